@@ -1,0 +1,228 @@
+//! Versioned, checksummed binary checkpoints of the dynamic state, and the
+//! 64-bit state hash. The solver only produces and consumes bytes; files are
+//! the study runner's business.
+
+use crate::particles::{Mat2, Particles, Vec2};
+use crate::Solver;
+
+const MAGIC: &[u8; 8] = b"KICKSTAT";
+pub const VERSION: u32 = 1;
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum CheckpointError {
+    BadMagic,
+    Version(u32),
+    Truncated,
+    Checksum { stored: u64, computed: u64 },
+    ParticleCount { stored: u64, expected: u64 },
+}
+
+impl std::fmt::Display for CheckpointError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CheckpointError::BadMagic => write!(f, "not a kick checkpoint (bad magic)"),
+            CheckpointError::Version(v) => {
+                write!(f, "checkpoint version {v}, this build reads {VERSION}")
+            }
+            CheckpointError::Truncated => write!(f, "checkpoint is truncated"),
+            CheckpointError::Checksum { stored, computed } => write!(
+                f,
+                "checkpoint is corrupted (checksum {stored:016x}, computed {computed:016x})"
+            ),
+            CheckpointError::ParticleCount { stored, expected } => write!(
+                f,
+                "checkpoint holds {stored} particles, the scene has {expected}"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for CheckpointError {}
+
+/// FNV-1a over 64-bit words.
+#[derive(Clone, Copy)]
+pub struct Hasher(u64);
+
+impl Default for Hasher {
+    fn default() -> Self {
+        Hasher(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Hasher {
+    #[inline]
+    pub fn word(&mut self, w: u64) {
+        self.0 = (self.0 ^ w).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+
+    pub fn bytes(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut w = [0u8; 8];
+            w[..chunk.len()].copy_from_slice(chunk);
+            self.word(u64::from_le_bytes(w));
+        }
+    }
+
+    pub fn finish(self) -> u64 {
+        self.0
+    }
+}
+
+pub fn state_hash(ps: &Particles) -> u64 {
+    let mut h = Hasher::default();
+    for p in 0..ps.len() {
+        for c in ps.x[p].iter().chain(ps.v[p].iter()) {
+            h.word(c.to_bits());
+        }
+        for c in ps.affine[p]
+            .iter()
+            .chain(ps.f[p].iter())
+            .chain(ps.stress[p].iter())
+        {
+            h.word(c.to_bits());
+        }
+        h.word(ps.j[p].to_bits());
+    }
+    h.finish()
+}
+
+struct Writer(Vec<u8>);
+
+impl Writer {
+    fn f64(&mut self, v: f64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn u64(&mut self, v: u64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn vec2s(&mut self, vs: &[Vec2]) {
+        vs.iter().flat_map(|v| v.iter()).for_each(|&c| self.f64(c));
+    }
+    fn mat2s(&mut self, ms: &[Mat2]) {
+        ms.iter().flat_map(|m| m.iter()).for_each(|&c| self.f64(c));
+    }
+    fn f64s(&mut self, vs: &[f64]) {
+        vs.iter().for_each(|&c| self.f64(c));
+    }
+}
+
+struct Reader<'a>(&'a [u8]);
+
+impl Reader<'_> {
+    fn take<const N: usize>(&mut self) -> Result<[u8; N], CheckpointError> {
+        if self.0.len() < N {
+            return Err(CheckpointError::Truncated);
+        }
+        let (head, rest) = self.0.split_at(N);
+        self.0 = rest;
+        Ok(head.try_into().expect("split at N"))
+    }
+    fn f64(&mut self) -> Result<f64, CheckpointError> {
+        Ok(f64::from_le_bytes(self.take()?))
+    }
+    fn u64(&mut self) -> Result<u64, CheckpointError> {
+        Ok(u64::from_le_bytes(self.take()?))
+    }
+    fn vec2s(&mut self, out: &mut [Vec2]) -> Result<(), CheckpointError> {
+        for v in out {
+            *v = Vec2::new(self.f64()?, self.f64()?);
+        }
+        Ok(())
+    }
+    fn mat2s(&mut self, out: &mut [Mat2]) -> Result<(), CheckpointError> {
+        for m in out {
+            for c in m.iter_mut() {
+                *c = self.f64()?;
+            }
+        }
+        Ok(())
+    }
+    fn f64s(&mut self, out: &mut [f64]) -> Result<(), CheckpointError> {
+        for v in out {
+            *v = self.f64()?;
+        }
+        Ok(())
+    }
+}
+
+pub fn save(s: &Solver) -> Vec<u8> {
+    let ps = &s.particles;
+    let mut w = Writer(Vec::with_capacity(64 + ps.len() * 240));
+    w.0.extend_from_slice(MAGIC);
+    w.0.extend_from_slice(&VERSION.to_le_bytes());
+    w.u64(ps.len() as u64);
+    w.u64(s.step);
+    w.f64(s.time);
+    w.f64(s.dt);
+    w.f64(s.dt_fixed);
+    w.f64(s.dissipated);
+    w.vec2s(&ps.x);
+    w.vec2s(&ps.v);
+    w.vec2s(&ps.v_prev);
+    w.mat2s(&ps.affine);
+    w.mat2s(&ps.f);
+    w.mat2s(&ps.stress);
+    w.f64s(&ps.j);
+    w.f64s(&ps.vol);
+    w.f64s(&ps.mass);
+    w.f64s(&ps.vol0);
+    w.f64s(&ps.pressure);
+    w.f64s(&ps.dev_rate);
+    let mut h = Hasher::default();
+    h.bytes(&w.0);
+    let sum = h.finish();
+    w.u64(sum);
+    w.0
+}
+
+pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
+    if bytes.len() < 20 {
+        return Err(CheckpointError::Truncated);
+    }
+    if &bytes[..8] != MAGIC {
+        return Err(CheckpointError::BadMagic);
+    }
+    let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
+    if version != VERSION {
+        return Err(CheckpointError::Version(version));
+    }
+    let (body, tail) = bytes.split_at(bytes.len() - 8);
+    let stored = u64::from_le_bytes(tail.try_into().expect("8 bytes"));
+    let mut h = Hasher::default();
+    h.bytes(body);
+    let computed = h.finish();
+    if stored != computed {
+        return Err(CheckpointError::Checksum { stored, computed });
+    }
+    let mut r = Reader(&body[12..]);
+    let n = r.u64()?;
+    let expected = s.particles.len() as u64;
+    if n != expected {
+        return Err(CheckpointError::ParticleCount {
+            stored: n,
+            expected,
+        });
+    }
+    s.step = r.u64()?;
+    s.time = r.f64()?;
+    s.dt = r.f64()?;
+    s.dt_fixed = r.f64()?;
+    s.dissipated = r.f64()?;
+    let ps = &mut s.particles;
+    r.vec2s(&mut ps.x)?;
+    r.vec2s(&mut ps.v)?;
+    r.vec2s(&mut ps.v_prev)?;
+    r.mat2s(&mut ps.affine)?;
+    r.mat2s(&mut ps.f)?;
+    r.mat2s(&mut ps.stress)?;
+    r.f64s(&mut ps.j)?;
+    r.f64s(&mut ps.vol)?;
+    r.f64s(&mut ps.mass)?;
+    r.f64s(&mut ps.vol0)?;
+    r.f64s(&mut ps.pressure)?;
+    r.f64s(&mut ps.dev_rate)?;
+    if !r.0.is_empty() {
+        return Err(CheckpointError::Truncated);
+    }
+    Ok(())
+}

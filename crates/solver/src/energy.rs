@@ -1,0 +1,50 @@
+//! Energy accounting: kinetic, gravitational, stored (sum V0 U(J)) and the
+//! accumulated viscous dissipation.
+
+use crate::config::Material;
+use crate::par;
+use crate::particles::Particles;
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Energy {
+    pub kinetic: f64,
+    /// sum m g (y - y_floor).
+    pub gravitational: f64,
+    pub stored: f64,
+    /// Viscous work dissipated since t = 0.
+    pub dissipated: f64,
+}
+
+impl Energy {
+    /// Conserved total (kinetic + gravitational + stored + dissipated).
+    pub fn total(&self) -> f64 {
+        self.kinetic + self.gravitational + self.stored + self.dissipated
+    }
+}
+
+pub fn measure(
+    particles: &Particles,
+    materials: &[Material],
+    gravity: f64,
+    floor: f64,
+    dissipated: f64,
+    partials: &mut [[f64; 4]],
+) -> Energy {
+    let [kinetic, gravitational, stored, _] = par::sum(particles.len(), partials, |p| {
+        let m = particles.mass[p];
+        let mat = &materials[particles.material[p] as usize];
+        [
+            0.5 * m * particles.v[p].norm_squared(),
+            m * gravity * (particles.x[p].y - floor),
+            particles.vol0[p] * mat.eos(particles.j[p]).energy,
+            0.0,
+        ]
+    });
+    Energy {
+        kinetic,
+        gravitational,
+        stored,
+        dissipated,
+    }
+}

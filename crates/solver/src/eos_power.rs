@@ -1,0 +1,19 @@
+//! Power law (Cueto-Felgueroso et al. 2004, eq. 64, density form): p = K (J^-gamma - 1).
+
+/// (p, K_t, U) at J.
+#[inline]
+pub fn eval(k: f64, gamma: f64, j: f64) -> (f64, f64, f64) {
+    let jg = j.powf(-gamma);
+    let p = k * (jg - 1.0);
+    let kt = gamma * k * jg;
+    let u = if (gamma - 1.0).abs() < 1e-12 {
+        k * (j - 1.0 - j.ln())
+    } else {
+        k * ((j * jg - 1.0) / (gamma - 1.0) + j - 1.0)
+    };
+    (p, kt, u)
+}
+
+pub fn j_at(k: f64, gamma: f64, p: f64) -> f64 {
+    (1.0 + p / k).powf(-1.0 / gamma)
+}

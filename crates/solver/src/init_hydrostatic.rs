@@ -1,0 +1,52 @@
+//! Discrete hydrostatic equilibrium: the lattice seeded by `scene::seed` already
+//! carries the hydrostatic J and stress; a damped PIC relaxation under gravity
+//! then removes what the discretisation (walls, free surface) leaves out of
+//! balance, before the clock starts at t = 0 with the particles at rest.
+
+use crate::config::{DtMode, TransferKind};
+use crate::particles::{Mat2, Vec2};
+use crate::{Solver, StepError};
+
+/// Lowest-mode periods of damped relaxation.
+const PERIODS: f64 = 3.0;
+
+pub fn relax(s: &mut Solver) -> Result<(), StepError> {
+    let method = s.cfg.method.clone();
+    let perturb = std::mem::take(&mut s.cfg.perturb);
+    s.cfg.method.transfer = TransferKind::Pic;
+    s.cfg.method.dt = DtMode::Dynamic;
+    let scene = &s.cfg.scene;
+    let height = scene
+        .bodies
+        .iter()
+        .map(|b| b.rect[3] - b.rect[1])
+        .fold(0.0, f64::max);
+    let c0 = scene
+        .materials
+        .iter()
+        .map(|m| m.wave_speed(1.0))
+        .fold(f64::INFINITY, f64::min);
+    // Quarter-wave mode of a column with a free top: period 4 H / c.
+    let omega = 2.0 * std::f64::consts::PI * c0 / (4.0 * height);
+    let duration = PERIODS * 4.0 * height / c0;
+    let mut t = 0.0;
+    let result = loop {
+        if t >= duration {
+            break Ok(());
+        }
+        let dt = s.cfl_dt();
+        if let Err(e) = s.step_with_dt(dt) {
+            break Err(e);
+        }
+        let damp = (1.0 - 2.0 * omega * dt).max(0.0);
+        s.particles.v.iter_mut().for_each(|v| *v *= damp);
+        t += dt;
+    };
+    s.cfg.method = method;
+    s.cfg.perturb = perturb;
+    let ps = &mut s.particles;
+    ps.v.iter_mut().for_each(|v| *v = Vec2::zeros());
+    ps.v_prev.iter_mut().for_each(|v| *v = Vec2::zeros());
+    ps.affine.iter_mut().for_each(|c| *c = Mat2::zeros());
+    result
+}

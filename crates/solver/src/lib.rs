@@ -1,0 +1,301 @@
+//! kick's solver: a 2D plane-strain explicit MPM in which every choice suspected
+//! of mattering for the kinematic anomaly is a switch (see `config`).
+//!
+//! A step is a short chain of named stages (`scheme.rs` orders them):
+//! sort, P2G, grid update, G2P, stress. The monitor sees the state only
+//! through [`StateView`].
+
+pub mod checkpoint;
+pub mod config;
+pub mod energy;
+pub mod eos;
+mod eos_linear;
+mod eos_power;
+pub mod eos_tait;
+pub mod grid;
+mod init_hydrostatic;
+pub mod par;
+pub mod particles;
+pub mod scene;
+mod scheme;
+pub mod shape;
+mod shape_bspline;
+mod shape_gimp;
+mod shape_linear;
+mod stage_g2p;
+mod stage_grid;
+mod stage_p2g;
+mod stage_sort;
+mod stage_stress;
+pub mod timestep;
+mod view;
+pub mod viscosity;
+
+pub use checkpoint::CheckpointError;
+pub use config::*;
+pub use energy::Energy;
+pub use particles::{Mat2, Vec2};
+pub use view::{GridView, StateView};
+
+use grid::Grid;
+use particles::Particles;
+use shape::{Shape, Weights1d};
+use stage_p2g::NodeSum;
+use stage_sort::Bins;
+
+/// Why a step could not be taken.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StepError {
+    /// A particle left the grid (box plus ghost layers): the run has blown up.
+    OutsideGrid { id: u32, x: [f64; 2] },
+    /// The configuration cannot run (e.g. a NaN time step).
+    BadTimeStep(f64),
+}
+
+impl std::fmt::Display for StepError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StepError::OutsideGrid { id, x } => {
+                write!(f, "particle {id} left the grid at ({}, {})", x[0], x[1])
+            }
+            StepError::BadTimeStep(dt) => write!(f, "time step {dt} is not positive and finite"),
+        }
+    }
+}
+
+impl std::error::Error for StepError {}
+
+pub struct Solver {
+    cfg: SolverConfig,
+    shape: Shape,
+    particles: Particles,
+    grid: Grid,
+    weights: Vec<[Weights1d; 2]>,
+    bins: Bins,
+    node_buf: Vec<NodeSum>,
+    partials4: Vec<[f64; 4]>,
+    partials1: Vec<[f64; 1]>,
+    gravity: Vec2,
+    step: u64,
+    time: f64,
+    dt: f64,
+    /// The step fixed at t = 0 (used when `method.dt` is fixed).
+    dt_fixed: f64,
+    dissipated: f64,
+    energy: Energy,
+    courant: f64,
+    ke_particles_p2g: f64,
+    ke_grid_p2g: f64,
+    grid_mass_p2g: f64,
+    n_outside: usize,
+    n_nonfinite: usize,
+}
+
+impl Solver {
+    /// Seeds the scene (relaxing it to hydrostatic equilibrium if asked).
+    pub fn new(cfg: SolverConfig) -> Result<Self, ConfigError> {
+        cfg.validate()?;
+        let particles = scene::seed(&cfg.scene);
+        if particles.is_empty() {
+            return Err(ConfigError {
+                key: "scene.body".into(),
+                message: "the bodies hold no particles".into(),
+            });
+        }
+        let mut solver = Self::with_particles(cfg, particles);
+        if solver.cfg.scene.initial == InitialState::Hydrostatic {
+            init_hydrostatic::relax(&mut solver).map_err(|e| ConfigError {
+                key: "scene.initial".into(),
+                message: format!("hydrostatic relaxation failed: {e}"),
+            })?;
+        }
+        solver.start_clock();
+        Ok(solver)
+    }
+
+    /// A solver over given particles (tests and benchmarks seed their own).
+    pub fn with_particles(cfg: SolverConfig, particles: Particles) -> Self {
+        let s = &cfg.scene;
+        let grid = Grid::new(Vec2::from(s.origin), s.cell, s.cells(), s.periodic);
+        let n = particles.len();
+        let nodes = grid.node_count();
+        let chunks = par::chunk_count(n);
+        let mut solver = Solver {
+            shape: Shape::new(cfg.method.shape, s.ppc),
+            gravity: Vec2::new(0.0, -s.gravity),
+            weights: vec![[Weights1d::default(); 2]; n],
+            bins: Bins::new(nodes, n),
+            node_buf: Vec::with_capacity(nodes),
+            partials4: vec![[0.0; 4]; chunks],
+            partials1: vec![[0.0; 1]; chunks],
+            grid,
+            particles,
+            cfg,
+            step: 0,
+            time: 0.0,
+            dt: 0.0,
+            dt_fixed: 0.0,
+            dissipated: 0.0,
+            energy: Energy::default(),
+            courant: 0.0,
+            ke_particles_p2g: 0.0,
+            ke_grid_p2g: 0.0,
+            grid_mass_p2g: 0.0,
+            n_outside: 0,
+            n_nonfinite: 0,
+        };
+        solver.start_clock();
+        solver
+    }
+
+    /// Sets t = 0: fixes the time step from the current state and measures energy.
+    fn start_clock(&mut self) {
+        self.step = 0;
+        self.time = 0.0;
+        self.dissipated = 0.0;
+        self.dt_fixed = self.cfl_dt();
+        self.dt = self.dt_fixed;
+        self.measure();
+    }
+
+    fn cfl_dt(&self) -> f64 {
+        if let Some(dt) = self.cfg.method.dt_override {
+            return dt;
+        }
+        let c = timestep::max_signal_speed(&self.particles, &self.cfg.scene.materials);
+        timestep::cfl_step(self.cfg.method.cfl, self.cfg.scene.cell, c)
+    }
+
+    pub fn config(&self) -> &SolverConfig {
+        &self.cfg
+    }
+
+    pub fn step_count(&self) -> u64 {
+        self.step
+    }
+
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// The step the next `step()` will take (before clamping to t_end).
+    pub fn next_dt(&self) -> f64 {
+        match self.cfg.method.dt {
+            DtMode::Fixed => self.dt_fixed,
+            DtMode::Dynamic => self.cfl_dt(),
+        }
+    }
+
+    pub fn energy(&self) -> Energy {
+        self.energy
+    }
+
+    pub fn particle_count(&self) -> usize {
+        self.particles.len()
+    }
+
+    /// True once t has reached the scene's end time.
+    pub fn finished(&self) -> bool {
+        self.time >= self.cfg.scene.t_end * (1.0 - 1e-12)
+    }
+
+    /// Takes one explicit step (clamped so as to land on t_end exactly).
+    pub fn step(&mut self) -> Result<(), StepError> {
+        let mut dt = self.next_dt();
+        let remaining = self.cfg.scene.t_end - self.time;
+        if remaining > 0.0 && dt > remaining {
+            dt = remaining;
+        }
+        self.step_with_dt(dt)
+    }
+
+    /// Takes one step of a given size (relaxation and tests).
+    pub fn step_with_dt(&mut self, dt: f64) -> Result<(), StepError> {
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(StepError::BadTimeStep(dt));
+        }
+        self.dt = dt;
+        let signal = timestep::max_signal_speed(&self.particles, &self.cfg.scene.materials);
+        self.courant = signal * dt / self.cfg.scene.cell;
+        self.particles.v_prev.copy_from_slice(&self.particles.v);
+        self.ke_particles_p2g = self.energy.kinetic;
+        stage_sort::sort(
+            &self.particles,
+            &mut self.grid,
+            &self.shape,
+            &mut self.weights,
+            &mut self.bins,
+        )?;
+        scheme::advance(self);
+        self.step += 1;
+        self.time += dt;
+        self.measure();
+        Ok(())
+    }
+
+    /// Energies and the blow-out counters after a step.
+    fn measure(&mut self) {
+        let s = &self.cfg.scene;
+        self.energy = energy::measure(
+            &self.particles,
+            &s.materials,
+            s.gravity,
+            s.origin[1],
+            self.dissipated,
+            &mut self.partials4,
+        );
+        let lo = Vec2::from(s.origin);
+        let hi = lo + Vec2::from(s.size);
+        let periodic = s.periodic;
+        let ps = &self.particles;
+        let [outside, nonfinite, _, _] = par::sum(ps.len(), &mut self.partials4, |p| {
+            let x = ps.x[p];
+            let finite = x.iter().chain(ps.v[p].iter()).all(|c| c.is_finite())
+                && ps.j[p].is_finite()
+                && ps.pressure[p].is_finite();
+            let out = (0..2).any(|k| !periodic[k] && (x[k] < lo[k] || x[k] > hi[k]));
+            [out as u8 as f64, (!finite) as u8 as f64, 0.0, 0.0]
+        });
+        self.n_outside = outside as usize;
+        self.n_nonfinite = nonfinite as usize;
+    }
+
+    /// Adds the perturbations scheduled for the step being taken (after G2P).
+    fn apply_perturbations(&mut self) {
+        let step = self.step + 1;
+        for pert in &self.cfg.perturb {
+            if pert.step != step {
+                continue;
+            }
+            let [x0, y0, x1, y1] = pert.region;
+            let dv = Vec2::from(pert.dv);
+            for (x, v) in self.particles.x.iter().zip(self.particles.v.iter_mut()) {
+                if x.x >= x0 && x.x <= x1 && x.y >= y0 && x.y <= y1 {
+                    *v += dv;
+                }
+            }
+        }
+    }
+
+    /// The read-only view the monitor observes.
+    pub fn view(&self) -> StateView<'_> {
+        view::make(self)
+    }
+
+    /// 64-bit hash of the particle state (positions, velocities, affine, F, J, stress).
+    pub fn state_hash(&self) -> u64 {
+        checkpoint::state_hash(&self.particles)
+    }
+
+    /// Serialises the full dynamic state (versioned, checksummed).
+    pub fn checkpoint(&self) -> Vec<u8> {
+        checkpoint::save(self)
+    }
+
+    /// Restores a state saved from a solver built from the same configuration.
+    pub fn restore(&mut self, bytes: &[u8]) -> Result<(), CheckpointError> {
+        checkpoint::load(self, bytes)?;
+        self.measure();
+        Ok(())
+    }
+}

@@ -1,0 +1,65 @@
+//! Particle seeding: n x n particles per cell at ((k + 1/2) / n) h, and the
+//! hydrostatic lattice (rows spaced by their J under the strip's weight).
+
+use crate::config::{InitialState, Scene};
+use crate::particles::{Mat2, Particles, Vec2};
+
+pub fn seed(scene: &Scene) -> Particles {
+    let mut ps = Particles::default();
+    let h = scene.cell;
+    let l = h / scene.ppc as f64;
+    for body in &scene.bodies {
+        let mat = &scene.materials[body.material];
+        let [x0, y0, x1, y1] = body.rect;
+        // Lattice positions origin + (k + 1/2) l that fall inside the rectangle.
+        let first = |lo: f64, o: f64| ((lo - o) / l - 0.5).ceil().max(0.0) as i64;
+        let last = |hi: f64, o: f64| ((hi - o) / l - 0.5).ceil() as i64;
+        let (ix0, ix1) = (first(x0, scene.origin[0]), last(x1, scene.origin[0]));
+        let (iy0, iy1) = (first(y0, scene.origin[1]), last(y1, scene.origin[1]));
+        let rows = (iy1 - iy0).max(0) as usize;
+        for ix in ix0..ix1 {
+            let x = scene.origin[0] + (ix as f64 + 0.5) * l;
+            match scene.initial {
+                InitialState::ZeroStress => {
+                    for iy in iy0..iy1 {
+                        let y = scene.origin[1] + (iy as f64 + 0.5) * l;
+                        ps.push(
+                            Vec2::new(x, y),
+                            Vec2::from(body.velocity),
+                            mat.rho0 * l * l,
+                            l * l,
+                            body.material as u16,
+                        );
+                    }
+                }
+                InitialState::Hydrostatic => {
+                    // Row k from the top carries p = rho0 g l (k + 1/2): exactly the
+                    // clamped mass-above reference of PHYSICS.md on this lattice.
+                    let mut y = scene.origin[1] + iy0 as f64 * l;
+                    let mut prev_half = 0.0;
+                    for row in 0..rows {
+                        let k_top = (rows - 1 - row) as f64;
+                        let p = mat.rho0 * scene.gravity * l * (k_top + 0.5);
+                        let j = mat.j_at_pressure(p);
+                        y += prev_half + 0.5 * j * l;
+                        prev_half = 0.5 * j * l;
+                        ps.push(
+                            Vec2::new(x, y),
+                            Vec2::from(body.velocity),
+                            mat.rho0 * l * l,
+                            l * l,
+                            body.material as u16,
+                        );
+                        let q = ps.len() - 1;
+                        ps.f[q] = Mat2::new(1.0, 0.0, 0.0, j);
+                        ps.j[q] = j;
+                        ps.vol[q] = j * l * l;
+                        ps.pressure[q] = p;
+                        ps.stress[q] = -p * Mat2::identity();
+                    }
+                }
+            }
+        }
+    }
+    ps
+}

@@ -1,0 +1,111 @@
+//! USF, USL and MUSL as orderings of the same stages.
+
+use crate::config::{SchemeKind, TransferKind};
+use crate::stage_p2g::{self, Terms};
+use crate::{stage_g2p, stage_grid, stage_stress, Solver};
+
+const MASS_MOMENTUM: Terms = Terms {
+    mass: true,
+    momentum: true,
+    force: false,
+};
+const FORCE: Terms = Terms {
+    mass: false,
+    momentum: false,
+    force: true,
+};
+const ALL: Terms = Terms {
+    mass: true,
+    momentum: true,
+    force: true,
+};
+const MOMENTUM: Terms = Terms {
+    mass: false,
+    momentum: true,
+    force: false,
+};
+
+/// Which grid velocity the stress stage differentiates.
+#[derive(Clone, Copy)]
+enum StressVelocity {
+    Start,
+    Updated,
+}
+
+pub fn advance(s: &mut Solver) {
+    match s.cfg.method.scheme {
+        SchemeKind::Usf => {
+            p2g(s, MASS_MOMENTUM);
+            s.ke_grid_p2g = stage_grid::velocities(&mut s.grid);
+            stress(s, StressVelocity::Start);
+            p2g(s, FORCE);
+            stage_grid::update(&mut s.grid, s.dt);
+            g2p(s);
+        }
+        SchemeKind::Usl => {
+            p2g(s, ALL);
+            s.ke_grid_p2g = stage_grid::velocities(&mut s.grid);
+            stage_grid::update(&mut s.grid, s.dt);
+            g2p(s);
+            stress(s, StressVelocity::Updated);
+        }
+        SchemeKind::Musl => {
+            p2g(s, ALL);
+            s.ke_grid_p2g = stage_grid::velocities(&mut s.grid);
+            stage_grid::update(&mut s.grid, s.dt);
+            g2p(s);
+            // Re-project the updated particle velocities (weights of the step start).
+            p2g(s, MOMENTUM);
+            stage_grid::project_momentum(&mut s.grid);
+            stress(s, StressVelocity::Start);
+        }
+    }
+}
+
+fn p2g(s: &mut Solver, terms: Terms) {
+    let inputs = stage_p2g::Inputs {
+        particles: &s.particles,
+        weights: &s.weights,
+        bins: &s.bins,
+        width: s.shape.width(),
+        affine: s.cfg.method.transfer == TransferKind::Apic,
+        gravity: s.gravity,
+    };
+    stage_p2g::p2g(&inputs, terms, &mut s.node_buf, &mut s.grid);
+    if terms.mass {
+        s.grid_mass_p2g = s.grid.active.iter().map(|&n| s.grid.mass_raw[n as usize]).sum();
+    }
+}
+
+fn stress(s: &mut Solver, which: StressVelocity) {
+    let velocity = match which {
+        StressVelocity::Start => &s.grid.vel,
+        StressVelocity::Updated => &s.grid.vel_new,
+    };
+    let inputs = stage_stress::Inputs {
+        weights: &s.weights,
+        grid: &s.grid,
+        velocity,
+        width: s.shape.width(),
+        materials: &s.cfg.scene.materials,
+        j_update: s.cfg.method.j_update,
+        dt: s.dt,
+    };
+    s.dissipated += stage_stress::update(&inputs, &mut s.particles, &mut s.partials1);
+}
+
+fn g2p(s: &mut Solver) {
+    let transfer = stage_g2p::Transfer {
+        kind: s.cfg.method.transfer,
+        flip_alpha: s.cfg.method.flip_alpha,
+    };
+    stage_g2p::g2p(
+        &mut s.particles,
+        &s.weights,
+        &s.grid,
+        &s.shape,
+        &transfer,
+        s.dt,
+    );
+    s.apply_perturbations();
+}

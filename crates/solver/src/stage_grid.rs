@@ -1,0 +1,66 @@
+//! Grid stage: fold wall/periodic images, nodal velocities, momentum update,
+//! ghost refill. Zero-mass active nodes (a particle exactly on a node line)
+//! keep zero velocity.
+
+use crate::grid::Grid;
+
+/// v^n = p / m from the folded P2G sums; also returns the grid kinetic energy
+/// of the real particles' mass (sum over nodes of m_raw |v|^2 / 2).
+pub fn velocities(grid: &mut Grid) -> f64 {
+    for &n in &grid.active {
+        let n = n as usize;
+        grid.mass[n] = grid.mass_raw[n];
+    }
+    let mut mass = std::mem::take(&mut grid.mass);
+    grid.fold(&mut mass);
+    grid.mass = mass;
+    project_momentum(grid);
+    let mut ke = 0.0;
+    for &n in &grid.active {
+        let n = n as usize;
+        ke += 0.5 * grid.mass_raw[n] * grid.vel[n].norm_squared();
+    }
+    ke
+}
+
+/// v^n = p / m for the current momentum (already P2G'd), with folded mass.
+pub fn project_momentum(grid: &mut Grid) {
+    let mut momentum = std::mem::take(&mut grid.momentum);
+    grid.fold(&mut momentum);
+    for &n in &grid.active {
+        let n = n as usize;
+        if grid.is_canonical(n) {
+            let m = grid.mass[n];
+            grid.vel[n] = if m > 0.0 { momentum[n] / m } else { momentum[n] * 0.0 };
+        }
+    }
+    grid.momentum = momentum;
+    let mut vel = std::mem::take(&mut grid.vel);
+    grid.fill(&mut vel);
+    grid.vel = vel;
+    let mut mass = std::mem::take(&mut grid.mass);
+    grid.fill(&mut mass);
+    grid.mass = mass;
+}
+
+/// v^{n+1} = v^n + dt f / m from the folded nodal force (gravity included).
+pub fn update(grid: &mut Grid, dt: f64) {
+    let mut force = std::mem::take(&mut grid.force);
+    grid.fold(&mut force);
+    for &n in &grid.active {
+        let n = n as usize;
+        if grid.is_canonical(n) {
+            let m = grid.mass[n];
+            let a = if m > 0.0 { force[n] / m } else { force[n] * 0.0 };
+            grid.accel[n] = a;
+            grid.vel_new[n] = grid.vel[n] + a * dt;
+        }
+    }
+    grid.force = force;
+    let mut accel = std::mem::take(&mut grid.accel);
+    grid.fill(&mut accel);
+    grid.accel = accel;
+    let mut vel_new = std::mem::take(&mut grid.vel_new);
+    grid.fill(&mut vel_new);
+    grid.vel_new = vel_new;
+}

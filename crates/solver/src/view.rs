@@ -1,0 +1,104 @@
+//! The narrow read-only view of the state that the monitor observes.
+
+use crate::config::{Material, Scene};
+use crate::energy::Energy;
+use crate::particles::{Mat2, Vec2};
+use crate::Solver;
+
+/// Grid geometry and nodal fields after the last step (ghost layers included).
+#[derive(Clone, Copy)]
+pub struct GridView<'a> {
+    pub h: f64,
+    /// Position of padded node (0, 0).
+    pub padded_origin: Vec2,
+    /// Padded node count per axis; node (i, j) is `i + j * dims[0]`.
+    pub dims: [usize; 2],
+    /// Folded nodal mass (mirror images included).
+    pub mass: &'a [f64],
+    /// Nodal mass of the real particles only.
+    pub mass_raw: &'a [f64],
+    /// Velocity after the grid update.
+    pub velocity: &'a [Vec2],
+    pub acceleration: &'a [Vec2],
+    /// Indices of the nodes worked on this step.
+    pub active: &'a [u32],
+}
+
+#[derive(Clone, Copy)]
+pub struct StateView<'a> {
+    pub step: u64,
+    pub time: f64,
+    /// Size of the last step.
+    pub dt: f64,
+    pub scene: &'a Scene,
+    pub materials: &'a [Material],
+    pub x: &'a [Vec2],
+    pub v: &'a [Vec2],
+    /// Velocities at the start of the last step.
+    pub v_prev: &'a [Vec2],
+    pub mass: &'a [f64],
+    pub volume: &'a [f64],
+    pub volume0: &'a [f64],
+    pub deformation: &'a [Mat2],
+    pub j: &'a [f64],
+    pub pressure: &'a [f64],
+    /// |dev D| of the last step (1/s).
+    pub dev_rate: &'a [f64],
+    pub material: &'a [u16],
+    pub id: &'a [u32],
+    pub grid: GridView<'a>,
+    pub energy: Energy,
+    /// Particle kinetic energy at P2G of the last step.
+    pub ke_particles_p2g: f64,
+    /// Grid kinetic energy right after P2G of the last step (real mass only).
+    pub ke_grid_p2g: f64,
+    /// Total P2G nodal mass of the last step (ghost nodes included, before folding).
+    pub grid_mass_p2g: f64,
+    /// Effective Courant number max(c_p + |v_p|) dt / h at the start of the last step.
+    pub courant: f64,
+    /// Particles outside the box (non-periodic axes).
+    pub n_outside: usize,
+    /// Particles with a non-finite position, velocity, J or pressure.
+    pub n_nonfinite: usize,
+}
+
+pub fn make(s: &Solver) -> StateView<'_> {
+    let ps = &s.particles;
+    let g = &s.grid;
+    StateView {
+        step: s.step,
+        time: s.time,
+        dt: s.dt,
+        scene: &s.cfg.scene,
+        materials: &s.cfg.scene.materials,
+        x: &ps.x,
+        v: &ps.v,
+        v_prev: &ps.v_prev,
+        mass: &ps.mass,
+        volume: &ps.vol,
+        volume0: &ps.vol0,
+        deformation: &ps.f,
+        j: &ps.j,
+        pressure: &ps.pressure,
+        dev_rate: &ps.dev_rate,
+        material: &ps.material,
+        id: &ps.id,
+        grid: GridView {
+            h: g.h,
+            padded_origin: g.position(0),
+            dims: g.dims,
+            mass: &g.mass,
+            mass_raw: &g.mass_raw,
+            velocity: &g.vel_new,
+            acceleration: &g.accel,
+            active: &g.active,
+        },
+        energy: s.energy,
+        ke_particles_p2g: s.ke_particles_p2g,
+        ke_grid_p2g: s.ke_grid_p2g,
+        grid_mass_p2g: s.grid_mass_p2g,
+        courant: s.courant,
+        n_outside: s.n_outside,
+        n_nonfinite: s.n_nonfinite,
+    }
+}

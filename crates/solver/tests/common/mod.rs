@@ -1,0 +1,52 @@
+#![allow(dead_code)]
+use solver::*;
+
+pub fn method(shape: ShapeKind, transfer: TransferKind, scheme: SchemeKind) -> Method {
+    Method {
+        shape,
+        transfer,
+        flip_alpha: 1.0,
+        scheme,
+        cfl: 0.2,
+        dt: DtMode::Fixed,
+        dt_override: None,
+        j_update: JUpdate::Det,
+    }
+}
+
+pub fn box_scene(size: [f64; 2], rect: [f64; 4], material: Material, gravity: f64) -> Scene {
+    Scene {
+        origin: [0.0, 0.0],
+        size,
+        cell: 0.01,
+        ppc: 2,
+        t_end: 1.0,
+        gravity,
+        initial: InitialState::ZeroStress,
+        periodic: [false, false],
+        bodies: vec![Body {
+            rect,
+            material: 0,
+            velocity: [0.0, 0.0],
+        }],
+        materials: vec![material],
+    }
+}
+
+pub fn solver(scene: Scene, method: Method) -> Solver {
+    Solver::new(SolverConfig {
+        scene,
+        method,
+        perturb: vec![],
+    })
+    .expect("valid config")
+}
+
+pub const SHAPES: [ShapeKind; 4] = [
+    ShapeKind::Linear,
+    ShapeKind::Gimp,
+    ShapeKind::Bspline2,
+    ShapeKind::Bspline3,
+];
+pub const TRANSFERS: [TransferKind; 3] = [TransferKind::Pic, TransferKind::Flip, TransferKind::Apic];
+pub const SCHEMES: [SchemeKind; 3] = [SchemeKind::Usf, SchemeKind::Usl, SchemeKind::Musl];

@@ -1,0 +1,83 @@
+//! EOS forms of PHYSICS.md section 2: U' = -p and K_t = -J dp/dJ by finite
+//! differences, signs (compression positive), the inverse, and J_res.
+
+use solver::{EosKind, Material};
+
+fn materials() -> Vec<Material> {
+    let mut out = vec![];
+    for (eos, gamma) in [
+        (EosKind::Power, 1.0),
+        (EosKind::Power, 4.0),
+        (EosKind::Power, 7.0),
+        (EosKind::Tait, 7.0),
+        (EosKind::Linear, 1.0),
+    ] {
+        let mut m = Material::water(1.5e6);
+        m.eos = eos;
+        m.gamma = gamma;
+        out.push(m);
+    }
+    out
+}
+
+#[test]
+fn derivatives_match_finite_differences() {
+    for m in materials() {
+        for k in 0..50 {
+            let j = 0.7 + 0.012 * k as f64;
+            let e = 1e-6;
+            let s = m.eos(j);
+            let (up, dn) = (m.eos(j + e), m.eos(j - e));
+            let du = (up.energy - dn.energy) / (2.0 * e);
+            let dp = (up.pressure - dn.pressure) / (2.0 * e);
+            let scale = m.k * (1.0 + s.tangent_modulus / m.k);
+            assert!((du + s.pressure).abs() < 1e-6 * scale, "{:?} U' != -p at J {j}", m.eos);
+            assert!(
+                (-j * dp - s.tangent_modulus).abs() < 1e-6 * scale,
+                "{:?} K_t at J {j}: {} vs {}",
+                m.eos,
+                -j * dp,
+                s.tangent_modulus
+            );
+        }
+    }
+}
+
+#[test]
+fn signs_zero_point_and_inverse() {
+    for m in materials() {
+        let s = m.eos(1.0);
+        assert!(s.pressure.abs() < 1e-9 && s.energy.abs() < 1e-9);
+        assert!(m.eos(0.9).pressure > 0.0, "compression gives positive pressure");
+        assert!(m.eos(1.1).pressure < 0.0, "expansion gives tension");
+        assert!(m.eos(0.9).energy > 0.0 && m.eos(1.1).energy > 0.0);
+        for p in [-1e4, 0.0, 3.9e3, 1e5] {
+            let j = m.j_at_pressure(p);
+            assert!((m.eos(j).pressure - p).abs() < 1e-6 * m.k, "{:?} inverse at {p}", m.eos);
+        }
+    }
+}
+
+#[test]
+fn tangent_modulus_values_from_physics_md() {
+    let mut m = Material::water(1.0);
+    m.eos = EosKind::Tait;
+    // PHYSICS.md: Tait at J = 0.81 is about 6.8 K.
+    let kt = m.eos(0.81).tangent_modulus;
+    assert!((kt - 0.81 * (0.19f64 / 0.0894).exp()).abs() < 1e-12);
+    assert!((kt - 6.8).abs() < 0.1, "{kt}");
+    m.eos = EosKind::Power;
+    m.gamma = 7.0;
+    assert!((m.eos(1.0).tangent_modulus - 7.0).abs() < 1e-12);
+}
+
+#[test]
+fn thermal_jres_and_tension_cutoff() {
+    let mut m = Material::water(1.5e6);
+    m.j_res = 1.02;
+    assert!(m.eos(1.02).pressure.abs() < 1e-9, "free thermal expansion is stress free");
+    assert_eq!(m.eos(0.99).pressure, Material::water(1.5e6).eos(0.99 / 1.02).pressure);
+    m.pressure_floor = Some(-100.0);
+    assert_eq!(m.pressure(1.2), -100.0);
+    assert_eq!(m.pressure(0.99), m.eos(0.99).pressure);
+}
