@@ -1,0 +1,70 @@
+//! The step loop allocates nothing (counted by a global allocator), for every
+//! shape, transfer and scheme, on one thread and on two.
+
+use solver::*;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+mod common;
+
+struct Counting;
+
+static COUNTING: AtomicBool = AtomicBool::new(false);
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn step_does_not_allocate() {
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        for shape in common::SHAPES {
+            for transfer in common::TRANSFERS {
+                for scheme in common::SCHEMES {
+                    let mut mat = Material::water(1.5e4);
+                    mat.viscosity = 0.5;
+                    let cfg = SolverConfig {
+                        scene: Scene::dam_break(mat),
+                        method: common::method(shape, transfer, scheme),
+                        perturb: vec![Perturb {
+                            step: 30,
+                            region: [0.0, 0.0, 0.05, 0.05],
+                            dv: [0.1, 0.0],
+                        }],
+                    };
+                    let mut s = Solver::new(cfg).unwrap();
+                    pool.install(|| {
+                        // Warm-up: let rayon set up its workers.
+                        for _ in 0..5 {
+                            s.step().unwrap();
+                        }
+                        ALLOCATIONS.store(0, Ordering::SeqCst);
+                        COUNTING.store(true, Ordering::SeqCst);
+                        for _ in 0..50 {
+                            s.step().unwrap();
+                        }
+                        COUNTING.store(false, Ordering::SeqCst);
+                    });
+                    let n = ALLOCATIONS.load(Ordering::SeqCst);
+                    assert_eq!(n, 0, "{threads} threads {shape:?} {transfer:?} {scheme:?}: {n} allocations");
+                }
+            }
+        }
+    }
+}
