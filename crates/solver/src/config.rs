@@ -240,19 +240,30 @@ impl SolverConfig {
     /// Checks what the solver relies on; the study crate checks ranges earlier with file context.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let s = &self.scene;
-        check(s.cell > 0.0 && s.cell.is_finite(), "scene.cell", "must be > 0")?;
+        check(
+            s.cell > 0.0 && s.cell.is_finite(),
+            "scene.cell",
+            "must be > 0",
+        )?;
         for a in 0..2 {
             let n = s.size[a] / s.cell;
             check(
                 s.size[a] > 0.0 && (n - n.round()).abs() < 1e-6 && n.round() >= 2.0,
                 "scene.box",
-                format!("box must be a whole number (>= 2) of cells of size {}", s.cell),
+                format!(
+                    "box must be a whole number (>= 2) of cells of size {}",
+                    s.cell
+                ),
             )?;
         }
         check((1..=8).contains(&s.ppc), "scene.ppc", "allowed range 1..=8")?;
         check(s.t_end > 0.0, "scene.t_end", "must be > 0")?;
         check(s.gravity.is_finite(), "scene.gravity", "must be finite")?;
-        check(!s.materials.is_empty(), "materials", "at least one material")?;
+        check(
+            !s.materials.is_empty(),
+            "materials",
+            "at least one material",
+        )?;
         for (i, b) in s.bodies.iter().enumerate() {
             let key = format!("scene.body[{i}].rect");
             check(

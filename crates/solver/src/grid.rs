@@ -18,7 +18,10 @@ pub enum NodeRole {
     /// On a symmetry wall: folds onto itself.
     Wall,
     /// Outside the box: folds onto (and is filled from) `partner`.
-    Ghost { partner: usize, flip: bool },
+    Ghost {
+        partner: usize,
+        flip: bool,
+    },
 }
 
 /// Values the wall fold knows how to mirror.

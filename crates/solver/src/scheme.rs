@@ -73,7 +73,12 @@ fn p2g(s: &mut Solver, terms: Terms) {
     };
     stage_p2g::p2g(&inputs, terms, &mut s.node_buf, &mut s.grid);
     if terms.mass {
-        s.grid_mass_p2g = s.grid.active.iter().map(|&n| s.grid.mass_raw[n as usize]).sum();
+        s.grid_mass_p2g = s
+            .grid
+            .active
+            .iter()
+            .map(|&n| s.grid.mass_raw[n as usize])
+            .sum();
     }
 }
 

@@ -18,7 +18,10 @@ pub fn cubic(r: f64) -> (f64, f64) {
     let a = r.abs();
     let s = r.signum();
     if a < 1.0 {
-        (0.5 * a * a * a - a * a + 2.0 / 3.0, s * (1.5 * a * a - 2.0 * a))
+        (
+            0.5 * a * a * a - a * a + 2.0 / 3.0,
+            s * (1.5 * a * a - 2.0 * a),
+        )
     } else if a < 2.0 {
         let d = 2.0 - a;
         (d * d * d / 6.0, -s * 0.5 * d * d)

@@ -30,10 +30,7 @@ pub fn g2p(
     };
     let apic = transfer.kind == TransferKind::Apic;
     let lo = grid.origin;
-    let size = Vec2::new(
-        grid.cells[0] as f64 * grid.h,
-        grid.cells[1] as f64 * grid.h,
-    );
+    let size = Vec2::new(grid.cells[0] as f64 * grid.h, grid.cells[1] as f64 * grid.h);
     (
         particles.x.par_iter_mut(),
         particles.v.par_iter_mut(),

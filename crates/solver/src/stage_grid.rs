@@ -31,7 +31,11 @@ pub fn project_momentum(grid: &mut Grid) {
         let n = n as usize;
         if grid.is_canonical(n) {
             let m = grid.mass[n];
-            grid.vel[n] = if m > 0.0 { momentum[n] / m } else { momentum[n] * 0.0 };
+            grid.vel[n] = if m > 0.0 {
+                momentum[n] / m
+            } else {
+                momentum[n] * 0.0
+            };
         }
     }
     grid.momentum = momentum;
@@ -51,7 +55,11 @@ pub fn update(grid: &mut Grid, dt: f64) {
         let n = n as usize;
         if grid.is_canonical(n) {
             let m = grid.mass[n];
-            let a = if m > 0.0 { force[n] / m } else { force[n] * 0.0 };
+            let a = if m > 0.0 {
+                force[n] / m
+            } else {
+                force[n] * 0.0
+            };
             grid.accel[n] = a;
             grid.vel_new[n] = grid.vel[n] + a * dt;
         }

@@ -47,41 +47,43 @@ pub fn update(inputs: &Inputs, particles: &mut Particles, partials: &mut [[f64; 
         partials[..n_chunks].par_iter_mut(),
     )
         .into_par_iter()
-        .for_each(|(f, j, vol, stress, pressure, dev_rate, vol0, mat, w, work)| {
-            let mut acc = 0.0;
-            for k in 0..f.len() {
-                let [wx, wy] = &w[k];
-                let (bi, bj) = ((wx.base + pad) as usize, (wy.base + pad) as usize);
-                let mut l = Mat2::zeros();
-                for c in 0..width {
-                    for a in 0..width {
-                        let grad = Vec2::new(wx.dw[a] * wy.w[c], wx.w[a] * wy.dw[c]) * inv_h;
-                        l += velocity[grid.index(bi + a, bj + c)] * grad.transpose();
+        .for_each(
+            |(f, j, vol, stress, pressure, dev_rate, vol0, mat, w, work)| {
+                let mut acc = 0.0;
+                for k in 0..f.len() {
+                    let [wx, wy] = &w[k];
+                    let (bi, bj) = ((wx.base + pad) as usize, (wy.base + pad) as usize);
+                    let mut l = Mat2::zeros();
+                    for c in 0..width {
+                        for a in 0..width {
+                            let grad = Vec2::new(wx.dw[a] * wy.w[c], wx.w[a] * wy.dw[c]) * inv_h;
+                            l += velocity[grid.index(bi + a, bj + c)] * grad.transpose();
+                        }
                     }
+                    let f_new = (Mat2::identity() + dt * l) * f[k];
+                    let det = f_new.determinant();
+                    let (f_next, j_next) = match j_update {
+                        JUpdate::Det => (f_new, det),
+                        JUpdate::Exp => {
+                            let jn = j[k] * (dt * l.trace()).exp();
+                            // Rescale F's volumetric part so that det F = J still holds.
+                            (f_new * (jn / det).abs().sqrt(), jn)
+                        }
+                    };
+                    f[k] = f_next;
+                    j[k] = j_next;
+                    vol[k] = vol0[k] * j_next;
+                    let m = &materials[mat[k] as usize];
+                    let p = m.pressure(j_next);
+                    let d = 0.5 * (l + l.transpose());
+                    let visc = viscosity::newtonian(m.viscosity, &d);
+                    stress[k] = visc.stress - p * Mat2::identity();
+                    pressure[k] = p;
+                    dev_rate[k] = visc.dev_rate;
+                    acc += visc.power * vol[k] * dt;
                 }
-                let f_new = (Mat2::identity() + dt * l) * f[k];
-                let det = f_new.determinant();
-                let (f_next, j_next) = match j_update {
-                    JUpdate::Det => (f_new, det),
-                    JUpdate::Exp => {
-                        let jn = j[k] * (dt * l.trace()).exp();
-                        // Rescale F's volumetric part so that det F = J still holds.
-                        (f_new * (jn / det).abs().sqrt(), jn)
-                    }
-                };
-                f[k] = f_next;
-                j[k] = j_next;
-                vol[k] = vol0[k] * j_next;
-                let m = &materials[mat[k] as usize];
-                let p = m.pressure(j_next);
-                let d = 0.5 * (l + l.transpose());
-                let visc = viscosity::newtonian(m.viscosity, &d);
-                stress[k] = visc.stress - p * Mat2::identity();
-                pressure[k] = p;
-                dev_rate[k] = visc.dev_rate;
-                acc += visc.power * vol[k] * dt;
-            }
-            work[0] = acc;
-        });
+                work[0] = acc;
+            },
+        );
     partials[..n_chunks].iter().map(|w| w[0]).sum()
 }

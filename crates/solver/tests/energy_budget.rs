@@ -30,7 +30,12 @@ fn pic_dam_break_energy_stays_under_noise_floor() {
         lowest = lowest.min(e);
         let floor = energy::injection_noise_floor(mass, g, height, v.dt);
         worst = worst.max((e - lowest) / floor);
-        assert!(e - lowest <= floor, "step {}: injected {} > floor {floor}", v.step, e - lowest);
+        assert!(
+            e - lowest <= floor,
+            "step {}: injected {} > floor {floor}",
+            v.step,
+            e - lowest
+        );
     }
     // The run did something: the column collapsed and PIC dissipated energy.
     assert!(s.energy().total() < 0.9 * e0);

@@ -31,7 +31,11 @@ fn derivatives_match_finite_differences() {
             let du = (up.energy - dn.energy) / (2.0 * e);
             let dp = (up.pressure - dn.pressure) / (2.0 * e);
             let scale = m.k * (1.0 + s.tangent_modulus / m.k);
-            assert!((du + s.pressure).abs() < 1e-6 * scale, "{:?} U' != -p at J {j}", m.eos);
+            assert!(
+                (du + s.pressure).abs() < 1e-6 * scale,
+                "{:?} U' != -p at J {j}",
+                m.eos
+            );
             assert!(
                 (-j * dp - s.tangent_modulus).abs() < 1e-6 * scale,
                 "{:?} K_t at J {j}: {} vs {}",
@@ -48,12 +52,19 @@ fn signs_zero_point_and_inverse() {
     for m in materials() {
         let s = m.eos(1.0);
         assert!(s.pressure.abs() < 1e-9 && s.energy.abs() < 1e-9);
-        assert!(m.eos(0.9).pressure > 0.0, "compression gives positive pressure");
+        assert!(
+            m.eos(0.9).pressure > 0.0,
+            "compression gives positive pressure"
+        );
         assert!(m.eos(1.1).pressure < 0.0, "expansion gives tension");
         assert!(m.eos(0.9).energy > 0.0 && m.eos(1.1).energy > 0.0);
         for p in [-1e4, 0.0, 3.9e3, 1e5] {
             let j = m.j_at_pressure(p);
-            assert!((m.eos(j).pressure - p).abs() < 1e-6 * m.k, "{:?} inverse at {p}", m.eos);
+            assert!(
+                (m.eos(j).pressure - p).abs() < 1e-6 * m.k,
+                "{:?} inverse at {p}",
+                m.eos
+            );
         }
     }
 }
@@ -75,8 +86,14 @@ fn tangent_modulus_values_from_physics_md() {
 fn thermal_jres_and_tension_cutoff() {
     let mut m = Material::water(1.5e6);
     m.j_res = 1.02;
-    assert!(m.eos(1.02).pressure.abs() < 1e-9, "free thermal expansion is stress free");
-    assert_eq!(m.eos(0.99).pressure, Material::water(1.5e6).eos(0.99 / 1.02).pressure);
+    assert!(
+        m.eos(1.02).pressure.abs() < 1e-9,
+        "free thermal expansion is stress free"
+    );
+    assert_eq!(
+        m.eos(0.99).pressure,
+        Material::water(1.5e6).eos(0.99 / 1.02).pressure
+    );
     m.pressure_floor = Some(-100.0);
     assert_eq!(m.pressure(1.2), -100.0);
     assert_eq!(m.pressure(0.99), m.eos(0.99).pressure);

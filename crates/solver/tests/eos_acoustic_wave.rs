@@ -59,6 +59,9 @@ fn standing_wave_period_matches_tangent_modulus() {
     ] {
         let (measured, predicted) = measured_period(eos, gamma, k);
         let err = (measured / predicted - 1.0).abs();
-        assert!(err < 0.02, "{eos:?} gamma {gamma}: {measured} vs {predicted} ({err})");
+        assert!(
+            err < 0.02,
+            "{eos:?} gamma {gamma}: {measured} vs {predicted} ({err})"
+        );
     }
 }

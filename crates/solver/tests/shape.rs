@@ -16,13 +16,22 @@ fn partition_of_unity_and_zero_gradient_sum() {
                 let w = shape.weights(x);
                 let sum: f64 = w.w.iter().sum();
                 let grad: f64 = w.dw.iter().sum();
-                assert!((sum - 1.0).abs() < 1e-14, "{kind:?} ppc {ppc} x {x}: sum {sum}");
-                assert!(grad.abs() < 1e-13, "{kind:?} ppc {ppc} x {x}: grad sum {grad}");
+                assert!(
+                    (sum - 1.0).abs() < 1e-14,
+                    "{kind:?} ppc {ppc} x {x}: sum {sum}"
+                );
+                assert!(
+                    grad.abs() < 1e-13,
+                    "{kind:?} ppc {ppc} x {x}: grad sum {grad}"
+                );
                 // Linear completeness: sum N_i x_i = x.
                 let first: f64 = (0..shape.width())
                     .map(|i| w.w[i] * (w.base + i as i64) as f64)
                     .sum();
-                assert!((first - x).abs() < 1e-12, "{kind:?}: sum N x = {first} at {x}");
+                assert!(
+                    (first - x).abs() < 1e-12,
+                    "{kind:?}: sum N x = {first} at {x}"
+                );
                 assert!(w.w.iter().all(|&n| n >= 0.0));
             }
         }

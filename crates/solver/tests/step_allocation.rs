@@ -62,7 +62,10 @@ fn step_does_not_allocate() {
                         COUNTING.store(false, Ordering::SeqCst);
                     });
                     let n = ALLOCATIONS.load(Ordering::SeqCst);
-                    assert_eq!(n, 0, "{threads} threads {shape:?} {transfer:?} {scheme:?}: {n} allocations");
+                    assert_eq!(
+                        n, 0,
+                        "{threads} threads {shape:?} {transfer:?} {scheme:?}: {n} allocations"
+                    );
                 }
             }
         }

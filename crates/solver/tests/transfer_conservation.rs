@@ -7,7 +7,12 @@ use solver::*;
 mod common;
 
 fn periodic_swirl(shape: ShapeKind, transfer: TransferKind, scheme: SchemeKind) -> Solver {
-    let mut scene = common::box_scene([0.3, 0.3], [0.05, 0.07, 0.22, 0.25], Material::water(1e4), 0.0);
+    let mut scene = common::box_scene(
+        [0.3, 0.3],
+        [0.05, 0.07, 0.22, 0.25],
+        Material::water(1e4),
+        0.0,
+    );
     scene.periodic = [true, true];
     let mut ps = scene::seed(&scene);
     for p in 0..ps.len() {
@@ -69,12 +74,18 @@ fn periodic_momentum_is_conserved_to_round_off() {
 fn grid_mass_equals_particle_mass_with_walls() {
     for shape in common::SHAPES {
         let scene = Scene::dam_break(Material::water(1.5e4));
-        let mut s = common::solver(scene, common::method(shape, TransferKind::Flip, SchemeKind::Usf));
+        let mut s = common::solver(
+            scene,
+            common::method(shape, TransferKind::Flip, SchemeKind::Usf),
+        );
         let total_mass: f64 = s.view().mass.iter().sum();
         for _ in 0..300 {
             s.step().unwrap();
             let g = s.view().grid_mass_p2g;
-            assert!((g - total_mass).abs() < 1e-12 * total_mass, "{shape:?}: {g} vs {total_mass}");
+            assert!(
+                (g - total_mass).abs() < 1e-12 * total_mass,
+                "{shape:?}: {g} vs {total_mass}"
+            );
         }
     }
 }
@@ -83,19 +94,28 @@ fn grid_mass_equals_particle_mass_with_walls() {
 fn free_slip_floor_keeps_tangential_momentum() {
     for shape in common::SHAPES {
         for transfer in common::TRANSFERS {
-            let mut scene = common::box_scene([1.2, 0.3], [0.5, 0.0, 0.6, 0.1], Material::water(1e4), 9.81);
+            let mut scene =
+                common::box_scene([1.2, 0.3], [0.5, 0.0, 0.6, 0.1], Material::water(1e4), 9.81);
             scene.bodies[0].velocity = [0.7, 0.0];
             let mut s = common::solver(scene, common::method(shape, transfer, SchemeKind::Usf));
             let mass: f64 = s.view().mass.iter().sum();
             for _ in 0..400 {
                 if let Err(e) = s.step() {
                     // Linear APIC blows up in this slump (README); momentum held until then.
-                    assert_eq!((shape, transfer), (ShapeKind::Linear, TransferKind::Apic), "{e}");
+                    assert_eq!(
+                        (shape, transfer),
+                        (ShapeKind::Linear, TransferKind::Apic),
+                        "{e}"
+                    );
                     break;
                 }
                 let v = s.view();
                 let px = momentum(&v).x / mass;
-                assert!((px - 0.7).abs() < 1e-12, "{shape:?} {transfer:?} step {}: {px}", v.step);
+                assert!(
+                    (px - 0.7).abs() < 1e-12,
+                    "{shape:?} {transfer:?} step {}: {px}",
+                    v.step
+                );
                 // The floor is impermeable: nothing below it.
                 assert!(v.x.iter().all(|x| x.y >= 0.0));
             }

@@ -1,1 +1,195 @@
-fn main() {}
+//! `kick`: runs studies of the MPM kinematic anomaly.
+
+mod bench;
+mod output_files;
+mod run_case;
+mod study_file;
+
+use clap::{Parser, Subcommand};
+use solver::{ShapeKind, TransferKind};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "kick", version, about = "Hunts the MPM kinematic anomaly")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run one case of a study (the first, or --case NAME).
+    Run {
+        /// Study file (TOML).
+        study: PathBuf,
+        /// Case name (see `kick list`).
+        #[arg(long)]
+        case: Option<String>,
+        /// Output folder; the case is written to OUT/CASE.
+        #[arg(long, default_value = "reports")]
+        out: PathBuf,
+        /// Solver threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Override any study key, e.g. --set materials.water.K=1.5e6
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// List the expanded cases of a study and their parameters.
+    List {
+        study: PathBuf,
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Measure particle-steps per second.
+    Bench {
+        #[arg(long, value_enum, default_value = "dam-break")]
+        scene: bench::BenchScene,
+        #[arg(long, default_value_t = 2000)]
+        steps: u64,
+        #[arg(long, default_value_t = 1)]
+        threads: usize,
+        /// Shape function (dam_break only).
+        #[arg(long, value_parser = parse_shape, default_value = "linear")]
+        shape: ShapeKind,
+        /// Transfer (dam_break only).
+        #[arg(long, value_parser = parse_transfer, default_value = "flip")]
+        transfer: TransferKind,
+    },
+}
+
+fn parse_shape(s: &str) -> Result<ShapeKind, String> {
+    serde_json::from_value(serde_json::Value::String(s.into())).map_err(|_| {
+        format!("\"{s}\" is not allowed (allowed: linear | gimp | bspline2 | bspline3)")
+    })
+}
+
+fn parse_transfer(s: &str) -> Result<TransferKind, String> {
+    serde_json::from_value(serde_json::Value::String(s.into()))
+        .map_err(|_| format!("\"{s}\" is not allowed (allowed: pic | flip | apic)"))
+}
+
+/// Exit code for bad input (study files, keys, values, case names).
+const BAD_INPUT: u8 = 2;
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Run {
+            study,
+            case,
+            out,
+            threads,
+            set,
+        } => {
+            let study = match study_file::load(&study, &set) {
+                Ok(s) => s,
+                Err(e) => return bad_input(&e.to_string()),
+            };
+            let chosen = match &case {
+                None => &study.cases[0],
+                Some(name) => match study.cases.iter().find(|c| &c.name == name) {
+                    Some(c) => c,
+                    None => {
+                        let names: Vec<&str> =
+                            study.cases.iter().map(|c| c.name.as_str()).collect();
+                        return bad_input(&format!(
+                            "{}: unknown case \"{name}\" (cases: {})",
+                            study.file.display(),
+                            names.join(", ")
+                        ));
+                    }
+                },
+            };
+            if threads == Some(0) {
+                return bad_input("--threads: 0 is out of range (allowed >= 1)");
+            }
+            let dir = out.join(&chosen.name);
+            let opts = run_case::RunOptions {
+                threads,
+                progress: true,
+            };
+            match run_case::run_case(chosen, &dir, &opts) {
+                Ok(summary) => {
+                    println!(
+                        "case {}: {} after {} steps, t = {:.4} s ({}), wall {:.1} s, {:.2} M particle-steps/s",
+                        chosen.name,
+                        summary["status"].as_str().unwrap_or("?"),
+                        summary["steps"],
+                        summary["t_end"].as_f64().unwrap_or(0.0),
+                        summary["reason"].as_str().filter(|r| !r.is_empty()).unwrap_or("no fault"),
+                        summary["wall_s"].as_f64().unwrap_or(0.0),
+                        summary["particle_steps_per_s"].as_f64().unwrap_or(0.0) / 1e6
+                    );
+                    println!("results in {}", dir.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("kick: writing {} failed: {e}", dir.display());
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Command::List { study, set } => {
+            let study = match study_file::load(&study, &set) {
+                Ok(s) => s,
+                Err(e) => return bad_input(&e.to_string()),
+            };
+            for case in &study.cases {
+                let m = &case.solver.method;
+                let mats: Vec<String> = case
+                    .solver
+                    .scene
+                    .materials
+                    .iter()
+                    .map(|m| format!("{:?} K={} gamma={} mu={}", m.eos, m.k, m.gamma, m.viscosity))
+                    .collect();
+                println!(
+                    "{}\t{:?} {:?} {:?} cfl={} dt={:?}\t{}",
+                    case.name,
+                    m.shape,
+                    m.transfer,
+                    m.scheme,
+                    m.cfl,
+                    m.dt,
+                    mats.join("; ")
+                );
+            }
+            ExitCode::SUCCESS
+        }
+        Command::Bench {
+            scene,
+            steps,
+            threads,
+            shape,
+            transfer,
+        } => {
+            if threads == 0 || steps == 0 {
+                return bad_input("--threads and --steps must be >= 1");
+            }
+            let opts = bench::BenchOptions {
+                scene,
+                steps,
+                threads,
+                shape,
+                transfer,
+            };
+            match bench::run(&opts) {
+                Ok(line) => {
+                    println!("{line}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("kick bench: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
+    }
+}
+
+fn bad_input(message: &str) -> ExitCode {
+    eprintln!("kick: {message}");
+    ExitCode::from(BAD_INPUT)
+}

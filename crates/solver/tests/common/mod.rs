@@ -48,5 +48,6 @@ pub const SHAPES: [ShapeKind; 4] = [
     ShapeKind::Bspline2,
     ShapeKind::Bspline3,
 ];
-pub const TRANSFERS: [TransferKind; 3] = [TransferKind::Pic, TransferKind::Flip, TransferKind::Apic];
+pub const TRANSFERS: [TransferKind; 3] =
+    [TransferKind::Pic, TransferKind::Flip, TransferKind::Apic];
 pub const SCHEMES: [SchemeKind; 3] = [SchemeKind::Usf, SchemeKind::Usl, SchemeKind::Musl];

@@ -1,0 +1,136 @@
+//! `kick bench`: particle-steps per second on the default dam break or on the
+//! scene of the well-known 88-line MLS-MPM fluid.
+
+use serde_json::json;
+use solver::particles::Particles;
+use solver::{
+    DtMode, EosKind, InitialState, JUpdate, Material, Method, Scene, SchemeKind, ShapeKind, Solver,
+    SolverConfig, TransferKind, Vec2,
+};
+use std::time::Instant;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum BenchScene {
+    DamBreak,
+    Mpm88,
+}
+
+pub struct BenchOptions {
+    pub scene: BenchScene,
+    pub steps: u64,
+    pub threads: usize,
+    pub shape: ShapeKind,
+    pub transfer: TransferKind,
+}
+
+/// The mpm88 scene: 8192 particles (fixed seed) in [0.2, 0.6]^2 of a unit box,
+/// 128^2 grid, dt = 2e-4, quadratic B-spline APIC, p = K (1 - J) with K = 400,
+/// rho = 1, volume (h/2)^2, gravity 9.8, v0 = (0, -1); the 3-cell wall margin
+/// is the box [3h, 1 - 3h] with slip walls.
+pub fn mpm88() -> (SolverConfig, Particles) {
+    let n_grid = 128;
+    let h = 1.0 / n_grid as f64;
+    let mut mat = Material::water(400.0);
+    mat.rho0 = 1.0;
+    mat.eos = EosKind::Linear;
+    let scene = Scene {
+        origin: [3.0 * h, 3.0 * h],
+        size: [(n_grid - 6) as f64 * h, (n_grid - 6) as f64 * h],
+        cell: h,
+        ppc: 2,
+        t_end: 1e9,
+        gravity: 9.8,
+        initial: InitialState::ZeroStress,
+        periodic: [false, false],
+        bodies: vec![],
+        materials: vec![mat],
+    };
+    let method = Method {
+        shape: ShapeKind::Bspline2,
+        transfer: TransferKind::Apic,
+        flip_alpha: 0.0,
+        scheme: SchemeKind::Usl,
+        cfl: 1.0,
+        dt: DtMode::Fixed,
+        dt_override: Some(2e-4),
+        j_update: JUpdate::Det,
+    };
+    let mut ps = Particles::default();
+    let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut uniform = || {
+        // splitmix64
+        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let vol = (0.5 * h) * (0.5 * h);
+    for _ in 0..8192 {
+        let x = Vec2::new(0.2 + 0.4 * uniform(), 0.2 + 0.4 * uniform());
+        ps.push(x, Vec2::new(0.0, -1.0), vol, vol, 0);
+    }
+    (
+        SolverConfig {
+            scene,
+            method,
+            perturb: vec![],
+        },
+        ps,
+    )
+}
+
+pub fn dam_break(shape: ShapeKind, transfer: TransferKind) -> SolverConfig {
+    let mut mat = Material::water(1.5e5);
+    mat.eos = EosKind::Power;
+    let mut method = Method::baseline();
+    method.shape = shape;
+    method.transfer = transfer;
+    SolverConfig {
+        scene: Scene::dam_break(mat),
+        method,
+        perturb: vec![],
+    }
+}
+
+pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(opts.threads)
+        .build()
+        .map_err(|e| e.to_string())?;
+    pool.install(|| {
+        let (mut solver, name, shape, transfer) = match opts.scene {
+            BenchScene::Mpm88 => {
+                let (cfg, ps) = mpm88();
+                let (shape, transfer) = (cfg.method.shape, cfg.method.transfer);
+                (Solver::with_particles(cfg, ps), "mpm88", shape, transfer)
+            }
+            BenchScene::DamBreak => (
+                Solver::new(dam_break(opts.shape, opts.transfer)).map_err(|e| e.to_string())?,
+                "dam_break",
+                opts.shape,
+                opts.transfer,
+            ),
+        };
+        // Warm-up outside the timing (caches, rayon workers).
+        for _ in 0..10 {
+            solver.step().map_err(|e| e.to_string())?;
+        }
+        let start = Instant::now();
+        for _ in 0..opts.steps {
+            solver.step().map_err(|e| e.to_string())?;
+        }
+        let seconds = start.elapsed().as_secs_f64();
+        let n = solver.particle_count();
+        Ok(json!({
+            "scene": name,
+            "shape": shape,
+            "transfer": transfer,
+            "particles": n,
+            "steps": opts.steps,
+            "threads": opts.threads,
+            "seconds": seconds,
+            "particle_steps_per_s": n as f64 * opts.steps as f64 / seconds,
+        }))
+    })
+}
