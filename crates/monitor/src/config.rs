@@ -1,0 +1,72 @@
+//! Every threshold of the monitor, by name, with its documented default.
+//! All are study-file keys under `[monitor]`.
+
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MonitorConfig {
+    /// z scores are computed only for particles accelerating above this (in g).
+    pub accel_candidate_g: f64,
+    /// A particle is an acceleration outlier when a/g >= this ...
+    pub kick_accel_g: f64,
+    /// ... and its robust z score against its neighbourhood >= this.
+    pub kick_z: f64,
+    /// Half-width (cells) of the neighbourhood window for median/MAD; it must be
+    /// wider than any patch to be caught (a 5 x 5 window is blind inside a 5 x 5 kick).
+    pub window_half_cells: usize,
+    /// Window statistics are shared by tiles of this many cells per side (cost).
+    pub window_tile_cells: usize,
+    /// Kinetic-energy spike: e_p over its recent maximum (floored) >= this ...
+    pub ke_spike_ratio: f64,
+    /// ... with the recent maximum floored by 1/2 m v_q^2 at this quiescent speed (m/s).
+    pub quiescent_speed: f64,
+    /// Steps over which a particle's kinetic-energy history decays (1/e).
+    pub ke_history_steps: f64,
+    /// Steps before an event looked at for `quiescent_before` and `previously_deformed`.
+    pub recent_steps: u64,
+    /// |dev D| (1/s) above which a particle counts as highly deformed.
+    pub deformed_rate: f64,
+    /// Isochoric stretch ratio of F (largest / smallest principal stretch) above
+    /// which a particle counts as highly distorted.
+    pub distortion_ratio: f64,
+    /// Clusters with fewer flagged particles are noise, not kicks (default: one
+    /// cell's worth at 2 x 2 particles per cell).
+    pub min_cluster_particles: usize,
+    /// Events closer than this many cells and steps are merged.
+    pub merge_cells: usize,
+    pub merge_steps: u64,
+    /// Particle ids kept per event (the count is always exact).
+    pub max_event_ids: usize,
+    /// Energy injected within `injection_window` steps counts as an event when it
+    /// exceeds this multiple of the explicit-stepping noise floor.
+    pub injection_floor_factor: f64,
+    pub injection_window: u64,
+    /// Blow-out: a particle faster than this multiple of sqrt(2 g H_box).
+    pub escape_speed_factor: f64,
+}
+
+impl Default for MonitorConfig {
+    fn default() -> Self {
+        MonitorConfig {
+            accel_candidate_g: 5.0,
+            kick_accel_g: 50.0,
+            kick_z: 10.0,
+            window_half_cells: 5,
+            window_tile_cells: 4,
+            ke_spike_ratio: 25.0,
+            quiescent_speed: 0.05,
+            ke_history_steps: 50.0,
+            recent_steps: 200,
+            deformed_rate: 20.0,
+            distortion_ratio: 4.0,
+            min_cluster_particles: 4,
+            merge_cells: 3,
+            merge_steps: 5,
+            max_event_ids: 64,
+            injection_floor_factor: 3.0,
+            injection_window: 20,
+            escape_speed_factor: 10.0,
+        }
+    }
+}
