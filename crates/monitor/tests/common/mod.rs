@@ -1,0 +1,82 @@
+#![allow(dead_code)]
+use monitor::{Event, EventKind, Monitor, MonitorConfig};
+use solver::*;
+
+pub fn method(shape: ShapeKind, transfer: TransferKind) -> Method {
+    let mut m = Method::baseline();
+    m.shape = shape;
+    m.transfer = transfer;
+    m
+}
+
+pub fn tait(k: f64, viscosity: f64) -> Material {
+    let mut m = Material::water(k);
+    m.eos = EosKind::Tait;
+    m.viscosity = viscosity;
+    m
+}
+
+/// A cell block [i0, i1) x [j0, j1) as a perturbation region in metres.
+pub fn region(h: f64, i0: usize, j0: usize, i1: usize, j1: usize) -> [f64; 4] {
+    [i0 as f64 * h, j0 as f64 * h, i1 as f64 * h, j1 as f64 * h]
+}
+
+/// Runs `steps` steps from `start`, with `perturb` applied, under a clone of `monitor`.
+pub fn run_window(
+    cfg: &SolverConfig,
+    start: &[u8],
+    monitor: &Monitor,
+    perturb: Vec<Perturb>,
+    steps: u64,
+) -> (Monitor, Solver) {
+    let mut cfg = cfg.clone();
+    cfg.scene.initial = InitialState::ZeroStress;
+    cfg.perturb = perturb;
+    let mut s = Solver::new(cfg).unwrap();
+    s.restore(start).unwrap();
+    let mut m = monitor.clone();
+    for _ in 0..steps {
+        s.step().unwrap();
+        let r = m.observe(&s.view());
+        assert!(r.blow_out.is_none(), "{:?}", r.blow_out);
+    }
+    (m, s)
+}
+
+pub fn fresh_monitor(s: &Solver) -> Monitor {
+    Monitor::new(MonitorConfig::default(), &s.view())
+}
+
+pub fn events_after(m: &Monitor, step: u64) -> Vec<Event> {
+    m.events()
+        .iter()
+        .filter(|e| e.first_step > step)
+        .cloned()
+        .collect()
+}
+
+/// Asserts the acceptance of an injected kick: a kick event at step s (or s+1)
+/// whose first-step cells lie within the perturbed cells plus two, and no event
+/// starting outside [s, s + window].
+pub fn assert_detected(events: &[Event], s: u64, window: u64, cells: [usize; 4], tag: &str) {
+    let [i0, j0, i1, j1] = cells;
+    let kick = events
+        .iter()
+        .find(|e| e.kind == EventKind::Kick && (e.first_step == s || e.first_step == s + 1))
+        .unwrap_or_else(|| panic!("{tag}: no kick at step {s}: {events:#?}"));
+    let c = kick.cells;
+    assert!(
+        c.i_min + 2 >= i0 && c.j_min + 2 >= j0 && c.i_max <= i1 - 1 + 2 && c.j_max <= j1 - 1 + 2,
+        "{tag}: first-step cells {c:?} outside perturbed {cells:?} + 2"
+    );
+    assert!(kick.peak_accel_g > 10.0, "{tag}: {kick:?}");
+    for e in events {
+        assert!(
+            e.first_step >= s && e.first_step <= s + window,
+            "{tag}: event {} starts at {} outside [{s}, {}]: {e:?}",
+            e.id,
+            e.first_step,
+            s + window
+        );
+    }
+}

@@ -1,0 +1,132 @@
+//! Injected kicks in a column at rest (hydrostatic initial state, Tait
+//! K = 1.5 MPa, quadratic B-spline APIC): a 1 m/s [[perturb]] on patches of
+//! 1 x 1 to 5 x 5 cells, in the interior, at the walls, the floor and the free
+//! surface, is logged as a kick at its step inside the patch plus two cells;
+//! no event starts outside [s, s + 2L/c]; without the perturbation there is no
+//! event at all. The injected energy is 1/2 m dv^2 of the perturbed particles.
+//! All with the shipped default thresholds.
+
+use monitor::EventKind;
+use solver::*;
+
+mod common;
+
+struct Column {
+    cfg: SolverConfig,
+    start: Vec<u8>,
+    monitor: monitor::Monitor,
+    window: u64,
+}
+
+fn column() -> Column {
+    let mut scene = Scene::dam_break(common::tait(1.5e6, 0.5));
+    scene.size = [0.4, 0.6];
+    scene.bodies[0].rect = [0.0, 0.0, 0.4, 0.4];
+    scene.initial = InitialState::Hydrostatic;
+    let cfg = SolverConfig {
+        scene,
+        method: common::method(ShapeKind::Bspline2, TransferKind::Apic),
+        perturb: vec![],
+    };
+    let s = Solver::new(cfg.clone()).unwrap();
+    let c = s.config().scene.materials[0].wave_speed(1.0);
+    let window = (2.0 * 0.4 / c / s.next_dt()).ceil() as u64;
+    Column {
+        monitor: common::fresh_monitor(&s),
+        start: s.checkpoint(),
+        cfg,
+        window,
+    }
+}
+
+#[test]
+fn injected_kicks_in_a_column_at_rest_are_found_where_and_when_they_happen() {
+    let col = column();
+    let s = 30;
+    let steps = s + col.window + 100;
+    let (quiet, _) = common::run_window(&col.cfg, &col.start, &col.monitor, vec![], steps);
+    assert!(
+        quiet.events().is_empty(),
+        "column at rest: {:#?}",
+        quiet.events()
+    );
+    // (cells [i0, j0, i1, j1), dv): interior, walls, floor, free surface; 1x1 to 5x5.
+    let cases: [([usize; 4], [f64; 2], &str); 6] = [
+        ([18, 15, 21, 18], [1.0, 0.0], "interior 3x3 along"),
+        ([0, 10, 5, 15], [1.0, 0.0], "left wall 5x5 into the fluid"),
+        (
+            [37, 20, 40, 23],
+            [-1.0, 0.0],
+            "right wall 3x3 into the fluid",
+        ),
+        ([20, 0, 23, 3], [1.0, 0.0], "floor 3x3 along"),
+        (
+            [10, 37, 13, 40],
+            [0.0, -1.0],
+            "free surface 3x3 down into the fluid",
+        ),
+        ([30, 25, 31, 26], [0.0, 1.0], "interior 1x1 up"),
+    ];
+    for (cells, dv, tag) in cases {
+        let perturb = vec![Perturb {
+            step: s,
+            region: common::region(0.01, cells[0], cells[1], cells[2], cells[3]),
+            dv,
+        }];
+        let (m, _) = common::run_window(&col.cfg, &col.start, &col.monitor, perturb, steps);
+        common::assert_detected(m.events(), s, col.window, cells, tag);
+        let kick = m
+            .events()
+            .iter()
+            .find(|e| e.kind == EventKind::Kick)
+            .unwrap();
+        assert!(
+            kick.quiescent_before,
+            "{tag}: the column was at rest before"
+        );
+        assert!(
+            !kick.previously_deformed,
+            "{tag}: the column was never deformed"
+        );
+        assert!(kick
+            .rules
+            .iter()
+            .any(|r| r == "accel_outlier" || r == "ke_spike"));
+    }
+}
+
+#[test]
+fn injected_energy_is_half_m_dv_squared() {
+    let col = column();
+    let s = 10;
+    let cells = [15, 10, 20, 15];
+    let dv = [0.6, 0.8];
+    let region = common::region(0.01, cells[0], cells[1], cells[2], cells[3]);
+    let perturb = vec![Perturb {
+        step: s,
+        region,
+        dv,
+    }];
+    let (m, solver) = common::run_window(&col.cfg, &col.start, &col.monitor, perturb, s);
+    let v = solver.view();
+    let mass: f64 = (0..v.x.len())
+        .filter(|&p| {
+            let x = v.x[p];
+            x.x >= region[0] && x.x <= region[2] && x.y >= region[1] && x.y <= region[3]
+        })
+        .map(|p| v.mass[p])
+        .sum();
+    assert!(mass > 0.0);
+    let expected = 0.5 * mass * (dv[0] * dv[0] + dv[1] * dv[1]);
+    let injected = m.report().energy_injected;
+    assert!(
+        (injected / expected - 1.0).abs() < 0.05,
+        "injected {injected} vs 1/2 m dv^2 = {expected}"
+    );
+    let e = m
+        .events()
+        .iter()
+        .find(|e| e.kind == EventKind::Kick)
+        .unwrap();
+    assert!((e.energy_injected / expected - 1.0).abs() < 0.05, "{e:?}");
+}
