@@ -18,10 +18,7 @@ test:
 	$(CARGO) test --workspace
 
 matrix: build
-	@echo "the matrix runner arrives with the study-runner issue; running each case in turn"
-	for c in $$($(KICK) list studies/bug_report.toml | cut -f1); do \
-		$(KICK) run studies/bug_report.toml --case $$c --out $(OUT)/bug_report || exit $$?; \
-	done
+	$(KICK) matrix studies/bug_report.toml --out $(OUT)/bug_report --resume $(MATRIX_ARGS)
 
 bench: build
 	$(KICK) bench --scene mpm88 --steps 2000 --threads 1

@@ -46,6 +46,7 @@ fn run_completes_and_writes_the_case_folder() {
         "method.shape=\"bspline2\"",
         "--set",
         "output.vtk_times=[0.0, 0.05]",
+        "--csv",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let dir = out.join("dam_break");
@@ -63,6 +64,44 @@ fn run_completes_and_writes_the_case_folder() {
     assert!(last.starts_with(&format!("{steps},")), "{last}");
     let vtk: Vec<_> = std::fs::read_dir(dir.join("particles")).unwrap().collect();
     assert!(vtk.len() >= 2);
+    let parquet = std::fs::read(dir.join("timeseries.parquet")).unwrap();
+    assert_eq!(&parquet[..4], b"PAR1");
+    let header = csv.lines().next().unwrap();
+    for col in [
+        "step",
+        "e_total",
+        "energy_injected",
+        "max_accel_g",
+        "max_z",
+        "checkerboard",
+        "hydro_rel_rms",
+        "front_x",
+        "courant",
+        "j_min",
+        "j_max",
+        "n_outside",
+    ] {
+        assert!(header.split(',').any(|c| c == col), "{col} in {header}");
+    }
+    let case_toml = std::fs::read_to_string(dir.join("case.toml")).unwrap();
+    assert!(case_toml.contains("bspline2"), "{case_toml}");
+    for k in [
+        "hydro_rel_rms_late",
+        "hydro_max_late",
+        "checkerboard_late",
+        "checkerboard_peak",
+        "energy_injected_max",
+        "t_first_kick",
+        "front_rms_error",
+    ] {
+        assert!(
+            s["metrics"].get(k).is_some(),
+            "metric {k}: {}",
+            s["metrics"]
+        );
+    }
+    // 0.05 s is T = 0.5, before the first Martin & Moyce point (T = 0.83).
+    assert!(s["metrics"]["front_rms_error"].is_null());
 }
 
 #[test]
@@ -89,6 +128,14 @@ fn blow_up_is_a_result_with_step_and_reason() {
         reason.contains("left the box") || reason.contains("non-finite") || reason.contains("grid")
     );
     assert!(s["t_end"].as_f64().unwrap() < 1.0);
+    // The blow-out is logged as an event at the last step, and the front was
+    // compared with Martin & Moyce up to then (Z units).
+    let events = s["events"].as_array().unwrap();
+    let last = events.last().unwrap();
+    assert_eq!(last["kind"], "blow_out", "{last}");
+    assert_eq!(last["first_step"].as_u64(), Some(steps));
+    let front = s["metrics"]["front_rms_error"].as_f64().unwrap();
+    assert!(front > 0.0 && front < 1.0, "{front}");
 }
 
 #[test]
@@ -221,4 +268,297 @@ fn bench_prints_one_json_line() {
     assert_eq!(v["threads"], 1);
     assert!(v["particle_steps_per_s"].as_f64().unwrap() > 0.0);
     assert!(v["seconds"].as_f64().unwrap() > 0.0);
+}
+
+const SMALL_MATRIX: &str = r#"
+[scene]
+t_end = 0.05
+[[scene.body]]
+rect = [0.0, 0.0, 0.2, 0.4]
+material = "water"
+[materials.water]
+K = 1.5e4
+[output]
+checkpoint_every = 0
+[matrix]
+"materials.water.K" = [1.5e4, 1.5e5]
+"#;
+
+fn rows(csv: &str) -> Vec<Vec<String>> {
+    csv.lines()
+        .map(|l| l.split(',').map(|c| c.to_string()).collect())
+        .collect()
+}
+
+#[test]
+fn matrix_runs_cases_in_parallel_and_writes_the_tables() {
+    let out = scratch("matrix");
+    let study = out.join("small.toml");
+    std::fs::write(&study, SMALL_MATRIX).unwrap();
+    let o = kick(&[
+        "matrix",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--jobs",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("2 cases: 2 completed"), "{text}");
+    let table = rows(&std::fs::read_to_string(out.join("summary.csv")).unwrap());
+    assert_eq!(table.len(), 3, "header + one row per case");
+    let header = &table[0];
+    for col in [
+        "case",
+        "materials.water.K",
+        "method.shape",
+        "method.transfer",
+        "method.cfl",
+        "status",
+        "steps",
+        "wall_s",
+        "particle_steps_per_s",
+        "t_first_kick",
+        "hydro_rel_rms_late",
+    ] {
+        assert!(header.iter().any(|c| c == col), "{col} in {header:?}");
+    }
+    let k = header
+        .iter()
+        .position(|c| c == "materials.water.K")
+        .unwrap();
+    let shape = header.iter().position(|c| c == "method.shape").unwrap();
+    let mut ks: Vec<f64> = table[1..].iter().map(|r| r[k].parse().unwrap()).collect();
+    ks.sort_by(f64::total_cmp);
+    assert_eq!(ks, vec![1.5e4, 1.5e5]);
+    assert!(table[1..].iter().all(|r| r[shape] == "linear"));
+    assert_eq!(
+        &std::fs::read(out.join("summary.parquet")).unwrap()[..4],
+        b"PAR1"
+    );
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(manifest["state"], "finished");
+    assert_eq!(manifest["cases"].as_array().unwrap().len(), 2);
+    // Shards: 0/2 and 1/2 split the cases, --merge joins them.
+    let (a, b) = (out.join("shard0"), out.join("shard1"));
+    for (i, dir) in [(0, &a), (1, &b)] {
+        let shard = format!("{i}/2");
+        let o = kick(&[
+            "matrix",
+            study.to_str().unwrap(),
+            "--out",
+            dir.to_str().unwrap(),
+            "--shard",
+            &shard,
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(
+            rows(&std::fs::read_to_string(dir.join("summary.csv")).unwrap()).len(),
+            2
+        );
+    }
+    let merged = out.join("merged");
+    let o = kick(&[
+        "matrix",
+        "--merge",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        rows(&std::fs::read_to_string(merged.join("summary.csv")).unwrap()).len(),
+        3
+    );
+    let o = kick(&["matrix", study.to_str().unwrap(), "--shard", "2/2"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}
+
+#[test]
+fn matrix_resumes_after_sigkill_without_redoing_finished_cases() {
+    let out = scratch("resume");
+    let study = out.join("three.toml");
+    std::fs::write(
+        &study,
+        SMALL_MATRIX
+            .replace("t_end = 0.05", "t_end = 0.25")
+            .replace("[1.5e4, 1.5e5]", "[1.5e4, 2.0e4, 2.5e4]"),
+    )
+    .unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_kick"))
+        .args([
+            "matrix",
+            study.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--jobs",
+            "1",
+        ])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let case_dirs: Vec<PathBuf> = ["K15kPa", "K20kPa", "K25kPa"]
+        .iter()
+        .map(|n| out.join(n))
+        .collect();
+    let started = std::time::Instant::now();
+    while !case_dirs.iter().any(|d| d.join("summary.json").exists()) {
+        assert!(started.elapsed().as_secs() < 120, "no case finished");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    let done: Vec<(PathBuf, Vec<u8>)> = case_dirs
+        .iter()
+        .filter_map(|d| {
+            std::fs::read(d.join("summary.json"))
+                .ok()
+                .map(|b| (d.clone(), b))
+        })
+        .collect();
+    assert!(
+        !done.is_empty() && done.len() < 3,
+        "killed mid-matrix: {} done",
+        done.len()
+    );
+    for (_, bytes) in &done {
+        let v: serde_json::Value =
+            serde_json::from_slice(bytes).expect("finished summaries are whole");
+        assert!(v["status"].is_string());
+    }
+    let o = kick(&[
+        "matrix",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--resume",
+        "--jobs",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains(&format!(
+            "ran {} cases ({} already done)",
+            3 - done.len(),
+            done.len()
+        )),
+        "{text}"
+    );
+    for (dir, bytes) in &done {
+        assert_eq!(
+            &std::fs::read(dir.join("summary.json")).unwrap(),
+            bytes,
+            "not redone"
+        );
+    }
+    assert_eq!(
+        rows(&std::fs::read_to_string(out.join("summary.csv")).unwrap()).len(),
+        4
+    );
+}
+
+#[test]
+fn reproduce_replays_an_injected_kick_bit_for_bit_on_one_thread() {
+    let out = scratch("reproduce");
+    // A 1 m/s push into the water at step 300, in a run on 2 threads with
+    // checkpoints every 100 steps (so the replay starts at step 200).
+    let study = out.join("push.toml");
+    std::fs::write(
+        &study,
+        r#"
+[scene]
+t_end = 0.08
+[[scene.body]]
+rect = [0.0, 0.0, 0.2, 0.4]
+material = "water"
+[materials.water]
+K = 1.5e5
+eos = "tait"
+[method]
+shape = "bspline2"
+transfer = "apic"
+[output]
+checkpoint_every = 100
+[[perturb]]
+step = 300
+region = [0.06, 0.1, 0.09, 0.13]
+dv = [1.0, 0.0]
+"#,
+    )
+    .unwrap();
+    let o = kick(&[
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--threads",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let dir = out.join("push");
+    let s = summary(&dir);
+    assert_eq!(s["status"], "completed", "{s}");
+    let events = s["events"].as_array().unwrap();
+    let kick_event = events
+        .iter()
+        .find(|e| e["kind"] == "kick" && e["first_step"].as_u64().unwrap() >= 300)
+        .unwrap_or_else(|| panic!("the push is logged: {events:?}"));
+    let first = kick_event["first_step"].as_u64().unwrap();
+    assert!(first <= 301, "{kick_event}");
+    let id = kick_event["id"].to_string();
+    let o = kick(&[
+        "reproduce",
+        dir.to_str().unwrap(),
+        "--event",
+        &id,
+        "--threads",
+        "1",
+    ]);
+    assert!(
+        o.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        stderr(&o)
+    );
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains(&format!(
+            "reproduced event {id} at step {first}: hash match"
+        )),
+        "{text}"
+    );
+    let replay = dir.join("reproduce").join(format!("event_{id}"));
+    let dense = rows(&std::fs::read_to_string(replay.join("timeseries.csv")).unwrap());
+    let steps: Vec<u64> = dense[1..].iter().map(|r| r[0].parse().unwrap()).collect();
+    assert_eq!(
+        steps.first(),
+        Some(&200),
+        "starts at the checkpoint before the event"
+    );
+    assert!(
+        steps.windows(2).all(|w| w[1] == w[0] + 1),
+        "a row every step"
+    );
+    assert!(replay
+        .join("particles")
+        .join(format!("particles_{first:09}.vtk"))
+        .exists());
+
+    // Unknown event and a corrupted checkpoint: clear errors, exit 2.
+    let o = kick(&["reproduce", dir.to_str().unwrap(), "--event", "999"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("no event 999"), "{}", stderr(&o));
+    let ckpt = dir.join(kick_event["checkpoint"].as_str().unwrap());
+    let mut bytes = std::fs::read(&ckpt).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 0x40;
+    std::fs::write(&ckpt, bytes).unwrap();
+    let o = kick(&["reproduce", dir.to_str().unwrap(), "--event", &id]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("corrupted"), "{}", stderr(&o));
 }

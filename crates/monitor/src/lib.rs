@@ -15,6 +15,7 @@ pub mod front;
 pub mod geometry;
 pub mod hydrostatic;
 pub mod particle_history;
+mod state;
 
 pub use config::MonitorConfig;
 pub use events::{CellRange, Event, EventKind, Region};

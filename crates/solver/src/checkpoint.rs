@@ -6,7 +6,7 @@ use crate::particles::{Mat2, Particles, Vec2};
 use crate::Solver;
 
 const MAGIC: &[u8; 8] = b"KICKSTAT";
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum CheckpointError {
@@ -86,29 +86,78 @@ pub fn state_hash(ps: &Particles) -> u64 {
     h.finish()
 }
 
-struct Writer(Vec<u8>);
+/// Little-endian binary writer shared by every checkpoint format (solver,
+/// monitor, study runner), so f64 values round-trip bit for bit.
+#[derive(Default)]
+pub struct Writer(pub Vec<u8>);
 
 impl Writer {
-    fn f64(&mut self, v: f64) {
+    pub fn f64(&mut self, v: f64) {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
-    fn u64(&mut self, v: u64) {
+    pub fn u64(&mut self, v: u64) {
         self.0.extend_from_slice(&v.to_le_bytes());
     }
-    fn vec2s(&mut self, vs: &[Vec2]) {
+    pub fn i64(&mut self, v: i64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    pub fn bool(&mut self, v: bool) {
+        self.u64(v as u64);
+    }
+    pub fn bytes(&mut self, b: &[u8]) {
+        self.u64(b.len() as u64);
+        self.0.extend_from_slice(b);
+    }
+    pub fn str(&mut self, s: &str) {
+        self.bytes(s.as_bytes());
+    }
+    pub fn vec2s(&mut self, vs: &[Vec2]) {
         vs.iter().flat_map(|v| v.iter()).for_each(|&c| self.f64(c));
     }
-    fn mat2s(&mut self, ms: &[Mat2]) {
+    pub fn mat2s(&mut self, ms: &[Mat2]) {
         ms.iter().flat_map(|m| m.iter()).for_each(|&c| self.f64(c));
     }
-    fn f64s(&mut self, vs: &[f64]) {
+    pub fn f64s(&mut self, vs: &[f64]) {
         vs.iter().for_each(|&c| self.f64(c));
+    }
+    pub fn i64s(&mut self, vs: &[i64]) {
+        vs.iter().for_each(|&c| self.i64(c));
+    }
+    pub fn u32s(&mut self, vs: &[u32]) {
+        vs.iter().for_each(|&c| self.u64(c as u64));
+    }
+    /// Appends the FNV checksum of everything written so far.
+    pub fn seal(mut self) -> Vec<u8> {
+        let mut h = Hasher::default();
+        h.bytes(&self.0);
+        let sum = h.finish();
+        self.u64(sum);
+        self.0
     }
 }
 
-struct Reader<'a>(&'a [u8]);
+/// Checks `magic` and the trailing checksum of a sealed buffer and returns its body after the magic.
+pub fn unseal<'a>(bytes: &'a [u8], magic: &[u8; 8]) -> Result<&'a [u8], CheckpointError> {
+    if bytes.len() < 16 {
+        return Err(CheckpointError::Truncated);
+    }
+    if &bytes[..8] != magic {
+        return Err(CheckpointError::BadMagic);
+    }
+    let (body, tail) = bytes.split_at(bytes.len() - 8);
+    let stored = u64::from_le_bytes(tail.try_into().expect("8 bytes"));
+    let mut h = Hasher::default();
+    h.bytes(body);
+    let computed = h.finish();
+    if stored != computed {
+        return Err(CheckpointError::Checksum { stored, computed });
+    }
+    Ok(&body[8..])
+}
 
-impl Reader<'_> {
+pub struct Reader<'a>(pub &'a [u8]);
+
+impl<'a> Reader<'a> {
     fn take<const N: usize>(&mut self) -> Result<[u8; N], CheckpointError> {
         if self.0.len() < N {
             return Err(CheckpointError::Truncated);
@@ -117,19 +166,37 @@ impl Reader<'_> {
         self.0 = rest;
         Ok(head.try_into().expect("split at N"))
     }
-    fn f64(&mut self) -> Result<f64, CheckpointError> {
+    pub fn f64(&mut self) -> Result<f64, CheckpointError> {
         Ok(f64::from_le_bytes(self.take()?))
     }
-    fn u64(&mut self) -> Result<u64, CheckpointError> {
+    pub fn u64(&mut self) -> Result<u64, CheckpointError> {
         Ok(u64::from_le_bytes(self.take()?))
     }
-    fn vec2s(&mut self, out: &mut [Vec2]) -> Result<(), CheckpointError> {
+    pub fn i64(&mut self) -> Result<i64, CheckpointError> {
+        Ok(i64::from_le_bytes(self.take()?))
+    }
+    pub fn bool(&mut self) -> Result<bool, CheckpointError> {
+        Ok(self.u64()? != 0)
+    }
+    pub fn bytes(&mut self) -> Result<&'a [u8], CheckpointError> {
+        let n = self.u64()? as usize;
+        if self.0.len() < n {
+            return Err(CheckpointError::Truncated);
+        }
+        let (head, rest) = self.0.split_at(n);
+        self.0 = rest;
+        Ok(head)
+    }
+    pub fn str(&mut self) -> Result<String, CheckpointError> {
+        String::from_utf8(self.bytes()?.to_vec()).map_err(|_| CheckpointError::Truncated)
+    }
+    pub fn vec2s(&mut self, out: &mut [Vec2]) -> Result<(), CheckpointError> {
         for v in out {
             *v = Vec2::new(self.f64()?, self.f64()?);
         }
         Ok(())
     }
-    fn mat2s(&mut self, out: &mut [Mat2]) -> Result<(), CheckpointError> {
+    pub fn mat2s(&mut self, out: &mut [Mat2]) -> Result<(), CheckpointError> {
         for m in out {
             for c in m.iter_mut() {
                 *c = self.f64()?;
@@ -137,11 +204,26 @@ impl Reader<'_> {
         }
         Ok(())
     }
-    fn f64s(&mut self, out: &mut [f64]) -> Result<(), CheckpointError> {
+    pub fn f64s(&mut self, out: &mut [f64]) -> Result<(), CheckpointError> {
         for v in out {
             *v = self.f64()?;
         }
         Ok(())
+    }
+    pub fn i64s(&mut self, out: &mut [i64]) -> Result<(), CheckpointError> {
+        for v in out {
+            *v = self.i64()?;
+        }
+        Ok(())
+    }
+    pub fn u32s(&mut self, out: &mut [u32]) -> Result<(), CheckpointError> {
+        for v in out {
+            *v = self.u64()? as u32;
+        }
+        Ok(())
+    }
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
     }
 }
 
@@ -149,7 +231,7 @@ pub fn save(s: &Solver) -> Vec<u8> {
     let ps = &s.particles;
     let mut w = Writer(Vec::with_capacity(64 + ps.len() * 240));
     w.0.extend_from_slice(MAGIC);
-    w.0.extend_from_slice(&VERSION.to_le_bytes());
+    w.u64(VERSION as u64);
     w.u64(ps.len() as u64);
     w.u64(s.step);
     w.f64(s.time);
@@ -168,33 +250,16 @@ pub fn save(s: &Solver) -> Vec<u8> {
     w.f64s(&ps.vol0);
     w.f64s(&ps.pressure);
     w.f64s(&ps.dev_rate);
-    let mut h = Hasher::default();
-    h.bytes(&w.0);
-    let sum = h.finish();
-    w.u64(sum);
-    w.0
+    w.seal()
 }
 
 pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
-    if bytes.len() < 20 {
-        return Err(CheckpointError::Truncated);
-    }
-    if &bytes[..8] != MAGIC {
-        return Err(CheckpointError::BadMagic);
-    }
-    let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
+    let body = unseal(bytes, MAGIC)?;
+    let mut r = Reader(body);
+    let version = r.u64().map(|w| w as u32)?;
     if version != VERSION {
         return Err(CheckpointError::Version(version));
     }
-    let (body, tail) = bytes.split_at(bytes.len() - 8);
-    let stored = u64::from_le_bytes(tail.try_into().expect("8 bytes"));
-    let mut h = Hasher::default();
-    h.bytes(body);
-    let computed = h.finish();
-    if stored != computed {
-        return Err(CheckpointError::Checksum { stored, computed });
-    }
-    let mut r = Reader(&body[12..]);
     let n = r.u64()?;
     let expected = s.particles.len() as u64;
     if n != expected {

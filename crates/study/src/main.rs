@@ -1,9 +1,15 @@
 //! `kick`: runs studies of the MPM kinematic anomaly.
 
 mod bench;
+mod case_checkpoint;
+mod matrix;
+mod metrics;
 mod output_files;
+mod reproduce;
 mod run_case;
 mod study_file;
+mod tables;
+mod timeseries;
 
 use clap::{Parser, Subcommand};
 use solver::{ShapeKind, TransferKind};
@@ -35,6 +41,57 @@ enum Command {
         /// Override any study key, e.g. --set materials.water.K=1.5e6
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// Also write the timeseries as CSV.
+        #[arg(long)]
+        csv: bool,
+    },
+    /// Run every case of a study, cases in parallel (or join shards with --merge).
+    Matrix {
+        /// Study file (TOML); not needed with --merge.
+        #[arg(required_unless_present = "merge")]
+        study: Option<PathBuf>,
+        /// Output folder: one sub-folder per case, summary.parquet/csv, manifest.json.
+        #[arg(long, default_value = "reports/matrix")]
+        out: PathBuf,
+        /// Cases run at once (default: number of cores).
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Solver threads per case (default: cores / jobs).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Run only the cases at positions I, I+N, I+2N, ... (0 <= I < N).
+        #[arg(long, value_name = "I/N", value_parser = matrix::parse_shard)]
+        shard: Option<(usize, usize)>,
+        /// Skip cases whose summary.json is already in OUT.
+        #[arg(long)]
+        resume: bool,
+        /// Join the case folders of these matrix outputs into OUT's tables.
+        #[arg(long, num_args = 1.., value_name = "DIR", conflicts_with_all = ["study", "shard", "resume"])]
+        merge: Vec<PathBuf>,
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Also write each case's timeseries as CSV.
+        #[arg(long)]
+        csv: bool,
+    },
+    /// Replay a logged event from the checkpoint before it and check it happens again.
+    Reproduce {
+        /// A case folder written by `kick run` or `kick matrix`.
+        case_dir: PathBuf,
+        /// Event id (see summary.json).
+        #[arg(long)]
+        event: u32,
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Output folder (default CASE_DIR/reproduce/event_K).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// VTK every step from this many steps before the event ...
+        #[arg(long, default_value_t = 20)]
+        before: u64,
+        /// ... to this many after its last step.
+        #[arg(long, default_value_t = 20)]
+        after: u64,
     },
     /// List the expanded cases of a study and their parameters.
     List {
@@ -82,6 +139,7 @@ fn main() -> ExitCode {
             out,
             threads,
             set,
+            csv,
         } => {
             let study = match study_file::load(&study, &set) {
                 Ok(s) => s,
@@ -108,7 +166,8 @@ fn main() -> ExitCode {
             let dir = out.join(&chosen.name);
             let opts = run_case::RunOptions {
                 threads,
-                progress: true,
+                bar: Some(indicatif::ProgressBar::new(1000).with_style(run_case::progress_style())),
+                csv,
             };
             match run_case::run_case(chosen, &dir, &opts) {
                 Ok(summary) => {
@@ -129,6 +188,99 @@ fn main() -> ExitCode {
                     eprintln!("kick: writing {} failed: {e}", dir.display());
                     ExitCode::FAILURE
                 }
+            }
+        }
+        Command::Matrix {
+            study,
+            out,
+            jobs,
+            threads,
+            shard,
+            resume,
+            merge,
+            set,
+            csv,
+        } => {
+            if !merge.is_empty() {
+                return match matrix::merge(&merge, &out) {
+                    Ok(rows) => {
+                        println!("{}", matrix::describe(&rows));
+                        println!("merged tables in {}", out.display());
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => {
+                        eprintln!("kick matrix --merge: {e}");
+                        ExitCode::FAILURE
+                    }
+                };
+            }
+            let Some(study) = study else {
+                return bad_input("matrix: a study file is required (or --merge DIR...)");
+            };
+            let study = match study_file::load(&study, &set) {
+                Ok(s) => s,
+                Err(e) => return bad_input(&e.to_string()),
+            };
+            let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+            let jobs = jobs.unwrap_or(cores);
+            if jobs == 0 || threads == Some(0) {
+                return bad_input("--jobs and --threads: 0 is out of range (allowed >= 1)");
+            }
+            let opts = matrix::MatrixOptions {
+                out: out.clone(),
+                jobs,
+                shard,
+                resume,
+                csv,
+                threads_per_case: threads.unwrap_or((cores / jobs).max(1)),
+                progress: true,
+            };
+            match matrix::run_matrix(&study, &opts) {
+                Ok(r) => {
+                    println!("{}", matrix::describe(&r.rows));
+                    println!(
+                        "ran {} cases ({} already done), wall {:.1} s; tables in {}",
+                        r.ran,
+                        r.skipped,
+                        r.wall_s,
+                        out.display()
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("kick matrix: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Command::Reproduce {
+            case_dir,
+            event,
+            threads,
+            out,
+            before,
+            after,
+        } => {
+            if threads == Some(0) {
+                return bad_input("--threads: 0 is out of range (allowed >= 1)");
+            }
+            let opts = reproduce::ReproduceOptions {
+                threads,
+                out,
+                before,
+                after,
+            };
+            match reproduce::reproduce(&case_dir, event, &opts) {
+                Ok(o) => {
+                    println!("{}", o.message);
+                    println!("dense output in {}", o.out.display());
+                    if o.matched {
+                        ExitCode::SUCCESS
+                    } else {
+                        ExitCode::FAILURE
+                    }
+                }
+                Err(e) => bad_input(&e.0),
             }
         }
         Command::List { study, set } => {

@@ -1,20 +1,30 @@
-//! One case end to end: solver loop, blow-up detection, timeseries, ring
-//! checkpoints, VTK snapshots and summary.json (all written atomically).
+//! One case end to end: the solver stepped under the monitor's eye, blow-up
+//! as a result, timeseries rows, ring checkpoints (solver + monitor) with the
+//! one preceding each event kept for good, VTK snapshots and summary.json,
+//! every file written atomically.
 
+use crate::case_checkpoint;
+use crate::metrics;
 use crate::output_files::{vtk_particles, write_atomic};
 use crate::study_file::Case;
+use crate::tables;
+use crate::timeseries::{Peaks, Timeseries};
 use indicatif::{ProgressBar, ProgressStyle};
+use monitor::{Event, Monitor};
 use serde_json::{json, Value};
-use solver::{Solver, StateView};
+use solver::{Scene, Solver};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Ring checkpoints kept per case.
+/// Ring checkpoints kept per case (besides the step-0 one and event ones).
 const CHECKPOINT_RING: usize = 3;
 
 pub struct RunOptions {
     pub threads: Option<usize>,
-    pub progress: bool,
+    /// Progress bar to drive (hidden when None).
+    pub bar: Option<ProgressBar>,
+    /// Also write the timeseries as CSV.
+    pub csv: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -34,107 +44,104 @@ impl Status {
     }
 }
 
-/// One timeseries row (solver-level figures; the monitor adds its own).
-#[derive(Clone, Debug)]
-struct Row {
-    step: u64,
-    t: f64,
-    dt: f64,
-    e_kin: f64,
-    e_grav: f64,
-    e_int: f64,
-    d_visc: f64,
-    e_total: f64,
-    energy_injected: f64,
-    courant: f64,
-    j_min: f64,
-    j_max: f64,
-    max_speed: f64,
-    n_outside: usize,
+/// What one step did.
+pub enum Stepped {
+    Ok,
+    /// The run must stop: blown up, with the reason.
+    Stop(String),
 }
 
-const ROW_HEADER: &str =
-    "step,t,dt,e_kin,e_grav,e_int,d_visc,e_total,energy_injected,courant,j_min,j_max,max_speed,n_outside";
+/// Solver and monitor stepped together, with the timeseries they feed.
+pub struct Driver {
+    pub solver: Solver,
+    pub monitor: Monitor,
+    pub series: Timeseries,
+    peaks: Peaks,
+}
 
-impl Row {
-    fn of(v: &StateView, injected: f64) -> Row {
-        let (j_min, j_max) =
-            v.j.iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &j| {
-                    (lo.min(j), hi.max(j))
-                });
-        Row {
-            step: v.step,
-            t: v.time,
-            dt: v.dt,
-            e_kin: v.energy.kinetic,
-            e_grav: v.energy.gravitational,
-            e_int: v.energy.stored,
-            d_visc: v.energy.dissipated,
-            e_total: v.energy.total(),
-            energy_injected: injected,
-            courant: v.courant,
-            j_min,
-            j_max,
-            max_speed: v.v.iter().map(|u| u.norm()).fold(0.0, f64::max),
-            n_outside: v.n_outside,
+impl Driver {
+    pub fn new(case: &Case) -> Result<Self, String> {
+        let solver = Solver::new(case.solver.clone()).map_err(|e| format!("setup: {e}"))?;
+        let monitor = Monitor::new(case.monitor.clone(), &solver.view());
+        Ok(Driver {
+            solver,
+            monitor,
+            series: Timeseries::new(),
+            peaks: Peaks::default(),
+        })
+    }
+
+    /// One solver step observed by the monitor.
+    pub fn step(&mut self) -> Stepped {
+        if let Err(e) = self.solver.step() {
+            return Stepped::Stop(format!("step {}: {e}", self.solver.step_count() + 1));
+        }
+        let report = self.monitor.observe(&self.solver.view());
+        self.peaks.add(report);
+        match &report.blow_out {
+            Some(reason) => Stepped::Stop(format!("step {}: {reason}", report.step)),
+            None => Stepped::Ok,
         }
     }
 
-    fn csv(&self) -> String {
-        format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-            self.step,
-            self.t,
-            self.dt,
-            self.e_kin,
-            self.e_grav,
-            self.e_int,
-            self.d_visc,
-            self.e_total,
-            self.energy_injected,
-            self.courant,
-            self.j_min,
-            self.j_max,
-            self.max_speed,
-            self.n_outside
-        )
+    /// A timeseries row at the current step (field metrics computed now).
+    pub fn push_row(&mut self) {
+        if self.series.last_step() == Some(self.solver.step_count()) {
+            return;
+        }
+        let v = self.solver.view();
+        let fields = self.monitor.field_metrics(&v);
+        let mut report = self.monitor.report().clone();
+        if v.step == 0 || report.step != v.step {
+            // Before the first observed step: energies from the state itself.
+            report = monitor::StepReport {
+                step: v.step,
+                t: v.time,
+                dt: v.dt,
+                e_kin: v.energy.kinetic,
+                e_grav: v.energy.gravitational,
+                e_int: v.energy.stored,
+                d_visc: v.energy.dissipated,
+                e_total: v.energy.total(),
+                courant: v.courant,
+                ..Default::default()
+            };
+        }
+        self.series.push(&report, &self.peaks, &fields);
+        self.peaks = Peaks::default();
     }
+}
+
+/// Where the surge front meets the far wall (Z units), for dam-break scenes:
+/// one body standing on the floor against the left wall, narrower than the box.
+pub fn front_wall_z(scene: &Scene) -> Option<f64> {
+    let [b] = scene.bodies.as_slice() else {
+        return None;
+    };
+    let a = b.rect[2] - b.rect[0];
+    let against_wall = (b.rect[0] - scene.origin[0]).abs() < 1e-9 * scene.size[0]
+        && (b.rect[1] - scene.origin[1]).abs() < 1e-9 * scene.size[1];
+    (against_wall && a < scene.size[0] && scene.gravity > 0.0).then(|| scene.size[0] / a)
 }
 
 /// Runs a case into `dir` and returns its summary (also written as summary.json).
 /// Panics inside the solver become status "failed"; nothing else is lost.
 pub fn run_case(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Value> {
     std::fs::create_dir_all(dir)?;
-    let started = Instant::now();
-    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match opts.threads {
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
+    write_atomic(
+        &dir.join("case.toml"),
+        toml::to_string(&case.table)
             .map_err(|e| std::io::Error::other(e.to_string()))?
-            .install(|| simulate(case, dir, opts)),
-        None => simulate(case, dir, opts),
+            .as_bytes(),
+    )?;
+    let started = Instant::now();
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        with_threads(opts.threads, || simulate(case, dir, opts))
     }));
     let wall_s = started.elapsed().as_secs_f64();
     let run = match outcome {
         Ok(r) => r?,
-        Err(panic) => {
-            let msg = panic
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_else(|| "panic".into());
-            Simulated {
-                status: Status::Failed,
-                reason: format!("panic: {msg}"),
-                steps: 0,
-                t_end: 0.0,
-                particles: 0,
-                final_hash: 0,
-                injected_max: 0.0,
-                courant_max: 0.0,
-            }
-        }
+        Err(panic) => Simulated::failed(format!("panic: {}", panic_message(panic))),
     };
     let params: serde_json::Map<String, Value> = case
         .params
@@ -153,18 +160,39 @@ pub fn run_case(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<V
         "particles": run.particles,
         "particle_steps_per_s": if wall_s > 0.0 { particle_steps / wall_s } else { 0.0 },
         "final_state_hash": format!("{:016x}", run.final_hash),
-        "events": [],
-        "metrics": {
-            "energy_injected_max": run.injected_max,
-            "courant_max": run.courant_max,
-            "t_first_kick": Value::Null,
-        },
+        "events": run.events,
+        "metrics": run.metrics,
     });
     write_atomic(
         &dir.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     Ok(summary)
+}
+
+pub fn with_threads<T>(
+    threads: Option<usize>,
+    f: impl FnOnce() -> std::io::Result<T> + Send,
+) -> std::io::Result<T>
+where
+    T: Send,
+{
+    match threads {
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map_err(|e| std::io::Error::other(e.to_string()))?
+            .install(f),
+        None => f(),
+    }
+}
+
+pub fn panic_message(panic: Box<dyn std::any::Any + Send>) -> String {
+    panic
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+        .unwrap_or_else(|| "panic".into())
 }
 
 struct Simulated {
@@ -174,137 +202,130 @@ struct Simulated {
     t_end: f64,
     particles: usize,
     final_hash: u64,
-    injected_max: f64,
-    courant_max: f64,
+    events: Vec<Event>,
+    metrics: Value,
+}
+
+impl Simulated {
+    fn failed(reason: String) -> Self {
+        Simulated {
+            status: Status::Failed,
+            reason,
+            steps: 0,
+            t_end: 0.0,
+            particles: 0,
+            final_hash: 0,
+            events: vec![],
+            metrics: json!({}),
+        }
+    }
+}
+
+pub fn event_checkpoint_name(id: u32) -> String {
+    format!("checkpoints/event_{id}.ckpt")
 }
 
 fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simulated> {
-    let mut solver = match Solver::new(case.solver.clone()) {
-        Ok(s) => s,
-        Err(e) => {
-            return Ok(Simulated {
-                status: Status::Failed,
-                reason: format!("setup: {e}"),
-                steps: 0,
-                t_end: 0.0,
-                particles: 0,
-                final_hash: 0,
-                injected_max: 0.0,
-                courant_max: 0.0,
-            })
-        }
+    let mut d = match Driver::new(case) {
+        Ok(d) => d,
+        Err(reason) => return Ok(Simulated::failed(reason)),
     };
     let t_end = case.solver.scene.t_end;
-    let expected_steps = (t_end / solver.next_dt()).ceil().max(1.0) as u64;
+    let expected_steps = (t_end / d.solver.next_dt()).ceil().max(1.0) as u64;
     let row_every = (expected_steps / case.output.timeseries_rows).max(1);
-    let bar = if opts.progress {
-        let bar = ProgressBar::new(1000);
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{prefix} [{elapsed_precise}] {wide_bar} {percent}% {msg}",
-            )
-            .expect("valid template"),
-        );
-        bar.set_prefix(case.name.clone());
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
-    let mut rows = vec![Row::of(&solver.view(), 0.0)];
-    let mut e_min = solver.energy().total();
-    let mut injected_max: f64 = 0.0;
-    let mut courant_max: f64 = 0.0;
+    let bar = opts.bar.clone().unwrap_or_else(ProgressBar::hidden);
+    bar.set_length(1000);
+    bar.set_prefix(case.name.clone());
     let mut vtk_times: Vec<f64> = case.output.vtk_times.clone();
     vtk_times.sort_by(f64::total_cmp);
     let mut next_vtk = 0;
-    let mut ring: Vec<PathBuf> = vec![];
     let particles_dir = dir.join("particles");
-    let write_vtk = |v: &StateView| -> std::io::Result<()> {
+    let write_vtk = |s: &Solver| -> std::io::Result<()> {
+        let v = s.view();
         write_atomic(
             &particles_dir.join(format!("particles_{:09}.vtk", v.step)),
-            &vtk_particles(v),
+            &vtk_particles(&v),
         )
     };
     while next_vtk < vtk_times.len() && vtk_times[next_vtk] <= 0.0 {
-        write_vtk(&solver.view())?;
+        write_vtk(&d.solver)?;
         next_vtk += 1;
     }
+    d.push_row();
+    // The step-0 checkpoint precedes any event, even one at step 1.
+    let mut ring: Vec<PathBuf> = vec![];
+    let every = case.output.checkpoint_every;
+    let ring_path = |step: u64| dir.join("checkpoints").join(format!("ring_{step:09}.ckpt"));
+    if every > 0 {
+        let path = ring_path(0);
+        write_atomic(&path, &case_checkpoint::save(&d.solver, &d.monitor))?;
+        ring.push(path);
+    }
     let (status, reason) = loop {
-        if solver.finished() {
+        if d.solver.finished() {
             break (Status::Completed, String::new());
         }
-        if let Err(e) = solver.step() {
-            break (
-                Status::BlewUp,
-                format!("step {}: {e}", solver.step_count() + 1),
-            );
+        let stepped = d.step();
+        let step = d.solver.step_count();
+        let opened = d.monitor.report().events_opened;
+        if opened > 0 {
+            let hash = format!("{:016x}", d.solver.state_hash());
+            let n = d.monitor.events().len();
+            for e in &mut d.monitor.events_mut()[n - opened..] {
+                e.state_hash = Some(hash.clone());
+                if let Some(src) = ring.last() {
+                    let name = event_checkpoint_name(e.id);
+                    write_atomic(&dir.join(&name), &std::fs::read(src)?)?;
+                    e.checkpoint = Some(name);
+                }
+            }
+            write_vtk(&d.solver)?;
         }
-        let v = solver.view();
-        let e = v.energy.total();
-        e_min = e_min.min(e);
-        injected_max = injected_max.max(e - e_min);
-        courant_max = courant_max.max(v.courant);
-        if v.step % row_every == 0 {
-            rows.push(Row::of(&v, e - e_min));
-            bar.set_position((1000.0 * v.time / t_end) as u64);
-            bar.set_message(format!("t = {:.3} s", v.time));
+        if step % row_every == 0 || opened > 0 || matches!(stepped, Stepped::Stop(_)) {
+            d.push_row();
+            let t = d.solver.time();
+            bar.set_position((1000.0 * t / t_end) as u64);
+            bar.set_message(format!("t = {t:.3} s, {} events", d.monitor.events().len()));
         }
-        while next_vtk < vtk_times.len() && vtk_times[next_vtk] <= v.time {
-            write_vtk(&v)?;
+        if let Stepped::Stop(reason) = stepped {
+            break (Status::BlewUp, reason);
+        }
+        while next_vtk < vtk_times.len() && vtk_times[next_vtk] <= d.solver.time() {
+            write_vtk(&d.solver)?;
             next_vtk += 1;
         }
-        if v.n_nonfinite > 0 {
-            break (
-                Status::BlewUp,
-                format!(
-                    "step {}: non-finite state in {} particles",
-                    v.step, v.n_nonfinite
-                ),
-            );
-        }
-        if v.n_outside > 0 {
-            break (
-                Status::BlewUp,
-                format!("step {}: {} particles left the box", v.step, v.n_outside),
-            );
-        }
-        let every = case.output.checkpoint_every;
-        if every > 0 && v.step % every == 0 {
-            let path = dir
-                .join("checkpoints")
-                .join(format!("ring_{:09}.ckpt", v.step));
-            write_atomic(&path, &solver.checkpoint())?;
+        if every > 0 && step % every == 0 {
+            let path = ring_path(step);
+            write_atomic(&path, &case_checkpoint::save(&d.solver, &d.monitor))?;
             ring.push(path);
             if ring.len() > CHECKPOINT_RING {
                 let _ = std::fs::remove_file(ring.remove(0));
             }
         }
     };
-    bar.finish_and_clear();
-    let v = solver.view();
-    if rows.last().map(|r| r.step) != Some(v.step) {
-        rows.push(Row::of(&v, v.energy.total() - e_min));
-    }
-    write_vtk(&v)?;
-    let mut csv = String::from(ROW_HEADER);
-    csv.push('\n');
-    for r in &rows {
-        csv.push_str(&r.csv());
-    }
-    write_atomic(&dir.join("timeseries.csv"), csv.as_bytes())?;
+    d.push_row();
+    write_vtk(&d.solver)?;
+    tables::write_timeseries(&d.series, dir, opts.csv)?;
+    let events = d.monitor.events().to_vec();
+    let scene = &case.solver.scene;
     Ok(Simulated {
         status,
         reason,
-        steps: v.step,
-        t_end: v.time,
-        particles: v.x.len(),
-        final_hash: solver.state_hash(),
-        injected_max,
-        courant_max,
+        steps: d.solver.step_count(),
+        t_end: d.solver.time(),
+        particles: d.solver.particle_count(),
+        final_hash: d.solver.state_hash(),
+        metrics: metrics::summarise(&d.series, &events, front_wall_z(scene)),
+        events,
     })
 }
 
-fn toml_to_json(v: &toml::Value) -> Value {
+pub fn progress_style() -> ProgressStyle {
+    ProgressStyle::with_template("{prefix:>24} [{elapsed_precise}] {wide_bar} {percent:>3}% {msg}")
+        .expect("valid template")
+}
+
+pub fn toml_to_json(v: &toml::Value) -> Value {
     match v {
         toml::Value::String(s) => json!(s),
         toml::Value::Integer(i) => json!(i),

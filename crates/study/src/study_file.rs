@@ -1,6 +1,7 @@
 //! Study files: TOML schema, validation with file/key/allowed-range errors,
 //! `--set` overrides and matrix expansion into named cases.
 
+use monitor::MonitorConfig;
 use solver::{
     Body, DtMode, EosKind, InitialState, JUpdate, Material, Method, Perturb, Scene, SchemeKind,
     ShapeKind, SolverConfig, TransferKind,
@@ -44,8 +45,11 @@ pub struct Output {
 #[derive(Clone, Debug)]
 pub struct Case {
     pub name: String,
+    pub monitor: MonitorConfig,
     /// Every parameter by dotted key (after overrides and matrix values).
     pub params: BTreeMap<String, Value>,
+    /// The resolved study table of this case (no matrix), written as case.toml.
+    pub table: Table,
     pub solver: SolverConfig,
     pub output: Output,
 }
@@ -110,7 +114,7 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Study, StudyError> {
             file: &file,
             table: &table,
         };
-        let (solver, output) = reader.case()?;
+        let (solver, output, monitor) = reader.case()?;
         let base = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -120,9 +124,18 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Study, StudyError> {
         } else {
             name_parts.join("_")
         };
+        let mut params = flatten(&table);
+        // Every method key appears in every case, defaults included.
+        if let Ok(Value::Table(m)) = Value::try_from(&solver.method) {
+            for (k, v) in m {
+                params.entry(format!("method.{k}")).or_insert(v);
+            }
+        }
         cases.push(Case {
             name,
-            params: flatten(&table),
+            monitor,
+            params,
+            table,
             solver,
             output,
         });
@@ -391,7 +404,7 @@ impl Reader<'_> {
         Ok(out)
     }
 
-    fn case(&mut self) -> Result<(SolverConfig, Output), StudyError> {
+    fn case(&mut self) -> Result<(SolverConfig, Output, MonitorConfig), StudyError> {
         let root = self.table;
         self.known(
             root,
@@ -434,10 +447,10 @@ impl Reader<'_> {
             .cloned()
             .unwrap_or_default();
         let method = self.method(&method_t)?;
-        if let Some(monitor) = self.section(root, "monitor", "monitor")? {
-            // Monitor thresholds arrive with the monitor crate.
-            self.known(monitor, "monitor", &[])?;
-        }
+        let monitor = match self.section(root, "monitor", "monitor")? {
+            Some(t) => self.monitor(t)?,
+            None => MonitorConfig::default(),
+        };
         let output_t = self
             .section(root, "output", "output")?
             .cloned()
@@ -450,7 +463,37 @@ impl Reader<'_> {
             perturb,
         };
         cfg.validate().map_err(|e| self.err(&e.key, e.message))?;
-        Ok((cfg, output))
+        Ok((cfg, output, monitor))
+    }
+
+    /// Every `[monitor]` key is a non-negative number named as in `MonitorConfig`.
+    fn monitor(&self, t: &Table) -> Result<MonitorConfig, StudyError> {
+        let defaults = Value::try_from(MonitorConfig::default()).expect("config serialises");
+        let defaults = defaults.as_table().expect("a table");
+        let allowed: Vec<&str> = defaults.keys().map(|k| k.as_str()).collect();
+        self.known(t, "monitor", &allowed)?;
+        let mut merged = defaults.clone();
+        for k in t.keys() {
+            let integer = defaults[k].is_integer();
+            let value = self.float(t, "monitor", k, None, 0.0, 1e12)?;
+            if integer && value.fract() != 0.0 {
+                return Err(self.err(
+                    &format!("monitor.{k}"),
+                    format!("{value} must be a whole number"),
+                ));
+            }
+            merged.insert(
+                k.clone(),
+                if integer {
+                    Value::Integer(value as i64)
+                } else {
+                    Value::Float(value)
+                },
+            );
+        }
+        Value::Table(merged)
+            .try_into()
+            .map_err(|e: toml::de::Error| self.err("monitor", e.message().to_string()))
     }
 
     fn material(&self, t: &Table, path: &str) -> Result<Material, StudyError> {
@@ -682,13 +725,16 @@ impl Reader<'_> {
                             )
                         }
                     };
-                    if !(0.0..=t_end).contains(&v) {
+                    if !(v >= 0.0 && v.is_finite()) {
                         return Err(self.err(
                             "output.vtk_times",
-                            format!("{v} is out of range (allowed 0 ..= t_end = {t_end})"),
+                            format!("{v} is out of range (allowed finite times >= 0 s)"),
                         ));
                     }
-                    out.push(v);
+                    // Times past t_end are kept in the file but never reached.
+                    if v <= t_end {
+                        out.push(v);
+                    }
                 }
                 out
             }

@@ -1,0 +1,243 @@
+//! `kick matrix`: every case of a study, cases in parallel (longest first),
+//! a progress bar per running case and one overall, resumable, shardable
+//! across a cluster, and joined into OUT/summary.{parquet,csv} + manifest.json.
+
+use crate::output_files::write_atomic;
+use crate::run_case::{progress_style, run_case, RunOptions};
+use crate::study_file::{Case, Study};
+use crate::tables;
+use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
+
+pub struct MatrixOptions {
+    pub out: PathBuf,
+    pub jobs: usize,
+    /// (index, count): run the cases whose position in the study is index mod count.
+    pub shard: Option<(usize, usize)>,
+    pub resume: bool,
+    pub csv: bool,
+    /// Solver threads per case (cases are the unit of parallelism).
+    pub threads_per_case: usize,
+    pub progress: bool,
+}
+
+/// `I/N` with 0 <= I < N.
+pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let bad = || {
+        format!("--shard {s}: expected I/N with 0 <= I < N (e.g. 0/4 for $SLURM_ARRAY_TASK_ID/4)")
+    };
+    let (i, n) = s.split_once('/').ok_or_else(bad)?;
+    let (i, n): (usize, usize) = (i.parse().map_err(|_| bad())?, n.parse().map_err(|_| bad())?);
+    if n == 0 || i >= n {
+        return Err(bad());
+    }
+    Ok((i, n))
+}
+
+/// Relative cost of a case: particles x steps (sound speed sets the fixed step).
+pub fn estimated_cost(case: &Case) -> f64 {
+    let s = &case.solver.scene;
+    let area: f64 = s
+        .bodies
+        .iter()
+        .map(|b| (b.rect[2] - b.rect[0]) * (b.rect[3] - b.rect[1]))
+        .sum();
+    let particles = area / (s.cell * s.cell) * (s.ppc * s.ppc) as f64;
+    let c = s
+        .materials
+        .iter()
+        .map(|m| (m.k / m.rho0).sqrt())
+        .fold(0.0, f64::max);
+    let speed = c + (2.0 * s.gravity * s.size[1]).sqrt();
+    let dt = case.solver.method.cfl * s.cell / speed.max(1e-12);
+    particles * s.t_end / dt
+}
+
+/// A finished case's summary, if its folder holds a readable one.
+pub fn finished_summary(dir: &Path) -> Option<Value> {
+    let bytes = std::fs::read(dir.join("summary.json")).ok()?;
+    let v: Value = serde_json::from_slice(&bytes).ok()?;
+    v["status"].as_str()?;
+    Some(v)
+}
+
+pub struct MatrixResult {
+    pub ran: usize,
+    pub skipped: usize,
+    pub rows: Vec<(String, Value)>,
+    pub wall_s: f64,
+}
+
+pub fn run_matrix(study: &Study, opts: &MatrixOptions) -> std::io::Result<MatrixResult> {
+    let started = Instant::now();
+    std::fs::create_dir_all(&opts.out)?;
+    let selected: Vec<&Case> = study
+        .cases
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| opts.shard.is_none_or(|(i, n)| k % n == i))
+        .map(|(_, c)| c)
+        .collect();
+    let mut todo: Vec<&Case> = selected
+        .iter()
+        .copied()
+        .filter(|c| !(opts.resume && finished_summary(&opts.out.join(&c.name)).is_some()))
+        .collect();
+    let skipped = selected.len() - todo.len();
+    todo.sort_by(|a, b| estimated_cost(b).total_cmp(&estimated_cost(a)));
+    let manifest = |state: &str, wall: f64| -> std::io::Result<()> {
+        let m = json!({
+            "study": study.file.display().to_string(),
+            "state": state,
+            "shard": opts.shard.map(|(i, n)| format!("{i}/{n}")),
+            "jobs": opts.jobs,
+            "threads_per_case": opts.threads_per_case,
+            "cases": selected.iter().map(|c| c.name.clone()).collect::<Vec<_>>(),
+            "wall_s": wall,
+            "kick_version": env!("CARGO_PKG_VERSION"),
+        });
+        write_atomic(
+            &opts.out.join("manifest.json"),
+            serde_json::to_string_pretty(&m)?.as_bytes(),
+        )
+    };
+    manifest("running", 0.0)?;
+
+    let multi = if opts.progress {
+        MultiProgress::new()
+    } else {
+        MultiProgress::with_draw_target(indicatif::ProgressDrawTarget::hidden())
+    };
+    let overall = multi.add(ProgressBar::new(todo.len() as u64));
+    overall.set_style(
+        ProgressStyle::with_template(
+            "{prefix:>24} [{elapsed_precise}] {wide_bar} {pos}/{len} cases {msg}",
+        )
+        .expect("valid template"),
+    );
+    overall.set_prefix("matrix");
+    let next = AtomicUsize::new(0);
+    let failures = Mutex::new(Vec::<String>::new());
+    std::thread::scope(|scope| {
+        for _ in 0..opts.jobs.max(1).min(todo.len().max(1)) {
+            scope.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::SeqCst);
+                let Some(case) = todo.get(k) else { break };
+                let bar = multi.insert_before(&overall, ProgressBar::new(1000));
+                bar.set_style(progress_style());
+                let ro = RunOptions {
+                    threads: Some(opts.threads_per_case),
+                    bar: Some(bar.clone()),
+                    csv: opts.csv,
+                };
+                let dir = opts.out.join(&case.name);
+                match run_case(case, &dir, &ro) {
+                    Ok(s) => overall.set_message(format!(
+                        "last: {} {}",
+                        case.name,
+                        s["status"].as_str().unwrap_or("?")
+                    )),
+                    Err(e) => failures
+                        .lock()
+                        .expect("not poisoned")
+                        .push(format!("{}: {e}", dir.display())),
+                }
+                bar.finish_and_clear();
+                multi.remove(&bar);
+                overall.inc(1);
+            });
+        }
+    });
+    overall.finish_and_clear();
+    let failures = failures.into_inner().expect("not poisoned");
+    if !failures.is_empty() {
+        return Err(std::io::Error::other(failures.join("; ")));
+    }
+    let rows: Vec<(String, Value)> = selected
+        .iter()
+        .filter_map(|c| {
+            let dir = opts.out.join(&c.name);
+            finished_summary(&dir).map(|s| (c.name.clone(), s))
+        })
+        .collect();
+    tables::write_summary(&rows, &opts.out)?;
+    let wall_s = started.elapsed().as_secs_f64();
+    manifest("finished", wall_s)?;
+    Ok(MatrixResult {
+        ran: todo.len(),
+        skipped,
+        rows,
+        wall_s,
+    })
+}
+
+/// Joins the case folders of several matrix outputs (e.g. shards) into OUT's
+/// summary table; the rows keep each case's folder in `case_dir`.
+pub fn merge(dirs: &[PathBuf], out: &Path) -> std::io::Result<Vec<(String, Value)>> {
+    std::fs::create_dir_all(out)?;
+    let mut rows: Vec<(String, Value)> = vec![];
+    for d in dirs {
+        let mut entries: Vec<PathBuf> = std::fs::read_dir(d)?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.is_dir())
+            .collect();
+        entries.sort();
+        for case_dir in entries {
+            if let Some(s) = finished_summary(&case_dir) {
+                let name = s["case"].as_str().unwrap_or_default().to_string();
+                rows.retain(|(_, r)| r["case"].as_str() != Some(&name));
+                rows.push((case_dir.display().to_string(), s));
+            }
+        }
+    }
+    tables::write_summary(&rows, out)?;
+    let m = json!({
+        "state": "merged",
+        "merged_from": dirs.iter().map(|d| d.display().to_string()).collect::<Vec<_>>(),
+        "cases": rows.iter().map(|(_, s)| s["case"].clone()).collect::<Vec<_>>(),
+    });
+    write_atomic(
+        &out.join("manifest.json"),
+        serde_json::to_string_pretty(&m)?.as_bytes(),
+    )?;
+    Ok(rows)
+}
+
+/// The one-paragraph matrix summary printed at the end.
+pub fn describe(rows: &[(String, Value)]) -> String {
+    let count = |st: &str| rows.iter().filter(|(_, s)| s["status"] == st).count();
+    let kicked: Vec<&str> = rows
+        .iter()
+        .filter(|(_, s)| s["metrics"]["t_first_kick"].is_number())
+        .map(|(_, s)| s["case"].as_str().unwrap_or("?"))
+        .collect();
+    let mut text = format!(
+        "{} cases: {} completed, {} blew up, {} failed; {} kicked",
+        rows.len(),
+        count("completed"),
+        count("blew_up"),
+        count("failed"),
+        kicked.len()
+    );
+    for (_, s) in rows {
+        let m = &s["metrics"];
+        text.push_str(&format!(
+            "\n  {:<32} {:<9} t = {:>6.3} s  first kick {:>8}  hydro late {:>9}  wall {:>7.1} s",
+            s["case"].as_str().unwrap_or("?"),
+            s["status"].as_str().unwrap_or("?"),
+            s["t_end"].as_f64().unwrap_or(0.0),
+            m["t_first_kick"]
+                .as_f64()
+                .map_or("-".into(), |t| format!("{t:.3} s")),
+            m["hydro_rel_rms_late"]
+                .as_f64()
+                .map_or("-".into(), |h| format!("{h:.3e}")),
+            s["wall_s"].as_f64().unwrap_or(0.0),
+        ));
+    }
+    text
+}
