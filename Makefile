@@ -4,15 +4,25 @@ STUDY ?= studies/dam_break.toml
 OUT ?= reports
 KICK = $(CARGO) run --release -q -p kick-study --
 
-.PHONY: run test build matrix bench fmt clean
+.PHONY: run test build matrix bench fmt clean browser
+
+# The report's browser test needs Debian's chromium; install it when we can (root with apt).
+browser:
+	@if command -v chromium >/dev/null 2>&1; then echo "chromium: $$(command -v chromium)"; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+		echo "installing chromium for the report's browser test"; \
+		DEBIAN_FRONTEND=noninteractive apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null \
+		|| echo "chromium could not be installed: the browser check will be SKIPPED"; \
+	else echo "no chromium and no root apt: the browser check will be SKIPPED"; fi
 
 build:
 	$(CARGO) build --release -p kick-study
 
 run: build
 	$(KICK) run $(STUDY) --out $(OUT)
+	$(KICK) report $(OUT)/$(basename $(notdir $(STUDY)))
 
-test:
+test: browser
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
 	$(CARGO) test --workspace

@@ -33,9 +33,13 @@ pub struct MonitorConfig {
     /// Clusters with fewer flagged particles are noise, not kicks (default: one
     /// cell's worth at 2 x 2 particles per cell).
     pub min_cluster_particles: usize,
-    /// Events closer than this many cells and steps are merged.
+    /// Events closer than this many cells, and than this many steps or
+    /// seconds (stiff cases take tiny steps), are merged.
     pub merge_cells: usize,
     pub merge_steps: u64,
+    pub merge_seconds: f64,
+    /// Events stored per run; later ones are only counted (blow-outs always stored).
+    pub max_events: usize,
     /// Particle ids kept per event (the count is always exact).
     pub max_event_ids: usize,
     /// Energy injected within `injection_window` steps counts as an event when it
@@ -63,6 +67,8 @@ impl Default for MonitorConfig {
             min_cluster_particles: 4,
             merge_cells: 3,
             merge_steps: 5,
+            merge_seconds: 0.01,
+            max_events: 500,
             max_event_ids: 64,
             injection_floor_factor: 3.0,
             injection_window: 20,

@@ -98,8 +98,9 @@ pub struct Event {
     pub kind: EventKind,
     pub first_step: u64,
     pub last_step: u64,
-    /// Time of the first step.
+    /// Time of the first step, and of the last.
     pub t: f64,
+    pub last_t: f64,
     /// Cells flagged at the first step, and in metres.
     pub cells: CellRange,
     pub region: Region,

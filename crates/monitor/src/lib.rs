@@ -128,6 +128,7 @@ pub struct Monitor {
     report: StepReport,
     prev_injected: f64,
     total_mass: f64,
+    events_dropped: u64,
 }
 
 const UNLABELLED: u32 = u32::MAX;
@@ -156,6 +157,7 @@ impl Monitor {
             front: Front::new(&geom),
             report: StepReport::default(),
             prev_injected: 0.0,
+            events_dropped: 0,
             total_mass: v.mass.iter().sum(),
             geom,
             cfg,
@@ -168,6 +170,11 @@ impl Monitor {
 
     pub fn events_mut(&mut self) -> &mut [Event] {
         &mut self.events
+    }
+
+    /// Events not stored because `max_events` was reached.
+    pub fn events_dropped(&self) -> u64 {
+        self.events_dropped
     }
 
     pub fn report(&self) -> &StepReport {
@@ -470,19 +477,27 @@ impl Monitor {
         }
     }
 
-    /// Merges a cluster into an open event of the same kind nearby, or opens one.
+    /// Merges a cluster into an open event of the same kind nearby, or opens
+    /// one; usize::MAX when the event store is full.
     fn attach(&mut self, kind: EventKind, c: Cluster, v: &StateView, g: f64) -> usize {
         let step = v.step;
         let open = self.events.iter().rposition(|e| {
             e.kind == kind
-                && e.last_step + self.cfg.merge_steps >= step
+                && (e.last_step + self.cfg.merge_steps >= step
+                    || v.time - e.last_t <= self.cfg.merge_seconds)
                 && e.extent.near(&c.cells, self.cfg.merge_cells)
         });
+        let blow_out = matches!(kind, EventKind::BlowOut | EventKind::NonFinite);
+        if open.is_none() && !blow_out && self.events.len() >= self.cfg.max_events {
+            self.events_dropped += 1;
+            return usize::MAX;
+        }
         let half = |k: usize| c.count > 0 && 2 * k >= c.count;
         match open {
             Some(k) => {
                 let e = &mut self.events[k];
                 e.last_step = step;
+                e.last_t = v.time;
                 e.extent = e.extent.union(&c.cells);
                 if e.first_step == step {
                     e.cells = e.cells.union(&c.cells);
@@ -508,6 +523,7 @@ impl Monitor {
                     first_step: step,
                     last_step: step,
                     t: v.time,
+                    last_t: v.time,
                     cells: c.cells,
                     region: c.cells.metres(&self.geom),
                     extent: c.cells,

@@ -70,6 +70,7 @@ fn put_event(w: &mut Writer, e: &Event) {
     w.u64(e.first_step);
     w.u64(e.last_step);
     w.f64(e.t);
+    w.f64(e.last_t);
     put_cells(w, &e.cells);
     w.f64s(&[
         e.region.x_min,
@@ -98,6 +99,7 @@ fn get_event(r: &mut Reader) -> Result<Event, CheckpointError> {
     let first_step = r.u64()?;
     let last_step = r.u64()?;
     let t = r.f64()?;
+    let last_t = r.f64()?;
     let cells = get_cells(r)?;
     let region = Region {
         x_min: r.f64()?,
@@ -115,6 +117,7 @@ fn get_event(r: &mut Reader) -> Result<Event, CheckpointError> {
         first_step,
         last_step,
         t,
+        last_t,
         cells,
         region,
         extent,
@@ -156,6 +159,7 @@ impl Monitor {
         w.u64(next as u64);
         w.u64(filled as u64);
         w.f64(self.prev_injected);
+        w.u64(self.events_dropped);
         w.u64(self.events.len() as u64);
         self.events.iter().for_each(|e| put_event(&mut w, e));
         w.seal()
@@ -189,6 +193,7 @@ impl Monitor {
         let filled = r.u64()? as usize;
         self.energy.restore(minimum, &recent, next, filled);
         self.prev_injected = r.f64()?;
+        self.events_dropped = r.u64()?;
         let events = r.u64()? as usize;
         self.events = (0..events)
             .map(|_| get_event(&mut r))

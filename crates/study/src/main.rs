@@ -1,15 +1,6 @@
 //! `kick`: runs studies of the MPM kinematic anomaly.
 
-mod bench;
-mod case_checkpoint;
-mod matrix;
-mod metrics;
-mod output_files;
-mod reproduce;
-mod run_case;
-mod study_file;
-mod tables;
-mod timeseries;
+use study::{bench, matrix, report, reproduce, run_case, study_file};
 
 use clap::{Parser, Subcommand};
 use solver::{ShapeKind, TransferKind};
@@ -92,6 +83,11 @@ enum Command {
         /// ... to this many after its last step.
         #[arg(long, default_value_t = 20)]
         after: u64,
+    },
+    /// Write OUT/report/index.html (figures as PNG and SVG) for a case or matrix folder.
+    Report {
+        /// A case folder (summary.json) or a matrix folder (summary.parquet).
+        dir: PathBuf,
     },
     /// List the expanded cases of a study and their parameters.
     List {
@@ -281,6 +277,21 @@ fn main() -> ExitCode {
                     }
                 }
                 Err(e) => bad_input(&e.0),
+            }
+        }
+        Command::Report { dir } => {
+            if !dir.is_dir() {
+                return bad_input(&format!("{}: no such folder", dir.display()));
+            }
+            match report::report(&dir) {
+                Ok(index) => {
+                    println!("report: {}", index.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("kick report: {e}");
+                    ExitCode::FAILURE
+                }
             }
         }
         Command::List { study, set } => {

@@ -5,8 +5,9 @@
 //! the log.
 
 use crate::case_checkpoint;
-use crate::output_files::{vtk_particles, write_atomic};
+use crate::output_files::write_atomic;
 use crate::run_case::{with_threads, Driver, Stepped};
+use crate::snapshot::Snapshot;
 use crate::study_file;
 use crate::tables;
 use monitor::Event;
@@ -108,7 +109,7 @@ pub fn reproduce(
                 write_atomic(
                     &out.join("particles")
                         .join(format!("particles_{step:09}.vtk")),
-                    &vtk_particles(&v),
+                    &Snapshot::of(&v).vtk(),
                 )?;
             }
             if step == logged.first_step {

@@ -5,7 +5,8 @@
 
 use crate::case_checkpoint;
 use crate::metrics;
-use crate::output_files::{vtk_particles, write_atomic};
+use crate::output_files::write_atomic;
+use crate::snapshot::Snapshot;
 use crate::study_file::Case;
 use crate::tables;
 use crate::timeseries::{Peaks, Timeseries};
@@ -13,11 +14,17 @@ use indicatif::{ProgressBar, ProgressStyle};
 use monitor::{Event, Monitor};
 use serde_json::{json, Value};
 use solver::{Scene, Solver};
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Ring checkpoints kept per case (besides the step-0 one and event ones).
 const CHECKPOINT_RING: usize = 3;
+/// Around an event, particle snapshots every EVENT_FRAME_EVERY steps,
+/// EVENT_FRAMES before and after it, for the first EVENT_WINDOWS events.
+const EVENT_FRAME_EVERY: u64 = 5;
+const EVENT_FRAMES: usize = 4;
+const EVENT_WINDOWS: usize = 8;
 
 pub struct RunOptions {
     pub threads: Option<usize>,
@@ -221,8 +228,9 @@ impl Simulated {
     }
 }
 
-pub fn event_checkpoint_name(id: u32) -> String {
-    format!("checkpoints/event_{id}.ckpt")
+/// A ring checkpoint's path relative to the case folder.
+pub fn ring_name(step: u64) -> String {
+    format!("checkpoints/ring_{step:09}.ckpt")
 }
 
 fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simulated> {
@@ -244,22 +252,39 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
         let v = s.view();
         write_atomic(
             &particles_dir.join(format!("particles_{:09}.vtk", v.step)),
-            &vtk_particles(&v),
+            &Snapshot::of(&v).vtk(),
         )
     };
+    let event_frame = |id: u32, snap: &Snapshot| -> std::io::Result<()> {
+        write_atomic(
+            &particles_dir
+                .join(format!("event_{id}"))
+                .join(format!("particles_{:09}.vtk", snap.step)),
+            &snap.vtk(),
+        )
+    };
+    let n = d.solver.particle_count();
+    let mut ring_frames: Vec<Snapshot> = (0..EVENT_FRAMES)
+        .map(|_| Snapshot::with_capacity(n))
+        .collect();
+    let mut frame_next = 0;
+    let mut now = Snapshot::with_capacity(n);
+    // (event id, last step of its window)
+    let mut windows: Vec<(u32, u64)> = vec![];
+    let mut windows_opened = 0;
     while next_vtk < vtk_times.len() && vtk_times[next_vtk] <= 0.0 {
         write_vtk(&d.solver)?;
         next_vtk += 1;
     }
     d.push_row();
     // The step-0 checkpoint precedes any event, even one at step 1.
-    let mut ring: Vec<PathBuf> = vec![];
+    let mut ring: Vec<(u64, PathBuf)> = vec![];
+    let mut pinned: BTreeSet<u64> = BTreeSet::new();
     let every = case.output.checkpoint_every;
-    let ring_path = |step: u64| dir.join("checkpoints").join(format!("ring_{step:09}.ckpt"));
     if every > 0 {
-        let path = ring_path(0);
+        let path = dir.join(ring_name(0));
         write_atomic(&path, &case_checkpoint::save(&d.solver, &d.monitor))?;
-        ring.push(path);
+        ring.push((0, path));
     }
     let (status, reason) = loop {
         if d.solver.finished() {
@@ -271,15 +296,40 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
         if opened > 0 {
             let hash = format!("{:016x}", d.solver.state_hash());
             let n = d.monitor.events().len();
+            let mut new_ids = vec![];
             for e in &mut d.monitor.events_mut()[n - opened..] {
                 e.state_hash = Some(hash.clone());
-                if let Some(src) = ring.last() {
-                    let name = event_checkpoint_name(e.id);
-                    write_atomic(&dir.join(&name), &std::fs::read(src)?)?;
-                    e.checkpoint = Some(name);
+                // The latest ring checkpoint precedes the event: keep it for good.
+                if let Some((ring_step, _)) = ring.last() {
+                    e.checkpoint = Some(ring_name(*ring_step));
+                    pinned.insert(*ring_step);
                 }
+                new_ids.push(e.id);
             }
-            write_vtk(&d.solver)?;
+            now.capture(&d.solver.view());
+            for id in new_ids {
+                if windows_opened >= EVENT_WINDOWS {
+                    break;
+                }
+                windows_opened += 1;
+                for f in ring_frames
+                    .iter()
+                    .filter(|f| !f.x.is_empty() && f.step < step)
+                {
+                    event_frame(id, f)?;
+                }
+                event_frame(id, &now)?;
+                windows.push((id, step + EVENT_FRAME_EVERY * EVENT_FRAMES as u64));
+            }
+        }
+        if step % EVENT_FRAME_EVERY == 0 {
+            let f = &mut ring_frames[frame_next];
+            f.capture(&d.solver.view());
+            frame_next = (frame_next + 1) % EVENT_FRAMES;
+            windows.retain(|&(_, until)| until >= step);
+            for &(id, _) in &windows {
+                event_frame(id, f)?;
+            }
         }
         if step % row_every == 0 || opened > 0 || matches!(stepped, Stepped::Stop(_)) {
             d.push_row();
@@ -295,11 +345,14 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
             next_vtk += 1;
         }
         if every > 0 && step % every == 0 {
-            let path = ring_path(step);
+            let path = dir.join(ring_name(step));
             write_atomic(&path, &case_checkpoint::save(&d.solver, &d.monitor))?;
-            ring.push(path);
+            ring.push((step, path));
             if ring.len() > CHECKPOINT_RING {
-                let _ = std::fs::remove_file(ring.remove(0));
+                let (old, path) = ring.remove(0);
+                if !pinned.contains(&old) {
+                    let _ = std::fs::remove_file(path);
+                }
             }
         }
     };
@@ -315,7 +368,11 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
         t_end: d.solver.time(),
         particles: d.solver.particle_count(),
         final_hash: d.solver.state_hash(),
-        metrics: metrics::summarise(&d.series, &events, front_wall_z(scene)),
+        metrics: {
+            let mut m = metrics::summarise(&d.series, &events, front_wall_z(scene));
+            m["events_dropped"] = json!(d.monitor.events_dropped());
+            m
+        },
         events,
     })
 }

@@ -1,0 +1,19 @@
+//! kick's study runner as a library: study files, running cases and
+//! matrices, checkpoints, tables, reproduction of events and plotted reports.
+//! The `kick` binary (main.rs) is a thin CLI over it.
+
+pub mod bench;
+pub mod case_checkpoint;
+pub mod matrix;
+pub mod metrics;
+pub mod output_files;
+pub mod plot_case;
+pub mod plot_common;
+pub mod plot_matrix;
+pub mod report;
+pub mod reproduce;
+pub mod run_case;
+pub mod snapshot;
+pub mod study_file;
+pub mod tables;
+pub mod timeseries;

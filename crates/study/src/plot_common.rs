@@ -1,0 +1,212 @@
+//! Shared plotting: the embedded font (no system fonts needed), rendering a
+//! figure to PNG and SVG atomically, colour maps and colour bars.
+
+use crate::output_files::write_atomic;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+use std::path::Path;
+
+pub type Res<T = ()> = Result<T, String>;
+
+const FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
+pub const SANS: &str = "sans-serif";
+
+pub fn err<E: std::fmt::Debug>(e: E) -> String {
+    format!("{e:?}")
+}
+
+/// Registers the embedded DejaVu Sans once per process.
+pub fn fonts() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        for style in [FontStyle::Normal, FontStyle::Bold] {
+            if plotters::style::register_font(SANS, style, FONT).is_err() {
+                panic!("the embedded DejaVu Sans does not parse");
+            }
+        }
+    });
+}
+
+/// A figure drawable on any backend.
+pub trait Figure {
+    fn size(&self) -> (u32, u32);
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Res;
+}
+
+/// Writes `stem`.png and `stem`.svg into `dir`; returns the two file names.
+pub fn render(fig: &impl Figure, dir: &Path, stem: &str) -> Res<[String; 2]> {
+    fonts();
+    std::fs::create_dir_all(dir).map_err(err)?;
+    let (png, svg) = (format!("{stem}.png"), format!("{stem}.svg"));
+    let tmp = dir.join(format!(".{stem}.tmp{}.png", std::process::id()));
+    {
+        let root = BitMapBackend::new(&tmp, fig.size()).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        fig.draw(&root)?;
+        root.present().map_err(err)?;
+    }
+    std::fs::rename(&tmp, dir.join(&png)).map_err(err)?;
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, fig.size()).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        fig.draw(&root)?;
+        root.present().map_err(err)?;
+    }
+    write_atomic(&dir.join(&svg), text.as_bytes()).map_err(err)?;
+    Ok([png, svg])
+}
+
+/// Viridis, interpolated between 6 stops; s in [0, 1].
+pub fn viridis(s: f64) -> RGBColor {
+    const STOPS: [(u8, u8, u8); 6] = [
+        (68, 1, 84),
+        (65, 68, 135),
+        (42, 120, 142),
+        (34, 168, 132),
+        (122, 209, 81),
+        (253, 231, 37),
+    ];
+    let s = if s.is_finite() {
+        s.clamp(0.0, 1.0)
+    } else {
+        0.0
+    } * (STOPS.len() - 1) as f64;
+    let k = (s.floor() as usize).min(STOPS.len() - 2);
+    let f = s - k as f64;
+    let mix = |a: u8, b: u8| (a as f64 + f * (b as f64 - a as f64)).round() as u8;
+    let (a, b) = (STOPS[k], STOPS[k + 1]);
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// A scalar range mapped to colours, linear or log10.
+#[derive(Clone, Copy, Debug)]
+pub struct ColourScale {
+    pub lo: f64,
+    pub hi: f64,
+    pub log: bool,
+}
+
+impl ColourScale {
+    /// From the 1st to the 99th percentile of the finite values (log: of the positive ones).
+    pub fn robust(values: &[f64], log: bool) -> Self {
+        let mut v: Vec<f64> = values
+            .iter()
+            .copied()
+            .filter(|x| x.is_finite() && (!log || *x > 0.0))
+            .collect();
+        if v.is_empty() {
+            return ColourScale {
+                lo: if log { 1e-3 } else { 0.0 },
+                hi: 1.0,
+                log,
+            };
+        }
+        v.sort_by(f64::total_cmp);
+        let q = |f: f64| v[((v.len() - 1) as f64 * f).round() as usize];
+        let (mut lo, mut hi) = (q(0.01), q(0.99));
+        if hi <= lo {
+            hi = if log { lo * 10.0 } else { lo + 1.0 };
+        }
+        if log {
+            lo = lo.max(hi * 1e-8);
+        }
+        ColourScale { lo, hi, log }
+    }
+
+    pub fn unit(&self, x: f64) -> f64 {
+        if self.log {
+            let (a, b) = (self.lo.log10(), self.hi.log10());
+            (x.max(self.lo * 1e-3).log10() - a) / (b - a)
+        } else {
+            (x - self.lo) / (self.hi - self.lo)
+        }
+    }
+
+    pub fn colour(&self, x: f64) -> RGBColor {
+        viridis(self.unit(x))
+    }
+}
+
+/// A vertical colour bar with its label.
+pub fn colour_bar<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    scale: &ColourScale,
+    label: &str,
+) -> Res {
+    let (lo, hi) = if scale.log {
+        (scale.lo.log10(), scale.hi.log10())
+    } else {
+        (scale.lo, scale.hi)
+    };
+    let mut chart = ChartBuilder::on(area)
+        .margin_top(20)
+        .margin_bottom(40)
+        .margin_right(8)
+        .y_label_area_size(62)
+        .build_cartesian_2d(0.0..1.0, lo..hi)
+        .map_err(err)?;
+    let fmt = |v: &f64| {
+        if scale.log {
+            format!("{v:.1}")
+        } else {
+            short(*v)
+        }
+    };
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .disable_y_mesh()
+        .disable_x_axis()
+        .y_desc(label)
+        .y_label_formatter(&fmt)
+        .y_labels(6)
+        .label_style((SANS, 13))
+        .axis_desc_style((SANS, 14))
+        .draw()
+        .map_err(err)?;
+    let n = 64;
+    chart
+        .draw_series((0..n).map(|k| {
+            let a = lo + (hi - lo) * k as f64 / n as f64;
+            let b = lo + (hi - lo) * (k + 1) as f64 / n as f64;
+            Rectangle::new(
+                [(0.0, a), (1.0, b)],
+                viridis((k as f64 + 0.5) / n as f64).filled(),
+            )
+        }))
+        .map_err(err)?;
+    Ok(())
+}
+
+/// Compact number: 3 significant digits, exponent when large or small.
+pub fn short(v: f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && !(1e-2..1e4).contains(&a) {
+        format!("{v:.1e}")
+    } else {
+        let s = format!("{v:.3}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        if s == "-0" {
+            "0".into()
+        } else {
+            s.to_string()
+        }
+    }
+}
+
+/// Distinct line colours.
+pub fn series_colour(k: usize) -> RGBColor {
+    const C: [RGBColor; 8] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(127, 127, 127),
+    ];
+    C[k % C.len()]
+}

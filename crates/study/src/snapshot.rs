@@ -1,0 +1,165 @@
+//! Particle snapshots: what the maps and animations need of a state
+//! (positions, velocity, pressure, acceleration, id), written as legacy VTK
+//! for ParaView and read back by the report.
+
+use solver::{StateView, Vec2};
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Snapshot {
+    pub step: u64,
+    pub t: f64,
+    pub x: Vec<Vec2>,
+    pub v: Vec<Vec2>,
+    pub pressure: Vec<f64>,
+    /// |dv| / dt of the last step.
+    pub accel: Vec<f64>,
+    pub j: Vec<f64>,
+    pub id: Vec<u32>,
+}
+
+impl Snapshot {
+    pub fn with_capacity(n: usize) -> Self {
+        Snapshot {
+            x: Vec::with_capacity(n),
+            v: Vec::with_capacity(n),
+            pressure: Vec::with_capacity(n),
+            accel: Vec::with_capacity(n),
+            j: Vec::with_capacity(n),
+            id: Vec::with_capacity(n),
+            ..Default::default()
+        }
+    }
+
+    /// Copies the state into this snapshot's buffers (no allocation once sized).
+    pub fn capture(&mut self, v: &StateView) {
+        self.step = v.step;
+        self.t = v.time;
+        let dt = v.dt.max(1e-300);
+        self.x.clear();
+        self.x.extend_from_slice(v.x);
+        self.v.clear();
+        self.v.extend_from_slice(v.v);
+        self.pressure.clear();
+        self.pressure.extend_from_slice(v.pressure);
+        self.j.clear();
+        self.j.extend_from_slice(v.j);
+        self.id.clear();
+        self.id.extend_from_slice(v.id);
+        self.accel.clear();
+        self.accel
+            .extend(v.v.iter().zip(v.v_prev).map(|(a, b)| (a - b).norm() / dt));
+    }
+
+    pub fn of(v: &StateView) -> Self {
+        let mut s = Snapshot::with_capacity(v.x.len());
+        s.capture(v);
+        s
+    }
+
+    /// Legacy ASCII VTK polydata.
+    pub fn vtk(&self) -> Vec<u8> {
+        use std::fmt::Write;
+        let n = self.x.len();
+        let mut s = String::with_capacity(n * 120);
+        let _ = write!(
+            s,
+            "# vtk DataFile Version 3.0\nkick particles step {} t {}\nASCII\nDATASET POLYDATA\nPOINTS {n} double\n",
+            self.step, self.t
+        );
+        for x in &self.x {
+            let _ = writeln!(s, "{} {} 0", x.x, x.y);
+        }
+        let _ = writeln!(s, "VERTICES {n} {}", 2 * n);
+        for p in 0..n {
+            let _ = writeln!(s, "1 {p}");
+        }
+        let _ = writeln!(s, "POINT_DATA {n}");
+        let mut scalar = |name: &str, f: &dyn Fn(usize) -> f64| {
+            let _ = writeln!(s, "SCALARS {name} double 1\nLOOKUP_TABLE default");
+            for p in 0..n {
+                let _ = writeln!(s, "{}", f(p));
+            }
+        };
+        scalar("pressure", &|p| self.pressure[p]);
+        scalar("accel", &|p| self.accel[p]);
+        scalar("J", &|p| self.j[p]);
+        scalar("id", &|p| self.id[p] as f64);
+        let _ = writeln!(s, "VECTORS velocity double");
+        for u in &self.v {
+            let _ = writeln!(s, "{} {} 0", u.x, u.y);
+        }
+        s.into_bytes()
+    }
+
+    /// Reads what `vtk` wrote.
+    pub fn from_vtk(text: &str) -> Result<Snapshot, String> {
+        let mut lines = text.lines();
+        let title = lines.nth(1).ok_or("empty VTK file")?;
+        let mut words = title.split_whitespace();
+        let mut snap = Snapshot::default();
+        while let Some(w) = words.next() {
+            match w {
+                "step" => snap.step = words.next().and_then(|v| v.parse().ok()).unwrap_or(0),
+                "t" => snap.t = words.next().and_then(|v| v.parse().ok()).unwrap_or(0.0),
+                _ => {}
+            }
+        }
+        let nums = |line: &str| -> Result<Vec<f64>, String> {
+            line.split_whitespace()
+                .map(|w| w.parse::<f64>().map_err(|_| format!("bad number {w:?}")))
+                .collect()
+        };
+        let mut n = 0usize;
+        while let Some(line) = lines.next() {
+            let mut head = line.split_whitespace();
+            match head.next() {
+                Some("POINTS") => {
+                    n = head
+                        .next()
+                        .and_then(|v| v.parse().ok())
+                        .ok_or("bad POINTS")?;
+                    for _ in 0..n {
+                        let v = nums(lines.next().ok_or("truncated POINTS")?)?;
+                        snap.x.push(Vec2::new(v[0], v[1]));
+                    }
+                }
+                Some("SCALARS") => {
+                    let name = head.next().unwrap_or_default().to_string();
+                    lines.next();
+                    let mut vals = Vec::with_capacity(n);
+                    for _ in 0..n {
+                        vals.push(nums(lines.next().ok_or("truncated SCALARS")?)?[0]);
+                    }
+                    match name.as_str() {
+                        "pressure" => snap.pressure = vals,
+                        "accel" => snap.accel = vals,
+                        "J" => snap.j = vals,
+                        "id" => snap.id = vals.iter().map(|v| *v as u32).collect(),
+                        _ => {}
+                    }
+                }
+                Some("VECTORS") => {
+                    for _ in 0..n {
+                        let v = nums(lines.next().ok_or("truncated VECTORS")?)?;
+                        snap.v.push(Vec2::new(v[0], v[1]));
+                    }
+                }
+                _ => {}
+            }
+        }
+        if snap.pressure.len() != n || snap.x.len() != n {
+            return Err("VTK file lacks points or pressure".into());
+        }
+        let fill = |v: &mut Vec<f64>, d: f64| {
+            if v.len() != n {
+                *v = vec![d; n]
+            }
+        };
+        fill(&mut snap.accel, 0.0);
+        fill(&mut snap.j, 1.0);
+        if snap.v.len() != n {
+            snap.v = vec![Vec2::zeros(); n];
+        }
+        Ok(snap)
+    }
+}

@@ -1,0 +1,317 @@
+//! Every plot kind rendered from small synthetic data: valid PNG/SVG/GIF of
+//! the expected size, PNGs not blank, SVGs carrying their axis labels as text.
+
+use plotters::style::RGBColor;
+use solver::Vec2;
+use std::path::{Path, PathBuf};
+use study::plot_case::{
+    animate, FrontFigure, MapsFigure, Marker, Outline, PressureDepthFigure, Series,
+    TimeseriesFigure,
+};
+use study::plot_common::{render, ColourScale, Figure};
+use study::plot_matrix::{
+    pareto_front, HeatCell, HeatKey, HeatPanel, HeatmapFigure, LinesFigure, ParetoFigure,
+};
+use study::snapshot::Snapshot;
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("kick-plots-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Renders, then checks both files: PNG size and ink, SVG labels.
+fn check(fig: &impl Figure, dir: &Path, stem: &str, labels: &[&str]) {
+    let [png, svg] = render(fig, dir, stem).unwrap();
+    let img = image::open(dir.join(&png)).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), fig.size(), "{png}");
+    let inked = img.pixels().filter(|p| p.0 != [255, 255, 255]).count();
+    let fraction = inked as f64 / (img.width() * img.height()) as f64;
+    assert!(fraction > 0.02, "{png} is nearly blank: {fraction}");
+    let text = std::fs::read_to_string(dir.join(&svg)).unwrap();
+    assert!(text.starts_with("<svg"), "{svg}");
+    let (w, h) = fig.size();
+    assert!(
+        text.contains(&format!("width=\"{w}\"")) && text.contains(&format!("height=\"{h}\"")),
+        "{svg}"
+    );
+    let texts: Vec<&str> = text
+        .split("<text")
+        .skip(1)
+        .filter_map(|t| Some(t[t.find('>')? + 1..t.find("</text>")?].trim()))
+        .collect();
+    for l in labels {
+        assert!(texts.contains(l), "{svg} lacks the text element {l:?}");
+    }
+}
+
+fn column_snapshot(step: u64, kick: bool) -> Snapshot {
+    let mut s = Snapshot {
+        step,
+        t: step as f64 * 1e-4,
+        ..Default::default()
+    };
+    for i in 0..20 {
+        for j in 0..40 {
+            let (x, y) = (0.005 + 0.01 * i as f64, 0.005 + 0.01 * j as f64);
+            s.x.push(Vec2::new(x, y));
+            s.v.push(Vec2::zeros());
+            s.pressure.push(1000.0 * 9.81 * (0.4 - y));
+            let a = if kick && (8..11).contains(&i) && (3..6).contains(&j) {
+                500.0
+            } else {
+                1.0 + (i + j) as f64 * 0.1
+            };
+            s.accel.push(a * 9.81);
+            s.j.push(1.0);
+            s.id.push((i * 40 + j) as u32);
+        }
+    }
+    s
+}
+
+#[test]
+fn case_plots_render_as_png_and_svg() {
+    let dir = scratch("case");
+    let t: Vec<f64> = (0..200).map(|k| k as f64 * 0.005).collect();
+    let wave = |a: f64| t.iter().map(|x| a * (3.0 * x).sin()).collect::<Vec<_>>();
+    let names = [
+        "e_kin",
+        "e_grav",
+        "e_int",
+        "d_visc",
+        "e_total",
+        "energy_injected",
+        "max_accel_g",
+        "max_z",
+        "checkerboard",
+        "hydro_rel_rms",
+        "hydro_max",
+    ];
+    let series = Series {
+        t: t.clone(),
+        columns: names
+            .iter()
+            .map(|n| {
+                (
+                    n.to_string(),
+                    wave(1.0).iter().map(|v| v.abs() + 0.01).collect(),
+                )
+            })
+            .collect(),
+    };
+    let markers = [Marker { id: 1, t: 0.3 }, Marker { id: 2, t: 0.7 }];
+    let fig = TimeseriesFigure {
+        series: &series,
+        markers: &markers,
+        title: "synthetic".into(),
+    };
+    check(
+        &fig,
+        &dir,
+        "timeseries",
+        &[
+            "time t (s)",
+            "energy change (J)",
+            "checkerboard CB",
+            "#1",
+            "#2",
+        ],
+    );
+
+    let tt: Vec<f64> = (0..50).map(|k| k as f64 * 0.1).collect();
+    let zz: Vec<f64> = tt.iter().map(|x| 1.0 + 0.6 * x).collect();
+    let data = study::metrics::martin_moyce();
+    let fig = FrontFigure {
+        t: &tt,
+        z: &zz,
+        data: &data,
+        z_wall: 4.0,
+        title: "front".into(),
+    };
+    check(
+        &fig,
+        &dir,
+        "front",
+        &[
+            "T = t sqrt(2g/a)",
+            "Z = x_front / a",
+            "Martin &amp; Moyce 1952",
+        ],
+    );
+
+    let snap = column_snapshot(10, false);
+    let fig = PressureDepthFigure {
+        snap: &snap,
+        level: 0.4,
+        rho0: 1000.0,
+        gravity: 9.81,
+        title: "p(d)".into(),
+    };
+    check(
+        &fig,
+        &dir,
+        "pressure_depth",
+        &["pressure p (kPa)", "depth below settled surface (m)"],
+    );
+
+    let (a, b, c) = (
+        column_snapshot(5, false),
+        column_snapshot(10, true),
+        column_snapshot(15, false),
+    );
+    let fig = MapsFigure {
+        snaps: vec![
+            (&a, "before".into()),
+            (&b, "at".into()),
+            (&c, "after".into()),
+        ],
+        bbox: [0.0, 0.0, 0.8, 0.6],
+        outline: Some(Outline {
+            x0: 0.08,
+            y0: 0.03,
+            x1: 0.11,
+            y1: 0.06,
+        }),
+        gravity: 9.81,
+        title: "maps".into(),
+    };
+    check(
+        &fig,
+        &dir,
+        "maps",
+        &["x (m)", "y (m)", "pressure (kPa)", "log10 a/g"],
+    );
+
+    let gif = dir.join("kick.gif");
+    animate(
+        &[a.clone(), b.clone(), c.clone()],
+        [0.0, 0.0, 0.8, 0.6],
+        None,
+        "kick",
+        &gif,
+        9.81,
+    )
+    .unwrap();
+    let bytes = std::fs::read(&gif).unwrap();
+    assert_eq!(&bytes[..6], b"GIF89a");
+    let decoder = image::codecs::gif::GifDecoder::new(std::io::Cursor::new(&bytes)).unwrap();
+    use image::AnimationDecoder;
+    let frames = decoder.into_frames().collect_frames().unwrap();
+    assert_eq!(frames.len(), 3, "one frame per snapshot");
+    let w = u16::from_le_bytes([bytes[6], bytes[7]]);
+    assert_eq!(w, 760);
+}
+
+#[test]
+fn matrix_plots_render_as_png_and_svg() {
+    let dir = scratch("matrix");
+    let x_cats: Vec<String> = ["15 kPa", "150 kPa", "1.5 MPa"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let y_cats: Vec<String> = ["power 1", "power 7", "tait"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let panel = |title: &str| HeatPanel {
+        title: title.into(),
+        cells: (0..3)
+            .flat_map(|x| (0..3).map(move |y| (x, y)))
+            .map(|(x, y)| HeatCell {
+                x,
+                y,
+                colour: RGBColor(40 * x as u8 + 50, 80, 60 * y as u8 + 40),
+                text: format!("{x}{y}"),
+            })
+            .collect(),
+    };
+    let fig = HeatmapFigure {
+        title: "outcome".into(),
+        x_label: "materials.water.K".into(),
+        y_label: "eos".into(),
+        x_cats: x_cats.clone(),
+        y_cats: y_cats.clone(),
+        panels: vec![panel("mu = 0"), panel("mu = 0.5")],
+        key: HeatKey::Legend(vec![
+            ("survived".into(), RGBColor(0, 150, 0)),
+            ("blew up".into(), RGBColor(200, 0, 0)),
+        ]),
+    };
+    check(
+        &fig,
+        &dir,
+        "heatmap_outcome",
+        &["materials.water.K", "15 kPa", "tait", "survived"],
+    );
+    let fig = HeatmapFigure {
+        title: "hydro".into(),
+        x_label: "K".into(),
+        y_label: "eos".into(),
+        x_cats,
+        y_cats,
+        panels: vec![panel("")],
+        key: HeatKey::Bar(
+            ColourScale {
+                lo: 1e-3,
+                hi: 1.0,
+                log: true,
+            },
+            "log10 rel. RMS".into(),
+        ),
+    };
+    check(&fig, &dir, "heatmap_hydro", &["log10 rel. RMS"]);
+    let fig = LinesFigure {
+        title: "stability".into(),
+        x_label: "K (Pa, log)".into(),
+        y_label: "time survived (s)".into(),
+        lines: vec![
+            (
+                "power 7".into(),
+                vec![(1.5e4, 0.5), (1.5e5, 0.6), (1.5e6, 5.0)],
+            ),
+            (
+                "tait".into(),
+                vec![(1.5e4, 0.4), (1.5e5, 5.0), (1.5e6, 5.0)],
+            ),
+        ],
+        x_log: true,
+        y_max: 5.0,
+    };
+    check(
+        &fig,
+        &dir,
+        "stability",
+        &["K (Pa, log)", "time survived (s)", "power 7"],
+    );
+    let fig = ParetoFigure {
+        title: "speed".into(),
+        x_label: "wall seconds per simulated second".into(),
+        y_label: "late hydrostatic rel. RMS".into(),
+        points: vec![
+            ("a".into(), 1.0, 0.5),
+            ("b".into(), 10.0, 0.01),
+            ("c".into(), 20.0, 0.2),
+            ("d".into(), 3.0, 0.1),
+        ],
+    };
+    check(
+        &fig,
+        &dir,
+        "speed_accuracy",
+        &["wall seconds per simulated second", "Pareto front"],
+    );
+}
+
+#[test]
+fn pareto_front_keeps_the_non_dominated_points() {
+    let pts = [
+        (1.0, 0.5),
+        (10.0, 0.01),
+        (20.0, 0.2),
+        (3.0, 0.1),
+        (3.0, 0.3),
+    ];
+    assert_eq!(pareto_front(&pts), vec![0, 3, 1]);
+}
