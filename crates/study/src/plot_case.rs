@@ -244,7 +244,7 @@ impl Figure for FrontFigure<'_> {
         chart
             .draw_series(LineSeries::new(sim, blue.stroke_width(2)))
             .map_err(err)?
-            .label("kick (this case)")
+            .label("this case")
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], blue.stroke_width(2)));
         chart
             .draw_series(
