@@ -268,6 +268,10 @@ fn bench_prints_one_json_line() {
     assert_eq!(v["threads"], 1);
     assert!(v["particle_steps_per_s"].as_f64().unwrap() > 0.0);
     assert!(v["seconds"].as_f64().unwrap() > 0.0);
+    // The monitor is timed apart from the solver.
+    assert!(v["monitor_seconds"].as_f64().unwrap() > 0.0);
+    let with = v["particle_steps_per_s_with_monitor"].as_f64().unwrap();
+    assert!(with > 0.0 && with < v["particle_steps_per_s"].as_f64().unwrap());
 }
 
 const SMALL_MATRIX: &str = r#"
