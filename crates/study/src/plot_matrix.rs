@@ -57,7 +57,10 @@ impl Figure for HeatmapFigure {
                 .margin(8)
                 .x_label_area_size(50)
                 .y_label_area_size(30 + 7 * longest)
-                .build_cartesian_2d((0..nx).into_segmented(), (0..ny).into_segmented())
+                .build_cartesian_2d(
+                    (0..(nx - 1).max(0)).into_segmented(),
+                    (0..(ny - 1).max(0)).into_segmented(),
+                )
                 .map_err(err)?;
             let xc = |v: &SegmentValue<i32>| match v {
                 SegmentValue::CenterOf(k) => {

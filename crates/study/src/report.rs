@@ -589,6 +589,9 @@ pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
                     .find(|o| o.0 == r.outcome())
                     .map_or(RGBColor(150, 150, 150), |o| o.2);
                 let text = match r.outcome() {
+                    "blew_up" if r.t_first_kick.is_finite() => {
+                        format!("k {:.2} x {:.2}", r.t_first_kick, r.t_end)
+                    }
                     "blew_up" => format!("x {:.2}", r.t_end),
                     "failed" => "failed".into(),
                     _ if r.t_first_kick.is_finite() => format!("k {:.2}", r.t_first_kick),
@@ -625,10 +628,11 @@ pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
 
         // Stability map: survival time against K, one line per family.
         if let Some(kx) = find(".K") {
+            let short_key = |k: usize| vnames[k].rsplit('.').next().unwrap_or(vnames[k]);
             let family = |r: &Row| {
                 (0..vnames.len())
                     .filter(|&k| k != kx)
-                    .map(|k| r.params[k].clone())
+                    .map(|k| format!("{}={}", short_key(k), r.params[k]))
                     .collect::<Vec<_>>()
                     .join(" ")
             };
