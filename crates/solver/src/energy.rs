@@ -1,7 +1,6 @@
 //! Energy accounting: kinetic, gravitational, stored (sum V0 U(J)) and the
 //! accumulated viscous dissipation.
 
-use crate::config::Material;
 use crate::par;
 use crate::particles::Particles;
 use serde::{Deserialize, Serialize};
@@ -25,7 +24,6 @@ impl Energy {
 
 pub fn measure(
     particles: &Particles,
-    materials: &[Material],
     gravity: f64,
     floor: f64,
     dissipated: f64,
@@ -33,11 +31,10 @@ pub fn measure(
 ) -> Energy {
     let [kinetic, gravitational, stored, _] = par::sum(particles.len(), partials, |p| {
         let m = particles.mass[p];
-        let mat = &materials[particles.material[p] as usize];
         [
             0.5 * m * particles.v[p].norm_squared(),
             m * gravity * (particles.x[p].y - floor),
-            particles.vol0[p] * mat.eos(particles.j[p]).energy,
+            particles.stored_energy[p],
             0.0,
         ]
     });

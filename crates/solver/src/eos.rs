@@ -32,18 +32,27 @@ impl Material {
     /// Pressure with the optional tension cutoff.
     #[inline]
     pub fn pressure(&self, j: f64) -> f64 {
-        let p = self.eos(j).pressure;
-        match self.pressure_floor {
-            Some(floor) => p.max(floor),
-            None => p,
-        }
+        self.cut(self.eos(j).pressure)
     }
 
     /// Longitudinal wave speed c = sqrt(K_t J / rho0).
     #[inline]
     pub fn wave_speed(&self, j: f64) -> f64 {
-        let kt = self.eos(j).tangent_modulus;
-        (kt * j / self.rho0).max(0.0).sqrt()
+        self.wave_speed_of(&self.eos(j), j)
+    }
+
+    #[inline]
+    pub fn wave_speed_of(&self, state: &EosState, j: f64) -> f64 {
+        (state.tangent_modulus * j / self.rho0).max(0.0).sqrt()
+    }
+
+    /// The tension cutoff applied to an EOS pressure.
+    #[inline]
+    pub fn cut(&self, p: f64) -> f64 {
+        match self.pressure_floor {
+            Some(floor) => p.max(floor),
+            None => p,
+        }
     }
 
     /// J at which the (uncut) pressure equals `p`: the inverse EOS.

@@ -27,6 +27,7 @@ mod stage_grid;
 mod stage_p2g;
 mod stage_sort;
 mod stage_stress;
+pub mod stage_times;
 pub mod timestep;
 mod view;
 pub mod viscosity;
@@ -35,6 +36,7 @@ pub use checkpoint::CheckpointError;
 pub use config::*;
 pub use energy::Energy;
 pub use particles::{Mat2, Vec2};
+pub use stage_times::StageTimes;
 pub use view::{GridView, StateView};
 
 use grid::Grid;
@@ -86,6 +88,7 @@ pub struct Solver {
     courant: f64,
     ke_particles_p2g: f64,
     ke_grid_p2g: f64,
+    times: StageTimes,
     grid_mass_p2g: f64,
     n_outside: usize,
     n_nonfinite: usize,
@@ -139,6 +142,7 @@ impl Solver {
             energy: Energy::default(),
             courant: 0.0,
             ke_particles_p2g: 0.0,
+            times: StageTimes::default(),
             ke_grid_p2g: 0.0,
             grid_mass_p2g: 0.0,
             n_outside: 0,
@@ -150,6 +154,7 @@ impl Solver {
 
     /// Sets t = 0: fixes the time step from the current state and measures energy.
     fn start_clock(&mut self) {
+        timestep::refresh_eos_cache(&mut self.particles, &self.cfg.scene.materials);
         self.step = 0;
         self.time = 0.0;
         self.dissipated = 0.0;
@@ -162,7 +167,7 @@ impl Solver {
         if let Some(dt) = self.cfg.method.dt_override {
             return dt;
         }
-        let c = timestep::max_signal_speed(&self.particles, &self.cfg.scene.materials);
+        let c = timestep::max_signal_speed(&self.particles);
         timestep::cfl_step(self.cfg.method.cfl, self.cfg.scene.cell, c)
     }
 
@@ -214,11 +219,13 @@ impl Solver {
         if !(dt > 0.0 && dt.is_finite()) {
             return Err(StepError::BadTimeStep(dt));
         }
+        let mut clock = std::time::Instant::now();
         self.dt = dt;
-        let signal = timestep::max_signal_speed(&self.particles, &self.cfg.scene.materials);
+        let signal = timestep::max_signal_speed(&self.particles);
         self.courant = signal * dt / self.cfg.scene.cell;
         self.particles.v_prev.copy_from_slice(&self.particles.v);
         self.ke_particles_p2g = self.energy.kinetic;
+        stage_times::lap(&mut self.times.other, &mut clock);
         stage_sort::sort(
             &self.particles,
             &mut self.grid,
@@ -226,10 +233,13 @@ impl Solver {
             &mut self.weights,
             &mut self.bins,
         )?;
-        scheme::advance(self);
+        stage_times::lap(&mut self.times.sort, &mut clock);
+        scheme::advance(self, &mut clock);
         self.step += 1;
         self.time += dt;
         self.measure();
+        stage_times::lap(&mut self.times.other, &mut clock);
+        self.times.steps += 1;
         Ok(())
     }
 
@@ -238,7 +248,6 @@ impl Solver {
         let s = &self.cfg.scene;
         self.energy = energy::measure(
             &self.particles,
-            &s.materials,
             s.gravity,
             s.origin[1],
             self.dissipated,
@@ -277,6 +286,15 @@ impl Solver {
         }
     }
 
+    /// Time per stage since the last `reset_stage_times`.
+    pub fn stage_times(&self) -> StageTimes {
+        self.times
+    }
+
+    pub fn reset_stage_times(&mut self) {
+        self.times = StageTimes::default();
+    }
+
     /// The read-only view the monitor observes.
     pub fn view(&self) -> StateView<'_> {
         view::make(self)
@@ -295,6 +313,7 @@ impl Solver {
     /// Restores a state saved from a solver built from the same configuration.
     pub fn restore(&mut self, bytes: &[u8]) -> Result<(), CheckpointError> {
         checkpoint::load(self, bytes)?;
+        timestep::refresh_eos_cache(&mut self.particles, &self.cfg.scene.materials);
         self.measure();
         Ok(())
     }

@@ -25,6 +25,10 @@ pub struct Particles {
     pub pressure: Vec<f64>,
     /// |dev D| (3D deviator, plane strain), 1/s.
     pub dev_rate: Vec<f64>,
+    /// EOS figures of the current J, cached by the stress stage so the time
+    /// step and the energy need no second EOS evaluation: c(J) and V0 U(J).
+    pub wave_speed: Vec<f64>,
+    pub stored_energy: Vec<f64>,
     pub material: Vec<u16>,
     pub id: Vec<u32>,
 }
@@ -53,6 +57,8 @@ impl Particles {
         self.stress.push(Mat2::zeros());
         self.pressure.push(0.0);
         self.dev_rate.push(0.0);
+        self.wave_speed.push(0.0);
+        self.stored_energy.push(0.0);
         self.material.push(material);
         self.id.push(id);
     }

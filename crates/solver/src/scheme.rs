@@ -2,7 +2,9 @@
 
 use crate::config::{SchemeKind, TransferKind};
 use crate::stage_p2g::{self, Terms};
+use crate::stage_times::lap;
 use crate::{stage_g2p, stage_grid, stage_stress, Solver};
+use std::time::Instant;
 
 const MASS_MOMENTUM: Terms = Terms {
     mass: true,
@@ -32,37 +34,48 @@ enum StressVelocity {
     Updated,
 }
 
-pub fn advance(s: &mut Solver) {
+pub fn advance(s: &mut Solver, clock: &mut Instant) {
     match s.cfg.method.scheme {
         SchemeKind::Usf => {
-            p2g(s, MASS_MOMENTUM);
-            s.ke_grid_p2g = stage_grid::velocities(&mut s.grid);
-            stress(s, StressVelocity::Start);
-            p2g(s, FORCE);
-            stage_grid::update(&mut s.grid, s.dt);
-            g2p(s);
+            p2g(s, MASS_MOMENTUM, clock);
+            grid_velocities(s, clock);
+            stress(s, StressVelocity::Start, clock);
+            p2g(s, FORCE, clock);
+            grid_update(s, clock);
+            g2p(s, clock);
         }
         SchemeKind::Usl => {
-            p2g(s, ALL);
-            s.ke_grid_p2g = stage_grid::velocities(&mut s.grid);
-            stage_grid::update(&mut s.grid, s.dt);
-            g2p(s);
-            stress(s, StressVelocity::Updated);
+            p2g(s, ALL, clock);
+            grid_velocities(s, clock);
+            grid_update(s, clock);
+            g2p(s, clock);
+            stress(s, StressVelocity::Updated, clock);
         }
         SchemeKind::Musl => {
-            p2g(s, ALL);
-            s.ke_grid_p2g = stage_grid::velocities(&mut s.grid);
-            stage_grid::update(&mut s.grid, s.dt);
-            g2p(s);
+            p2g(s, ALL, clock);
+            grid_velocities(s, clock);
+            grid_update(s, clock);
+            g2p(s, clock);
             // Re-project the updated particle velocities (weights of the step start).
-            p2g(s, MOMENTUM);
+            p2g(s, MOMENTUM, clock);
             stage_grid::project_momentum(&mut s.grid);
-            stress(s, StressVelocity::Start);
+            lap(&mut s.times.grid, clock);
+            stress(s, StressVelocity::Start, clock);
         }
     }
 }
 
-fn p2g(s: &mut Solver, terms: Terms) {
+fn grid_velocities(s: &mut Solver, clock: &mut Instant) {
+    s.ke_grid_p2g = stage_grid::velocities(&mut s.grid);
+    lap(&mut s.times.grid, clock);
+}
+
+fn grid_update(s: &mut Solver, clock: &mut Instant) {
+    stage_grid::update(&mut s.grid, s.dt);
+    lap(&mut s.times.grid, clock);
+}
+
+fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
     let inputs = stage_p2g::Inputs {
         particles: &s.particles,
         weights: &s.weights,
@@ -80,9 +93,10 @@ fn p2g(s: &mut Solver, terms: Terms) {
             .map(|&n| s.grid.mass_raw[n as usize])
             .sum();
     }
+    lap(&mut s.times.p2g, clock);
 }
 
-fn stress(s: &mut Solver, which: StressVelocity) {
+fn stress(s: &mut Solver, which: StressVelocity, clock: &mut Instant) {
     let velocity = match which {
         StressVelocity::Start => &s.grid.vel,
         StressVelocity::Updated => &s.grid.vel_new,
@@ -97,9 +111,10 @@ fn stress(s: &mut Solver, which: StressVelocity) {
         dt: s.dt,
     };
     s.dissipated += stage_stress::update(&inputs, &mut s.particles, &mut s.partials1);
+    lap(&mut s.times.stress, clock);
 }
 
-fn g2p(s: &mut Solver) {
+fn g2p(s: &mut Solver, clock: &mut Instant) {
     let transfer = stage_g2p::Transfer {
         kind: s.cfg.method.transfer,
         flip_alpha: s.cfg.method.flip_alpha,
@@ -113,4 +128,5 @@ fn g2p(s: &mut Solver) {
         s.dt,
     );
     s.apply_perturbations();
+    lap(&mut s.times.g2p, clock);
 }

@@ -1,5 +1,6 @@
 //! Stress stage: velocity gradient from the grid, deformation-gradient and J
-//! update, EOS pressure plus Newtonian viscosity (plane strain, 3D deviator).
+//! update, EOS pressure plus Newtonian viscosity (plane strain, 3D deviator),
+//! and the EOS figures the time step and the energy need (one EOS call).
 
 use crate::config::{JUpdate, Material};
 use crate::grid::Grid;
@@ -41,6 +42,8 @@ pub fn update(inputs: &Inputs, particles: &mut Particles, partials: &mut [[f64; 
         particles.stress.par_chunks_mut(CHUNK),
         particles.pressure.par_chunks_mut(CHUNK),
         particles.dev_rate.par_chunks_mut(CHUNK),
+        particles.wave_speed.par_chunks_mut(CHUNK),
+        particles.stored_energy.par_chunks_mut(CHUNK),
         particles.vol0.par_chunks(CHUNK),
         particles.material.par_chunks(CHUNK),
         weights.par_chunks(CHUNK),
@@ -48,7 +51,7 @@ pub fn update(inputs: &Inputs, particles: &mut Particles, partials: &mut [[f64; 
     )
         .into_par_iter()
         .for_each(
-            |(f, j, vol, stress, pressure, dev_rate, vol0, mat, w, work)| {
+            |(f, j, vol, stress, pressure, dev_rate, wave, stored, vol0, mat, w, work)| {
                 let mut acc = 0.0;
                 for k in 0..f.len() {
                     let [wx, wy] = &w[k];
@@ -74,7 +77,10 @@ pub fn update(inputs: &Inputs, particles: &mut Particles, partials: &mut [[f64; 
                     j[k] = j_next;
                     vol[k] = vol0[k] * j_next;
                     let m = &materials[mat[k] as usize];
-                    let p = m.pressure(j_next);
+                    let state = m.eos(j_next);
+                    let p = m.cut(state.pressure);
+                    wave[k] = m.wave_speed_of(&state, j_next);
+                    stored[k] = vol0[k] * state.energy;
                     let d = 0.5 * (l + l.transpose());
                     let visc = viscosity::newtonian(m.viscosity, &d);
                     stress[k] = visc.stress - p * Mat2::identity();

@@ -4,12 +4,22 @@ use crate::config::Material;
 use crate::par;
 use crate::particles::Particles;
 
-/// max_p(c_p + |v_p|) over all particles.
-pub fn max_signal_speed(particles: &Particles, materials: &[Material]) -> f64 {
+/// max_p(c_p + |v_p|) over all particles (c_p as cached by the stress stage).
+pub fn max_signal_speed(particles: &Particles) -> f64 {
     par::max(particles.len(), |p| {
-        let m = &materials[particles.material[p] as usize];
-        m.wave_speed(particles.j[p]) + particles.v[p].norm()
+        particles.wave_speed[p] + particles.v[p].norm()
     })
+}
+
+/// Recomputes the cached c(J) and V0 U(J) of every particle (after seeding or a restore).
+pub fn refresh_eos_cache(particles: &mut Particles, materials: &[Material]) {
+    for p in 0..particles.len() {
+        let m = &materials[particles.material[p] as usize];
+        let j = particles.j[p];
+        let state = m.eos(j);
+        particles.wave_speed[p] = m.wave_speed_of(&state, j);
+        particles.stored_energy[p] = particles.vol0[p] * state.energy;
+    }
 }
 
 pub fn cfl_step(cfl: f64, h: f64, signal_speed: f64) -> f64 {

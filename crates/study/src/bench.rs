@@ -121,6 +121,7 @@ pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
         // every FIELD_EVERY steps as a run with ~1000 timeseries rows does.
         const FIELD_EVERY: u64 = 25;
         let mut monitor = Monitor::new(MonitorConfig::default(), &solver.view());
+        solver.reset_stage_times();
         let (mut solver_s, mut monitor_s) = (0.0, 0.0);
         for k in 0..opts.steps {
             let t0 = Instant::now();
@@ -136,6 +137,8 @@ pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
         }
         let n = solver.particle_count();
         let ps = n as f64 * opts.steps as f64;
+        let st = solver.stage_times();
+        let ns = |t: f64| 1e9 * t / ps;
         Ok(json!({
             "scene": name,
             "shape": shape,
@@ -148,6 +151,15 @@ pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
             "monitor_seconds": monitor_s,
             "monitor_fraction": monitor_s / solver_s,
             "particle_steps_per_s_with_monitor": ps / (solver_s + monitor_s),
+            "ns_per_particle_step": {
+                "sort": ns(st.sort),
+                "p2g": ns(st.p2g),
+                "grid": ns(st.grid),
+                "g2p": ns(st.g2p),
+                "stress": ns(st.stress),
+                "other": ns(st.other),
+                "monitor": ns(monitor_s),
+            },
         }))
     })
 }
