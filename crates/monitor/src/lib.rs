@@ -70,6 +70,24 @@ pub struct StepReport {
     pub blow_out: Option<String>,
 }
 
+impl StepReport {
+    /// The figures the state itself carries (time, energies, Courant); the rest zero.
+    pub fn of_state(v: &StateView) -> Self {
+        StepReport {
+            step: v.step,
+            t: v.time,
+            dt: v.dt,
+            e_kin: v.energy.kinetic,
+            e_grav: v.energy.gravitational,
+            e_int: v.energy.stored,
+            d_visc: v.energy.dissipated,
+            e_total: v.energy.total(),
+            courant: v.courant,
+            ..Default::default()
+        }
+    }
+}
+
 /// Field metrics, computed at output rows and when an event opens.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct FieldMetrics {
@@ -346,13 +364,6 @@ impl Monitor {
 
         self.report = StepReport {
             step,
-            t: v.time,
-            dt: v.dt,
-            e_kin: v.energy.kinetic,
-            e_grav: v.energy.gravitational,
-            e_int: v.energy.stored,
-            d_visc: v.energy.dissipated,
-            e_total: v.energy.total(),
             energy_injected: injection.total,
             injection_window: injection.window,
             injection_floor: floor,
@@ -360,7 +371,6 @@ impl Monitor {
             max_z,
             max_ke_ratio: max_ratio,
             max_speed,
-            courant: v.courant,
             j_min,
             j_max,
             min_node_mass_ratio: if min_mass.is_finite() { min_mass } else { 0.0 },
@@ -371,6 +381,7 @@ impl Monitor {
             n_flagged: self.flagged.len(),
             events_opened: self.events.len() - opened_before,
             blow_out,
+            ..StepReport::of_state(v)
         };
         &self.report
     }

@@ -3,7 +3,7 @@
 //! maps (pressure and a/g with colour bars) and the animation of a kick.
 
 use crate::plot_common::{
-    colour_bar, err, fonts, series_colour, short, ColourScale, Figure, Res, SANS,
+    colour_bar, err, fonts, legend, series_colour, short, ColourScale, Figure, Res, SANS,
 };
 use crate::snapshot::Snapshot;
 use plotters::coord::Shift;
@@ -182,14 +182,7 @@ impl Figure for TimeseriesFigure<'_> {
                         .map_err(err)?;
                 }
             }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK.mix(0.3))
-                .label_font((SANS, 13))
-                .draw()
-                .map_err(err)?;
+            legend(&mut chart, SeriesLabelPosition::UpperRight, 13)?;
         }
         Ok(())
     }
@@ -264,14 +257,7 @@ impl Figure for FrontFigure<'_> {
             .map_err(err)?
             .label("far wall")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], BLACK.mix(0.4)));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.3))
-            .label_font((SANS, 14))
-            .draw()
-            .map_err(err)?;
+        legend(&mut chart, SeriesLabelPosition::LowerRight, 14)?;
         Ok(())
     }
 }
@@ -336,14 +322,7 @@ impl Figure for PressureDepthFigure<'_> {
             .map_err(err)?
             .label("hydrostatic rho0 g d")
             .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], BLACK.stroke_width(2)));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.3))
-            .label_font((SANS, 14))
-            .draw()
-            .map_err(err)?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight, 14)?;
         Ok(())
     }
 }

@@ -2,7 +2,7 @@
 //! figure to PNG and SVG atomically, colour maps and colour bars.
 
 use crate::output_files::write_atomic;
-use plotters::coord::Shift;
+use plotters::coord::{CoordTranslate, Shift};
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 use std::path::Path;
@@ -178,6 +178,26 @@ pub fn colour_bar<DB: DrawingBackend>(
         }))
         .map_err(err)?;
     Ok(())
+}
+
+/// The series legend every figure uses: framed, on a light background.
+pub fn legend<'a, DB, CT>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+    font_size: u32,
+) -> Res
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate,
+{
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.3))
+        .label_font((SANS, font_size))
+        .draw()
+        .map_err(err)
 }
 
 /// Compact number: 3 significant digits, exponent when large or small.

@@ -2,7 +2,9 @@
 //! per value of a third), the stability map and speed against accuracy with
 //! its Pareto front.
 
-use crate::plot_common::{colour_bar, err, series_colour, short, ColourScale, Figure, Res, SANS};
+use crate::plot_common::{
+    colour_bar, err, legend, series_colour, short, ColourScale, Figure, Res, SANS,
+};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -196,14 +198,7 @@ impl Figure for LinesFigure {
                 .draw_series(pts.iter().map(|p| Circle::new(*p, 4, colour.filled())))
                 .map_err(err)?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.3))
-            .label_font((SANS, 12))
-            .draw()
-            .map_err(err)?;
+        legend(&mut chart, SeriesLabelPosition::LowerRight, 12)?;
         Ok(())
     }
 }
@@ -316,14 +311,7 @@ impl Figure for ParetoFigure {
                 )])
                 .map_err(err)?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.3))
-            .label_font((SANS, 13))
-            .draw()
-            .map_err(err)?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight, 13)?;
         Ok(())
     }
 }

@@ -101,18 +101,7 @@ impl Driver {
         let mut report = self.monitor.report().clone();
         if v.step == 0 || report.step != v.step {
             // Before the first observed step: energies from the state itself.
-            report = monitor::StepReport {
-                step: v.step,
-                t: v.time,
-                dt: v.dt,
-                e_kin: v.energy.kinetic,
-                e_grav: v.energy.gravitational,
-                e_int: v.energy.stored,
-                d_visc: v.energy.dissipated,
-                e_total: v.energy.total(),
-                courant: v.courant,
-                ..Default::default()
-            };
+            report = monitor::StepReport::of_state(&v);
         }
         self.series.push(&report, &self.peaks, &fields);
         self.peaks = Peaks::default();
