@@ -446,7 +446,19 @@ pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
             params: varying.iter().map(|&k| texts[k][i].clone()).collect(),
         })
         .collect();
-    rows.sort_by(|a, b| a.params.cmp(&b.params));
+    // Grouped by axis: numbers compare as numbers, the rest as text.
+    let by_value = |a: &String, b: &String| match (a.parse::<f64>(), b.parse::<f64>()) {
+        (Ok(x), Ok(y)) => x.total_cmp(&y),
+        _ => a.cmp(b),
+    };
+    rows.sort_by(|a, b| {
+        a.params
+            .iter()
+            .zip(&b.params)
+            .map(|(x, y)| by_value(x, y))
+            .find(|o| o.is_ne())
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
     let vnames: Vec<&str> = varying.iter().map(|&k| param_keys[k].as_str()).collect();
 
     // Case pages first, so the matrix page can link them.
@@ -527,10 +539,7 @@ pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
                 .collect::<BTreeSet<_>>()
                 .into_iter()
                 .collect();
-            v.sort_by(|a, b| match (a.parse::<f64>(), b.parse::<f64>()) {
-                (Ok(x), Ok(y)) => x.total_cmp(&y),
-                _ => a.cmp(b),
-            });
+            v.sort_by(by_value);
             v
         };
         let x_cats = cats(&|r: &Row| r.params[x_axis].clone());
