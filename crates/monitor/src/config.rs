@@ -38,7 +38,8 @@ pub struct MonitorConfig {
     pub merge_cells: usize,
     pub merge_steps: u64,
     pub merge_seconds: f64,
-    /// Events stored per run; later ones are only counted (blow-outs always stored).
+    /// Events stored per run; later openings are only counted, per step
+    /// (blow-outs are always stored).
     pub max_events: usize,
     /// Particle ids kept per event (the count is always exact).
     pub max_event_ids: usize,

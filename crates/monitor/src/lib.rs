@@ -190,7 +190,8 @@ impl Monitor {
         &mut self.events
     }
 
-    /// Events not stored because `max_events` was reached.
+    /// Event openings refused because `max_events` was reached (an episode
+    /// flagged on several steps counts once per step).
     pub fn events_dropped(&self) -> u64 {
         self.events_dropped
     }

@@ -11,37 +11,9 @@ use solver::*;
 
 mod common;
 
-struct Column {
-    cfg: SolverConfig,
-    start: Vec<u8>,
-    monitor: monitor::Monitor,
-    window: u64,
-}
-
-fn column() -> Column {
-    let mut scene = Scene::dam_break(common::tait(1.5e6, 0.5));
-    scene.size = [0.4, 0.6];
-    scene.bodies[0].rect = [0.0, 0.0, 0.4, 0.4];
-    scene.initial = InitialState::Hydrostatic;
-    let cfg = SolverConfig {
-        scene,
-        method: common::method(ShapeKind::Bspline2, TransferKind::Apic),
-        perturb: vec![],
-    };
-    let s = Solver::new(cfg.clone()).unwrap();
-    let c = s.config().scene.materials[0].wave_speed(1.0);
-    let window = (2.0 * 0.4 / c / s.next_dt()).ceil() as u64;
-    Column {
-        monitor: common::fresh_monitor(&s),
-        start: s.checkpoint(),
-        cfg,
-        window,
-    }
-}
-
 #[test]
 fn injected_kicks_in_a_column_at_rest_are_found_where_and_when_they_happen() {
-    let col = column();
+    let col = common::column();
     let s = 30;
     let steps = s + col.window + 100;
     let (quiet, _) = common::run_window(&col.cfg, &col.start, &col.monitor, vec![], steps);
@@ -97,7 +69,7 @@ fn injected_kicks_in_a_column_at_rest_are_found_where_and_when_they_happen() {
 
 #[test]
 fn injected_energy_is_half_m_dv_squared() {
-    let col = column();
+    let col = common::column();
     let s = 10;
     let cells = [15, 10, 20, 15];
     let dv = [0.6, 0.8];

@@ -80,3 +80,33 @@ pub fn assert_detected(events: &[Event], s: u64, window: u64, cells: [usize; 4],
         );
     }
 }
+
+/// A Tait column at rest (K = 1.5 MPa, bspline2 APIC, hydrostatic start), its
+/// step-0 checkpoint, a fresh monitor and the echo window 2L/c in steps.
+pub struct Column {
+    pub cfg: SolverConfig,
+    pub start: Vec<u8>,
+    pub monitor: monitor::Monitor,
+    pub window: u64,
+}
+
+pub fn column() -> Column {
+    let mut scene = Scene::dam_break(tait(1.5e6, 0.5));
+    scene.size = [0.4, 0.6];
+    scene.bodies[0].rect = [0.0, 0.0, 0.4, 0.4];
+    scene.initial = InitialState::Hydrostatic;
+    let cfg = SolverConfig {
+        scene,
+        method: method(ShapeKind::Bspline2, TransferKind::Apic),
+        perturb: vec![],
+    };
+    let s = Solver::new(cfg.clone()).unwrap();
+    let c = s.config().scene.materials[0].wave_speed(1.0);
+    let window = (2.0 * 0.4 / c / s.next_dt()).ceil() as u64;
+    Column {
+        monitor: fresh_monitor(&s),
+        start: s.checkpoint(),
+        cfg,
+        window,
+    }
+}
