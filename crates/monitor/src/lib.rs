@@ -124,6 +124,23 @@ struct Cluster {
     event: usize,
 }
 
+impl Cluster {
+    /// A cluster over `cells` with no particles tallied yet.
+    fn new(cells: CellRange, rules: u32, peak_accel: f64) -> Self {
+        Cluster {
+            cells,
+            rules,
+            peak_accel,
+            peak_z: 0.0,
+            quiescent: 0,
+            deformed_rate: 0,
+            distorted: 0,
+            count: 0,
+            event: 0,
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Monitor {
     pub cfg: MonitorConfig,
@@ -307,17 +324,11 @@ impl Monitor {
         }
         if injection.window > cfg.injection_floor_factor * floor {
             let (i, j) = self.geom.cell_of(v.x[gain_max.1]);
-            let cluster = Cluster {
-                cells: CellRange::of(i, j),
-                rules: rule::INJECTION_WINDOW,
-                peak_accel: self.accel[gain_max.1],
-                peak_z: 0.0,
-                quiescent: 0,
-                deformed_rate: 0,
-                distorted: 0,
-                count: 0,
-                event: 0,
-            };
+            let cluster = Cluster::new(
+                CellRange::of(i, j),
+                rule::INJECTION_WINDOW,
+                self.accel[gain_max.1],
+            );
             self.attach(EventKind::EnergyInjection, cluster, v, g);
         }
         let mut blow_out = None;
@@ -429,17 +440,7 @@ impl Monitor {
                     }
                 }
             }
-            self.clusters.push(Cluster {
-                cells,
-                rules: 0,
-                peak_accel: 0.0,
-                peak_z: 0.0,
-                quiescent: 0,
-                deformed_rate: 0,
-                distorted: 0,
-                count: 0,
-                event: 0,
-            });
+            self.clusters.push(Cluster::new(cells, 0, 0.0));
         }
         let step = v.step as i64;
         let recent = self.cfg.recent_steps as i64;
@@ -581,18 +582,7 @@ impl Monitor {
             }
         }
         let Some(cells) = cells else { return };
-        let cluster = Cluster {
-            cells,
-            rules,
-            peak_accel: peak,
-            peak_z: 0.0,
-            quiescent: 0,
-            deformed_rate: 0,
-            distorted: 0,
-            count: 0,
-            event: 0,
-        };
-        let k = self.attach(kind, cluster, v, g);
+        let k = self.attach(kind, Cluster::new(cells, rules, peak), v, g);
         let cap = self.cfg.max_event_ids;
         let e = &mut self.events[k];
         e.n_particles = e.n_particles.max(count);
