@@ -41,8 +41,7 @@ pub use view::{GridView, StateView};
 
 use grid::Grid;
 use particles::Particles;
-use shape::{Shape, Weights1d};
-use stage_p2g::NodeSum;
+use shape::{Shape, Stencil};
 use stage_sort::Bins;
 
 /// Why a step could not be taken.
@@ -72,9 +71,8 @@ pub struct Solver {
     shape: Shape,
     particles: Particles,
     grid: Grid,
-    weights: Vec<[Weights1d; 2]>,
+    stencils: Vec<Stencil>,
     bins: Bins,
-    node_buf: Vec<NodeSum>,
     partials4: Vec<[f64; 4]>,
     partials1: Vec<[f64; 1]>,
     gravity: Vec2,
@@ -121,14 +119,12 @@ impl Solver {
         let s = &cfg.scene;
         let grid = Grid::new(Vec2::from(s.origin), s.cell, s.cells(), s.periodic);
         let n = particles.len();
-        let nodes = grid.node_count();
         let chunks = par::chunk_count(n);
         let mut solver = Solver {
             shape: Shape::new(cfg.method.shape, s.ppc),
             gravity: Vec2::new(0.0, -s.gravity),
-            weights: vec![[Weights1d::default(); 2]; n],
-            bins: Bins::new(nodes, n),
-            node_buf: Vec::with_capacity(nodes),
+            stencils: vec![Stencil::default(); n],
+            bins: Bins::new(grid.dims, n),
             partials4: vec![[0.0; 4]; chunks],
             partials1: vec![[0.0; 1]; chunks],
             grid,
@@ -230,7 +226,7 @@ impl Solver {
             &self.particles,
             &mut self.grid,
             &self.shape,
-            &mut self.weights,
+            &mut self.stencils,
             &mut self.bins,
         )?;
         stage_times::lap(&mut self.times.sort, &mut clock);

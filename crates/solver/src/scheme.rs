@@ -78,13 +78,14 @@ fn grid_update(s: &mut Solver, clock: &mut Instant) {
 fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
     let inputs = stage_p2g::Inputs {
         particles: &s.particles,
-        weights: &s.weights,
+        stencils: &s.stencils,
+        shape: &s.shape,
         bins: &s.bins,
         width: s.shape.width(),
         affine: s.cfg.method.transfer == TransferKind::Apic,
         gravity: s.gravity,
     };
-    stage_p2g::p2g(&inputs, terms, &mut s.node_buf, &mut s.grid);
+    stage_p2g::p2g(&inputs, terms, &mut s.grid);
     if terms.mass {
         s.grid_mass_p2g = s
             .grid
@@ -102,10 +103,10 @@ fn stress(s: &mut Solver, which: StressVelocity, clock: &mut Instant) {
         StressVelocity::Updated => &s.grid.vel_new,
     };
     let inputs = stage_stress::Inputs {
-        weights: &s.weights,
+        stencils: &s.stencils,
+        shape: &s.shape,
         grid: &s.grid,
         velocity,
-        width: s.shape.width(),
         materials: &s.cfg.scene.materials,
         j_update: s.cfg.method.j_update,
         dt: s.dt,
@@ -121,7 +122,7 @@ fn g2p(s: &mut Solver, clock: &mut Instant) {
     };
     stage_g2p::g2p(
         &mut s.particles,
-        &s.weights,
+        &s.stencils,
         &s.grid,
         &s.shape,
         &transfer,

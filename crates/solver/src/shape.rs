@@ -7,10 +7,21 @@ use crate::{shape_bspline, shape_gimp, shape_linear};
 /// Widest stencil (cubic B-spline) in nodes per axis.
 pub const MAX_STENCIL: usize = 4;
 
+/// A particle's place on the grid this step: its stencil's first node (padded
+/// index, which is also its sort bin) and its offset past that node in cells.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Stencil {
+    pub node: u32,
+    pub frac: [f64; 2],
+}
+
 /// 1D weights of one particle on its stencil nodes `base .. base + width`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Weights1d {
     pub base: i64,
+    /// Particle position minus the first stencil node (cell units), so node
+    /// `base + k` sits at `k - frac` cells from the particle.
+    pub frac: f64,
     pub w: [f64; MAX_STENCIL],
     /// dN/dx in units of 1/cell (divide by h for 1/m).
     pub dw: [f64; MAX_STENCIL],
@@ -47,7 +58,7 @@ impl Shape {
             ShapeKind::Gimp | ShapeKind::Bspline2 => 0.5,
             ShapeKind::Bspline3 => 1.0,
         };
-        (xr - shift).floor() as i64
+        floor(xr - shift)
     }
 
     /// Kernel value and derivative at signed distance `r` (cell units).
@@ -65,16 +76,66 @@ impl Shape {
     #[inline]
     pub fn weights(&self, xr: f64) -> Weights1d {
         let base = self.base(xr);
-        let mut out = Weights1d {
+        Weights1d {
             base,
+            ..self.weights_at(xr - base as f64)
+        }
+    }
+
+    /// Weights of a particle `f` cells past its first stencil node (`base`
+    /// left 0); see [`Shape::stencil_weights`].
+    #[inline(always)]
+    pub fn weights_at(&self, f: f64) -> Weights1d {
+        let mut out = Weights1d {
+            base: 0,
+            frac: f,
             ..Default::default()
         };
-        for k in 0..self.width() {
-            let (w, dw) = self.kernel(xr - (base + k as i64) as f64);
-            out.w[k] = w;
-            out.dw[k] = dw;
+        fn put<const W: usize>(out: &mut Weights1d, (w, dw): ([f64; W], [f64; W])) {
+            out.w[..W].copy_from_slice(&w);
+            out.dw[..W].copy_from_slice(&dw);
+        }
+        match self.width() {
+            2 => put(&mut out, self.stencil_weights::<2>(f)),
+            3 => put(&mut out, self.stencil_weights::<3>(f)),
+            _ => put(&mut out, self.stencil_weights::<4>(f)),
         }
         out
+    }
+
+    /// Values and derivatives (per cell) on the `W` stencil nodes of a particle
+    /// `f` cells past the first one. Linear and quadratic take closed forms in
+    /// `f` (no branches); the others evaluate the kernel node by node. The
+    /// stages call this on the fly rather than storing weights per particle.
+    #[inline(always)]
+    pub fn stencil_weights<const W: usize>(&self, f: f64) -> ([f64; W], [f64; W]) {
+        let (mut w, mut dw) = ([0.0; W], [0.0; W]);
+        match self.kind {
+            ShapeKind::Linear if W == 2 => {
+                (w[0], w[1]) = (1.0 - f, f);
+                (dw[0], dw[1]) = (-1.0, 1.0);
+            }
+            ShapeKind::Bspline2 if W == 3 => {
+                // f in [0.5, 1.5): node distances f, f - 1, f - 2.
+                let (d0, d1, d2) = (1.5 - f, f - 1.0, f - 0.5);
+                (w[0], w[1], w[2]) = (0.5 * d0 * d0, 0.75 - d1 * d1, 0.5 * d2 * d2);
+                (dw[0], dw[1], dw[2]) = (-d0, -2.0 * d1, d2);
+            }
+            _ => {
+                for k in 0..W.min(self.width()) {
+                    (w[k], dw[k]) = self.kernel(f - k as f64);
+                }
+            }
+        }
+        (w, dw)
+    }
+
+    /// Where a particle at `xr` (cell units) sits on one axis: its first
+    /// stencil node and the offset past it.
+    #[inline]
+    pub fn locate(&self, xr: f64) -> (i64, f64) {
+        let base = self.base(xr);
+        (base, xr - base as f64)
     }
 
     /// APIC inertia D^-1 h^2 where it is a constant (B-splines); None otherwise.
@@ -84,5 +145,17 @@ impl Shape {
             ShapeKind::Bspline3 => Some(3.0),
             ShapeKind::Linear | ShapeKind::Gimp => None,
         }
+    }
+}
+
+/// floor(x) as an integer without a libm call (exact for |x| < 2^53; a NaN
+/// maps to 0 and is caught by the caller's finiteness check).
+#[inline]
+fn floor(x: f64) -> i64 {
+    let t = x as i64;
+    if (t as f64) > x {
+        t - 1
+    } else {
+        t
     }
 }

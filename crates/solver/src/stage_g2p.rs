@@ -1,10 +1,11 @@
 //! Grid-to-particle transfer: particle velocity by PIC, FLIP blend or APIC,
-//! position moved with the grid velocity, periodic wrap.
+//! position moved with the grid velocity, periodic wrap. Sums run row by row
+//! of the stencil (x inner), so each node costs a few multiply-adds.
 
 use crate::config::TransferKind;
 use crate::grid::Grid;
 use crate::particles::{Mat2, Particles, Vec2};
-use crate::shape::{Shape, Weights1d};
+use crate::shape::{Shape, Stencil};
 use rayon::prelude::*;
 
 pub struct Transfer {
@@ -12,67 +13,114 @@ pub struct Transfer {
     pub flip_alpha: f64,
 }
 
+/// How G2P sets particle velocities, fixed per run so the loop carries no branches.
+const PIC: u8 = 0;
+const FLIP: u8 = 1;
+/// APIC with a B-spline (constant inertia D): C = B D^-1.
+const APIC_SPLINE: u8 = 2;
+/// APIC with multilinear/GIMP: C = sum v grad N^T (= B D^-1 for linear).
+const APIC_GRADIENT: u8 = 3;
+
 pub fn g2p(
     particles: &mut Particles,
-    weights: &[[Weights1d; 2]],
+    stencils: &[Stencil],
     grid: &Grid,
     shape: &Shape,
     transfer: &Transfer,
     dt: f64,
 ) {
-    let width = shape.width();
-    let pad = crate::grid::PAD as i64;
-    let inv_h = 1.0 / grid.h;
-    let apic_dinv = shape.apic_inverse_inertia().map(|d| d * inv_h * inv_h);
-    let alpha = match transfer.kind {
-        TransferKind::Pic | TransferKind::Apic => 0.0,
-        TransferKind::Flip => transfer.flip_alpha,
+    let mode = match transfer.kind {
+        TransferKind::Pic => PIC,
+        TransferKind::Flip if transfer.flip_alpha > 0.0 => FLIP,
+        TransferKind::Flip => PIC,
+        TransferKind::Apic if shape.apic_inverse_inertia().is_some() => APIC_SPLINE,
+        TransferKind::Apic => APIC_GRADIENT,
     };
-    let apic = transfer.kind == TransferKind::Apic;
+    macro_rules! go {
+        ($w:literal) => {
+            match mode {
+                PIC => run::<$w, PIC>(particles, stencils, grid, shape, transfer, dt),
+                FLIP => run::<$w, FLIP>(particles, stencils, grid, shape, transfer, dt),
+                APIC_SPLINE => {
+                    run::<$w, APIC_SPLINE>(particles, stencils, grid, shape, transfer, dt)
+                }
+                _ => run::<$w, APIC_GRADIENT>(particles, stencils, grid, shape, transfer, dt),
+            }
+        };
+    }
+    match shape.width() {
+        2 => go!(2),
+        3 => go!(3),
+        _ => go!(4),
+    }
+}
+
+fn run<const W: usize, const MODE: u8>(
+    particles: &mut Particles,
+    stencils: &[Stencil],
+    grid: &Grid,
+    shape: &Shape,
+    transfer: &Transfer,
+    dt: f64,
+) {
+    let nx = grid.dims[0];
+    let inv_h = 1.0 / grid.h;
+    // B-splines: B is summed in cells, so C = B_cells h D^-1 = B_cells (D^-1 h^2) / h.
+    let c_scale = shape.apic_inverse_inertia().unwrap_or(1.0) * inv_h;
+    let alpha = transfer.flip_alpha;
     let lo = grid.origin;
     let size = Vec2::new(grid.cells[0] as f64 * grid.h, grid.cells[1] as f64 * grid.h);
+    let (vel, vel_new) = (&grid.vel[..], &grid.vel_new[..]);
     (
         particles.x.par_iter_mut(),
         particles.v.par_iter_mut(),
         particles.affine.par_iter_mut(),
-        weights.par_iter(),
+        stencils.par_iter(),
     )
         .into_par_iter()
-        .for_each(|(x, v, affine, [wx, wy])| {
-            let (bi, bj) = ((wx.base + pad) as usize, (wy.base + pad) as usize);
+        .for_each(|(x, v, affine, st)| {
+            let [fx, fy] = st.frac;
+            let (wx, dwx) = shape.stencil_weights::<W>(fx);
+            let (wy, dwy) = shape.stencil_weights::<W>(fy);
+            let base = st.node as usize;
             let mut v_pic = Vec2::zeros();
             let mut dv = Vec2::zeros();
-            let mut b = Mat2::zeros();
-            for c in 0..width {
-                for a in 0..width {
-                    let node = grid.index(bi + a, bj + c);
-                    let n = wx.w[a] * wy.w[c];
-                    let vn = grid.vel_new[node];
-                    v_pic += n * vn;
-                    if alpha > 0.0 {
-                        dv += n * (vn - grid.vel[node]);
-                    }
-                    if apic {
-                        match apic_dinv {
-                            // B-splines: C = B D^-1 with constant D.
-                            Some(_) => b += (n * vn) * (grid.position(node) - *x).transpose(),
-                            // Multilinear/GIMP: C = sum v grad N^T (= B D^-1 for linear).
-                            None => {
-                                let grad =
-                                    Vec2::new(wx.dw[a] * wy.w[c], wx.w[a] * wy.dw[c]) * inv_h;
-                                b += vn * grad.transpose();
-                            }
-                        }
+            let (mut b0, mut b1) = (Vec2::zeros(), Vec2::zeros());
+            for c in 0..W {
+                let row = base + c * nx;
+                // s0 = sum N_x v; s1 = sum N_x a v (spline APIC) or sum dN_x v.
+                let (mut s0, mut s1, mut sd) = (Vec2::zeros(), Vec2::zeros(), Vec2::zeros());
+                for a in 0..W {
+                    let vn = vel_new[row + a];
+                    s0 += wx[a] * vn;
+                    match MODE {
+                        FLIP => sd += wx[a] * (vn - vel[row + a]),
+                        APIC_SPLINE => s1 += (wx[a] * a as f64) * vn,
+                        APIC_GRADIENT => s1 += dwx[a] * vn,
+                        _ => {}
                     }
                 }
+                v_pic += wy[c] * s0;
+                match MODE {
+                    FLIP => dv += wy[c] * sd,
+                    APIC_SPLINE => {
+                        b0 += wy[c] * (s1 - fx * s0);
+                        b1 += (wy[c] * (c as f64 - fy)) * s0;
+                    }
+                    APIC_GRADIENT => {
+                        b0 += wy[c] * s1;
+                        b1 += dwy[c] * s0;
+                    }
+                    _ => {}
+                }
             }
-            *v = if alpha > 0.0 {
+            *v = if MODE == FLIP {
                 alpha * (*v + dv) + (1.0 - alpha) * v_pic
             } else {
                 v_pic
             };
-            if apic {
-                *affine = b * apic_dinv.unwrap_or(1.0);
+            if MODE == APIC_SPLINE || MODE == APIC_GRADIENT {
+                *affine = Mat2::from_columns(&[b0, b1]) * c_scale;
             }
             *x += dt * v_pic;
             for k in 0..2 {

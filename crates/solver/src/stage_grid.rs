@@ -27,16 +27,14 @@ pub fn velocities(grid: &mut Grid) -> f64 {
 pub fn project_momentum(grid: &mut Grid) {
     let mut momentum = std::mem::take(&mut grid.momentum);
     grid.fold(&mut momentum);
-    for &n in &grid.active {
+    for &n in &grid.inside {
         let n = n as usize;
-        if grid.is_canonical(n) {
-            let m = grid.mass[n];
-            grid.vel[n] = if m > 0.0 {
-                momentum[n] / m
-            } else {
-                momentum[n] * 0.0
-            };
-        }
+        let m = grid.mass[n];
+        grid.vel[n] = if m > 0.0 {
+            momentum[n] / m
+        } else {
+            momentum[n] * 0.0
+        };
     }
     grid.momentum = momentum;
     let mut vel = std::mem::take(&mut grid.vel);
@@ -51,18 +49,16 @@ pub fn project_momentum(grid: &mut Grid) {
 pub fn update(grid: &mut Grid, dt: f64) {
     let mut force = std::mem::take(&mut grid.force);
     grid.fold(&mut force);
-    for &n in &grid.active {
+    for &n in &grid.inside {
         let n = n as usize;
-        if grid.is_canonical(n) {
-            let m = grid.mass[n];
-            let a = if m > 0.0 {
-                force[n] / m
-            } else {
-                force[n] * 0.0
-            };
-            grid.accel[n] = a;
-            grid.vel_new[n] = grid.vel[n] + a * dt;
-        }
+        let m = grid.mass[n];
+        let a = if m > 0.0 {
+            force[n] / m
+        } else {
+            force[n] * 0.0
+        };
+        grid.accel[n] = a;
+        grid.vel_new[n] = grid.vel[n] + a * dt;
     }
     grid.force = force;
     let mut accel = std::mem::take(&mut grid.accel);

@@ -1,11 +1,13 @@
-//! Particle-to-grid transfer as a gather: every active node sums the particles
-//! of the bins whose stencils reach it, in a fixed order. Nodes are independent,
-//! so the result is the same for any thread count, with no reduction buffers.
+//! Particle-to-grid transfer as a coloured scatter. Particles are walked tile
+//! by tile (`stage_sort::TILE` bins a side); tiles of one colour never share a
+//! node, so they scatter in parallel straight into the grid, and the colours
+//! run one after the other. Every node therefore sums its particles in the same
+//! order (colour, then bin, then particle index) for any thread count.
 
 use crate::grid::Grid;
-use crate::particles::{Particles, Vec2};
-use crate::shape::Weights1d;
-use crate::stage_sort::Bins;
+use crate::particles::{Mat2, Particles, Vec2};
+use crate::shape::{Shape, Stencil};
+use crate::stage_sort::{Bins, TILE};
 use rayon::prelude::*;
 
 /// Which nodal sums a P2G pass computes.
@@ -13,21 +15,15 @@ use rayon::prelude::*;
 pub struct Terms {
     pub mass: bool,
     pub momentum: bool,
-    /// Internal force -sum V sigma grad N plus gravity sum N m g.
+    /// Internal force -sum V sigma grad N plus gravity (m_i g, with the mass).
     pub force: bool,
-}
-
-#[derive(Clone, Copy, Debug, Default)]
-pub struct NodeSum {
-    mass: f64,
-    momentum: Vec2,
-    force: Vec2,
 }
 
 /// Read-only inputs of a P2G pass.
 pub struct Inputs<'a> {
     pub particles: &'a Particles,
-    pub weights: &'a [[Weights1d; 2]],
+    pub stencils: &'a [Stencil],
+    pub shape: &'a Shape,
     pub bins: &'a Bins,
     pub width: usize,
     /// Include the APIC affine term in the momentum.
@@ -35,67 +31,153 @@ pub struct Inputs<'a> {
     pub gravity: Vec2,
 }
 
-pub fn p2g(inputs: &Inputs, terms: Terms, buf: &mut Vec<NodeSum>, grid: &mut Grid) {
-    buf.clear();
-    buf.resize(grid.active.len(), NodeSum::default());
-    {
-        let grid = &*grid;
-        buf.par_iter_mut()
-            .zip(grid.active.par_iter())
-            .for_each(|(out, &node)| *out = gather(inputs, terms, grid, node as usize));
-    }
-    for (sum, &node) in buf.iter().zip(grid.active.iter()) {
-        let n = node as usize;
+/// One scatter pass: its inputs and the grid fields it writes, shared by the
+/// tiles of one colour.
+struct Pass<'a> {
+    inputs: &'a Inputs<'a>,
+    mass: *mut f64,
+    momentum: *mut Vec2,
+    force: *mut Vec2,
+    len: usize,
+    dims: [usize; 2],
+    h: f64,
+    inv_h: f64,
+}
+
+// SAFETY: tiles of one colour write disjoint node sets (see `TILE`), and the
+// colours are separated by the join at the end of each parallel loop.
+unsafe impl Sync for Pass<'_> {}
+
+pub fn p2g(inputs: &Inputs, terms: Terms, grid: &mut Grid) {
+    for &n in &grid.active {
+        let n = n as usize;
         if terms.mass {
-            grid.mass_raw[n] = sum.mass;
+            grid.mass_raw[n] = 0.0;
         }
         if terms.momentum {
-            grid.momentum[n] = sum.momentum;
+            grid.momentum[n] = Vec2::zeros();
         }
         if terms.force {
-            grid.force[n] = sum.force;
+            grid.force[n] = Vec2::zeros();
+        }
+    }
+    let pass = Pass {
+        inputs,
+        mass: grid.mass_raw.as_mut_ptr(),
+        momentum: grid.momentum.as_mut_ptr(),
+        force: grid.force.as_mut_ptr(),
+        len: grid.mass_raw.len(),
+        dims: grid.dims,
+        h: grid.h,
+        inv_h: 1.0 / grid.h,
+    };
+    match inputs.width {
+        2 => scatter_colours::<2>(&pass, terms),
+        3 => scatter_colours::<3>(&pass, terms),
+        _ => scatter_colours::<4>(&pass, terms),
+    }
+    if terms.force {
+        // sum_p N m g = m_i g: gravity once per node rather than per particle.
+        for &n in &grid.active {
+            let n = n as usize;
+            grid.force[n] += inputs.gravity * grid.mass_raw[n];
         }
     }
 }
 
-#[inline]
-fn gather(inputs: &Inputs, terms: Terms, grid: &Grid, node: usize) -> NodeSum {
-    let Inputs {
-        particles: ps,
-        weights,
-        bins,
-        width,
-        affine,
-        gravity,
-    } = *inputs;
-    let (i, j) = grid.coords(node);
-    let xi = grid.position(node);
-    let inv_h = 1.0 / grid.h;
-    let mut s = NodeSum::default();
-    for bj in j.saturating_sub(width - 1)..=j {
-        for bi in i.saturating_sub(width - 1)..=i {
-            let (a, c) = (i - bi, j - bj);
-            for &p in bins.of(grid.index(bi, bj)) {
-                let p = p as usize;
-                let [wx, wy] = &weights[p];
-                let n = wx.w[a] * wy.w[c];
-                let m = ps.mass[p];
-                if terms.mass {
-                    s.mass += n * m;
+fn scatter_colours<const W: usize>(pass: &Pass, terms: Terms) {
+    macro_rules! go {
+        ($m:literal, $p:literal, $f:literal) => {
+            for tiles in &pass.inputs.bins.by_colour {
+                tiles
+                    .par_iter()
+                    .for_each(|&tile| scatter_tile::<W, $m, $p, $f>(pass, tile as usize));
+            }
+        };
+    }
+    match (terms.mass, terms.momentum, terms.force) {
+        (true, true, true) => go!(true, true, true),
+        (true, true, false) => go!(true, true, false),
+        (true, false, true) => go!(true, false, true),
+        (true, false, false) => go!(true, false, false),
+        (false, true, true) => go!(false, true, true),
+        (false, true, false) => go!(false, true, false),
+        (false, false, true) => go!(false, false, true),
+        (false, false, false) => {}
+    }
+}
+
+fn scatter_tile<const W: usize, const MASS: bool, const MOMENTUM: bool, const FORCE: bool>(
+    pass: &Pass,
+    tile: usize,
+) {
+    let (bins, dims) = (pass.inputs.bins, pass.dims);
+    let (tx, ty) = (tile % bins.tiles[0], tile / bins.tiles[0]);
+    let (x0, x1) = (tx * TILE, ((tx + 1) * TILE).min(dims[0]));
+    for bj in ty * TILE..((ty + 1) * TILE).min(dims[1]) {
+        let row = bj * dims[0];
+        for &p in bins.of_range(row + x0, row + x1) {
+            scatter_particle::<W, MASS, MOMENTUM, FORCE>(pass, p as usize);
+        }
+    }
+}
+
+#[inline(always)]
+fn scatter_particle<const W: usize, const MASS: bool, const MOMENTUM: bool, const FORCE: bool>(
+    pass: &Pass,
+    p: usize,
+) {
+    let (inputs, dims) = (pass.inputs, pass.dims);
+    let ps = inputs.particles;
+    let st = &inputs.stencils[p];
+    let [fx, fy] = st.frac;
+    let (wx, dwx) = inputs.shape.stencil_weights::<W>(fx);
+    let (wy, dwy) = inputs.shape.stencil_weights::<W>(fy);
+    let base = st.node as usize;
+    let m = ps.mass[p];
+    // Momentum at node (a, c): N m (v + C h (a - fx, c - fy)), split into a
+    // per-particle constant and a slope per node step (cell units).
+    let (mv0, slope) = if MOMENTUM {
+        if inputs.affine {
+            let mc = ps.affine[p] * (m * pass.h);
+            (m * ps.v[p] - mc * Vec2::new(fx, fy), mc)
+        } else {
+            (m * ps.v[p], Mat2::zeros())
+        }
+    } else {
+        (Vec2::zeros(), Mat2::zeros())
+    };
+    // Internal force at node (a, c): A (dNx wy, wx dNy) with A = -V sigma / h.
+    let a_mat = if FORCE {
+        ps.stress[p] * (-ps.vol[p] * pass.inv_h)
+    } else {
+        Mat2::zeros()
+    };
+    debug_assert!(base + (W - 1) * (dims[0] + 1) < pass.len);
+    for c in 0..W {
+        let (wyc, dwyc) = (wy[c], dwy[c]);
+        let row = base + c * dims[0];
+        let mass_row = m * wyc;
+        let mom_row = wyc * (mv0 + slope.column(1) * c as f64);
+        let mom_slope = wyc * slope.column(0);
+        let force_w = a_mat.column(0) * wyc;
+        let force_dw = a_mat.column(1) * dwyc;
+        for a in 0..W {
+            let n = row + a;
+            let wxa = wx[a];
+            // SAFETY: `n` lies in the particle's stencil, inside the padded
+            // grid (checked by the sort), and no other thread writes it now.
+            unsafe {
+                if MASS {
+                    *pass.mass.add(n) += wxa * mass_row;
                 }
-                if terms.momentum {
-                    let mut vp = ps.v[p];
-                    if affine {
-                        vp += ps.affine[p] * (xi - ps.x[p]);
-                    }
-                    s.momentum += (n * m) * vp;
+                if MOMENTUM {
+                    *pass.momentum.add(n) += wxa * mom_row + (wxa * a as f64) * mom_slope;
                 }
-                if terms.force {
-                    let grad = Vec2::new(wx.dw[a] * wy.w[c], wx.w[a] * wy.dw[c]) * inv_h;
-                    s.force += (n * m) * gravity - ps.vol[p] * (ps.stress[p] * grad);
+                if FORCE {
+                    *pass.force.add(n) += dwx[a] * force_w + wxa * force_dw;
                 }
             }
         }
     }
-    s
 }

@@ -6,16 +6,16 @@ use crate::config::{JUpdate, Material};
 use crate::grid::Grid;
 use crate::par::CHUNK;
 use crate::particles::{Mat2, Particles, Vec2};
-use crate::shape::Weights1d;
+use crate::shape::{Shape, Stencil};
 use crate::viscosity;
 use rayon::prelude::*;
 
 pub struct Inputs<'a> {
-    pub weights: &'a [[Weights1d; 2]],
+    pub stencils: &'a [Stencil],
+    pub shape: &'a Shape,
     pub grid: &'a Grid,
     /// The grid velocity this scheme takes the gradient of.
     pub velocity: &'a [Vec2],
-    pub width: usize,
     pub materials: &'a [Material],
     pub j_update: JUpdate,
     pub dt: f64,
@@ -23,16 +23,56 @@ pub struct Inputs<'a> {
 
 /// Updates F, J, V, stress, pressure and |dev D|; returns the viscous work of this step.
 pub fn update(inputs: &Inputs, particles: &mut Particles, partials: &mut [[f64; 1]]) -> f64 {
+    match inputs.shape.width() {
+        2 => run::<2>(inputs, particles, partials),
+        3 => run::<3>(inputs, particles, partials),
+        _ => run::<4>(inputs, particles, partials),
+    }
+}
+
+/// Velocity gradient L = sum v grad N^T at a particle, summed row by row
+/// (x inner): column 0 takes dN_x N_y, column 1 N_x dN_y.
+#[inline(always)]
+fn velocity_gradient<const W: usize>(
+    shape: &Shape,
+    st: &Stencil,
+    velocity: &[Vec2],
+    nx: usize,
+    inv_h: f64,
+) -> Mat2 {
+    let (wx, dwx) = shape.stencil_weights::<W>(st.frac[0]);
+    let (wy, dwy) = shape.stencil_weights::<W>(st.frac[1]);
+    let base = st.node as usize;
+    let (mut col0, mut col1) = (Vec2::zeros(), Vec2::zeros());
+    for c in 0..W {
+        let row = base + c * nx;
+        let (mut sw, mut sdw) = (Vec2::zeros(), Vec2::zeros());
+        for a in 0..W {
+            let vn = velocity[row + a];
+            sw += wx[a] * vn;
+            sdw += dwx[a] * vn;
+        }
+        col0 += wy[c] * sdw;
+        col1 += dwy[c] * sw;
+    }
+    Mat2::from_columns(&[col0, col1]) * inv_h
+}
+
+fn run<const W: usize>(
+    inputs: &Inputs,
+    particles: &mut Particles,
+    partials: &mut [[f64; 1]],
+) -> f64 {
     let Inputs {
-        weights,
+        stencils,
+        shape,
         grid,
         velocity,
-        width,
         materials,
         j_update,
         dt,
     } = *inputs;
-    let pad = crate::grid::PAD as i64;
+    let nx = grid.dims[0];
     let inv_h = 1.0 / grid.h;
     let n_chunks = crate::par::chunk_count(particles.len());
     (
@@ -46,23 +86,15 @@ pub fn update(inputs: &Inputs, particles: &mut Particles, partials: &mut [[f64; 
         particles.stored_energy.par_chunks_mut(CHUNK),
         particles.vol0.par_chunks(CHUNK),
         particles.material.par_chunks(CHUNK),
-        weights.par_chunks(CHUNK),
+        stencils.par_chunks(CHUNK),
         partials[..n_chunks].par_iter_mut(),
     )
         .into_par_iter()
         .for_each(
-            |(f, j, vol, stress, pressure, dev_rate, wave, stored, vol0, mat, w, work)| {
+            |(f, j, vol, stress, pressure, dev_rate, wave, stored, vol0, mat, st, work)| {
                 let mut acc = 0.0;
                 for k in 0..f.len() {
-                    let [wx, wy] = &w[k];
-                    let (bi, bj) = ((wx.base + pad) as usize, (wy.base + pad) as usize);
-                    let mut l = Mat2::zeros();
-                    for c in 0..width {
-                        for a in 0..width {
-                            let grad = Vec2::new(wx.dw[a] * wy.w[c], wx.w[a] * wy.dw[c]) * inv_h;
-                            l += velocity[grid.index(bi + a, bj + c)] * grad.transpose();
-                        }
-                    }
+                    let l = velocity_gradient::<W>(shape, &st[k], velocity, nx, inv_h);
                     let f_new = (Mat2::identity() + dt * l) * f[k];
                     let det = f_new.determinant();
                     let (f_next, j_next) = match j_update {
