@@ -51,7 +51,8 @@ impl Geometry {
         let r = (x - self.origin) / self.cell;
         let clamp = |v: f64, n: usize| {
             if v.is_finite() {
-                (v.floor().max(0.0) as usize).min(n - 1)
+                // Truncation is floor here: the value is clamped to >= 0 first.
+                (v.max(0.0) as usize).min(n - 1)
             } else {
                 0
             }

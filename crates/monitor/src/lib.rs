@@ -145,7 +145,9 @@ impl Cluster {
 pub struct Monitor {
     pub cfg: MonitorConfig,
     pub geom: Geometry,
+    /// |dv| / dt per particle, filled only on steps that need it (`fill_accel`).
     accel: Vec<f64>,
+    accel_step: Option<u64>,
     flagged: Vec<Candidate>,
     bins: CellBins,
     stats: WindowStats,
@@ -176,6 +178,7 @@ impl Monitor {
         let cells = geom.cell_count();
         Monitor {
             accel: vec![0.0; n],
+            accel_step: None,
             flagged: Vec::with_capacity(n),
             bins: CellBins::new(&geom, n),
             stats: WindowStats::new(&geom, n),
@@ -226,6 +229,18 @@ impl Monitor {
         }
     }
 
+    /// Acceleration |v - v_prev| / dt of every particle for this step (once).
+    fn fill_accel(&mut self, v: &StateView) {
+        if self.accel_step == Some(v.step) {
+            return;
+        }
+        let inv_dt = 1.0 / v.dt.max(1e-300);
+        for (a, (vn, vp)) in self.accel.iter_mut().zip(v.v.iter().zip(v.v_prev)) {
+            *a = (vn - vp).norm() * inv_dt;
+        }
+        self.accel_step = Some(v.step);
+    }
+
     /// Observes the state after a step.
     pub fn observe(&mut self, v: &StateView) -> &StepReport {
         let cfg = self.cfg.clone();
@@ -238,7 +253,7 @@ impl Monitor {
 
         // One pass over the particles: cheap figures, candidates (with their
         // history as it was before this step), then the history update.
-        let (mut max_a, mut max_ratio, mut max_speed) = (0.0f64, 0.0f64, 0.0f64);
+        let (mut max_ratio, mut max_speed) = (0.0f64, 0.0f64);
         let (mut j_min, mut j_max) = (f64::INFINITY, f64::NEG_INFINITY);
         let mut gain_max = (f64::NEG_INFINITY, 0usize);
         let mut need_z = false;
@@ -246,14 +261,24 @@ impl Monitor {
         let quiescent2 = cfg.quiescent_speed * cfg.quiescent_speed;
         self.flagged.clear();
         let h = &mut self.history;
+        // Squared velocity jumps compared against (a dt)^2: no root per particle.
+        let inv_dt = 1.0 / dt;
+        let candidate_dv2 = (candidate_a * dt).powi(2);
+        let mut max_dv2 = 0.0f64;
         for p in 0..n {
-            let a = (v.v[p] - v.v_prev[p]).norm() / dt;
-            self.accel[p] = a;
+            let dv2 = (v.v[p] - v.v_prev[p]).norm_squared();
+            max_dv2 = max_dv2.max(dv2);
+            let candidate = dv2 >= candidate_dv2;
             let speed2 = v.v[p].norm_squared();
             let prev2 = v.v_prev[p].norm_squared();
             let e = 0.5 * v.mass[p] * speed2;
-            let ratio = e / h.ke_recent[p].max(0.5 * v.mass[p] * ke_floor_speed2);
-            max_a = max_a.max(a);
+            let ke_ref = h.ke_recent[p].max(0.5 * v.mass[p] * ke_floor_speed2);
+            // Divide only for a candidate or a possible new maximum.
+            let ratio = if candidate || e > max_ratio * ke_ref {
+                e / ke_ref
+            } else {
+                0.0
+            };
             max_ratio = max_ratio.max(ratio);
             max_speed = max_speed.max(speed2);
             j_min = j_min.min(v.j[p]);
@@ -262,7 +287,8 @@ impl Monitor {
             if gain > gain_max.0 {
                 gain_max = (gain, p);
             }
-            if a >= candidate_a {
+            if candidate {
+                let a = dv2.sqrt() * inv_dt;
                 let mut rules = 0;
                 if ratio >= cfg.ke_spike_ratio {
                     rules |= rule::KE_SPIKE;
@@ -292,6 +318,10 @@ impl Monitor {
             }
         }
         let max_speed = max_speed.sqrt();
+        let max_a = max_dv2.sqrt() * inv_dt;
+        if need_z || !self.flagged.is_empty() {
+            self.fill_accel(v);
+        }
 
         // Robust z only for gaining candidates above kick_accel_g.
         let mut max_z = 0.0f64;
@@ -323,6 +353,7 @@ impl Monitor {
             self.cluster_flagged(v, g);
         }
         if injection.window > cfg.injection_floor_factor * floor {
+            self.fill_accel(v);
             let (i, j) = self.geom.cell_of(v.x[gain_max.1]);
             let cluster = Cluster::new(
                 CellRange::of(i, j),
@@ -568,6 +599,7 @@ impl Monitor {
         g: f64,
         bad: impl Fn(solver::Vec2, solver::Vec2) -> bool,
     ) {
+        self.fill_accel(v);
         let mut cells: Option<CellRange> = None;
         let mut count = 0;
         let mut peak = 0.0f64;

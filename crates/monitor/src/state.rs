@@ -176,6 +176,7 @@ impl Monitor {
                 expected,
             });
         }
+        self.accel_step = None;
         let h = &mut self.history;
         r.f64s(&mut h.ke_recent)?;
         r.i64s(&mut h.last_fast_step)?;

@@ -49,18 +49,6 @@ struct Pass<'a> {
 unsafe impl Sync for Pass<'_> {}
 
 pub fn p2g(inputs: &Inputs, terms: Terms, grid: &mut Grid) {
-    for &n in &grid.active {
-        let n = n as usize;
-        if terms.mass {
-            grid.mass_raw[n] = 0.0;
-        }
-        if terms.momentum {
-            grid.momentum[n] = Vec2::zeros();
-        }
-        if terms.force {
-            grid.force[n] = Vec2::zeros();
-        }
-    }
     let pass = Pass {
         inputs,
         mass: grid.mass_raw.as_mut_ptr(),
@@ -71,19 +59,44 @@ pub fn p2g(inputs: &Inputs, terms: Terms, grid: &mut Grid) {
         h: grid.h,
         inv_h: 1.0 / grid.h,
     };
+    let (pass, active) = (&pass, &grid.active[..]);
+    // SAFETY (both loops): active nodes are distinct and below `len`.
+    active.par_chunks(NODE_CHUNK).for_each(|nodes| {
+        for &n in nodes {
+            let n = n as usize;
+            debug_assert!(n < pass.len);
+            unsafe {
+                if terms.mass {
+                    *pass.mass.add(n) = 0.0;
+                }
+                if terms.momentum {
+                    *pass.momentum.add(n) = Vec2::zeros();
+                }
+                if terms.force {
+                    *pass.force.add(n) = Vec2::zeros();
+                }
+            }
+        }
+    });
     match inputs.width {
-        2 => scatter_colours::<2>(&pass, terms),
-        3 => scatter_colours::<3>(&pass, terms),
-        _ => scatter_colours::<4>(&pass, terms),
+        2 => scatter_colours::<2>(pass, terms),
+        3 => scatter_colours::<3>(pass, terms),
+        _ => scatter_colours::<4>(pass, terms),
     }
     if terms.force {
         // sum_p N m g = m_i g: gravity once per node rather than per particle.
-        for &n in &grid.active {
-            let n = n as usize;
-            grid.force[n] += inputs.gravity * grid.mass_raw[n];
-        }
+        let g = inputs.gravity;
+        active.par_chunks(NODE_CHUNK).for_each(|nodes| {
+            for &n in nodes {
+                let n = n as usize;
+                unsafe { *pass.force.add(n) += g * *pass.mass.add(n) };
+            }
+        });
     }
 }
+
+/// Active nodes per parallel work item in the node loops.
+const NODE_CHUNK: usize = 4096;
 
 fn scatter_colours<const W: usize>(pass: &Pass, terms: Terms) {
     macro_rules! go {

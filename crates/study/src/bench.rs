@@ -22,6 +22,8 @@ pub struct BenchOptions {
     pub threads: usize,
     pub shape: ShapeKind,
     pub transfer: TransferKind,
+    /// Dam-break cell size (m).
+    pub cell: f64,
 }
 
 /// The mpm88 scene: 8192 particles (fixed seed) in [0.2, 0.6]^2 of a unit box,
@@ -81,14 +83,16 @@ pub fn mpm88() -> (SolverConfig, Particles) {
     )
 }
 
-pub fn dam_break(shape: ShapeKind, transfer: TransferKind) -> SolverConfig {
+pub fn dam_break(shape: ShapeKind, transfer: TransferKind, cell: f64) -> SolverConfig {
     let mut mat = Material::water(1.5e5);
     mat.eos = EosKind::Power;
     let mut method = Method::baseline();
     method.shape = shape;
     method.transfer = transfer;
+    let mut scene = Scene::dam_break(mat);
+    scene.cell = cell;
     SolverConfig {
-        scene: Scene::dam_break(mat),
+        scene,
         method,
         perturb: vec![],
     }
@@ -107,7 +111,8 @@ pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
                 (Solver::with_particles(cfg, ps), "mpm88", shape, transfer)
             }
             BenchScene::DamBreak => (
-                Solver::new(dam_break(opts.shape, opts.transfer)).map_err(|e| e.to_string())?,
+                Solver::new(dam_break(opts.shape, opts.transfer, opts.cell))
+                    .map_err(|e| e.to_string())?,
                 "dam_break",
                 opts.shape,
                 opts.transfer,
@@ -122,7 +127,7 @@ pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
         const FIELD_EVERY: u64 = 25;
         let mut monitor = Monitor::new(MonitorConfig::default(), &solver.view());
         solver.reset_stage_times();
-        let (mut solver_s, mut monitor_s) = (0.0, 0.0);
+        let (mut solver_s, mut monitor_s, mut field_s) = (0.0, 0.0, 0.0);
         for k in 0..opts.steps {
             let t0 = Instant::now();
             solver.step().map_err(|e| e.to_string())?;
@@ -130,7 +135,9 @@ pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
             let v = solver.view();
             monitor.observe(&v);
             if k % FIELD_EVERY == 0 {
+                let t2 = Instant::now();
                 monitor.field_metrics(&v);
+                field_s += t2.elapsed().as_secs_f64();
             }
             monitor_s += t1.elapsed().as_secs_f64();
             solver_s += (t1 - t0).as_secs_f64();
@@ -146,6 +153,7 @@ pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
             "particles": n,
             "steps": opts.steps,
             "threads": opts.threads,
+            "cell": if opts.scene == BenchScene::DamBreak { Some(opts.cell) } else { None },
             "seconds": solver_s,
             "particle_steps_per_s": ps / solver_s,
             "monitor_seconds": monitor_s,
@@ -159,6 +167,7 @@ pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
                 "stress": ns(st.stress),
                 "other": ns(st.other),
                 "monitor": ns(monitor_s),
+                "monitor_fields": ns(field_s),
             },
         }))
     })
