@@ -66,6 +66,40 @@ impl std::fmt::Display for StepError {
 
 impl std::error::Error for StepError {}
 
+/// The stages of a step, each runnable alone for the per-stage benchmarks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Stencils, counting sort, tiles and the active-node set.
+    Sort,
+    /// Mass, momentum and force to the grid (all three sums).
+    P2g,
+    /// Nodal velocities and the momentum update.
+    Grid,
+    G2p,
+    Stress,
+}
+
+impl Stage {
+    pub const ALL: [Stage; 5] = [
+        Stage::Sort,
+        Stage::P2g,
+        Stage::Grid,
+        Stage::G2p,
+        Stage::Stress,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Sort => "sort",
+            Stage::P2g => "p2g",
+            Stage::Grid => "grid",
+            Stage::G2p => "g2p",
+            Stage::Stress => "stress",
+        }
+    }
+}
+
+#[derive(Clone)]
 pub struct Solver {
     cfg: SolverConfig,
     shape: Shape,
@@ -280,6 +314,26 @@ impl Solver {
                 }
             }
         }
+    }
+
+    /// Runs one stage alone on the current state, with the current time step
+    /// (benchmarks; a normal step runs them through `step`).
+    pub fn run_stage(&mut self, stage: Stage) -> Result<(), StepError> {
+        let mut clock = std::time::Instant::now();
+        match stage {
+            Stage::Sort => stage_sort::sort(
+                &self.particles,
+                &mut self.grid,
+                &self.shape,
+                &mut self.stencils,
+                &mut self.bins,
+            )?,
+            Stage::P2g => scheme::run_p2g_all(self, &mut clock),
+            Stage::Grid => scheme::run_grid(self, &mut clock),
+            Stage::G2p => scheme::run_g2p(self, &mut clock),
+            Stage::Stress => scheme::run_stress(self, &mut clock),
+        }
+        Ok(())
     }
 
     /// Time per stage since the last `reset_stage_times`.

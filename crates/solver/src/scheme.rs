@@ -131,3 +131,21 @@ fn g2p(s: &mut Solver, clock: &mut Instant) {
     s.apply_perturbations();
     lap(&mut s.times.g2p, clock);
 }
+
+/// Single stages for `Solver::run_stage` (benchmarks).
+pub(crate) fn run_p2g_all(s: &mut Solver, clock: &mut Instant) {
+    p2g(s, ALL, clock);
+}
+
+pub(crate) fn run_grid(s: &mut Solver, clock: &mut Instant) {
+    grid_velocities(s, clock);
+    grid_update(s, clock);
+}
+
+pub(crate) fn run_g2p(s: &mut Solver, clock: &mut Instant) {
+    g2p(s, clock);
+}
+
+pub(crate) fn run_stress(s: &mut Solver, clock: &mut Instant) {
+    stress(s, StressVelocity::Updated, clock);
+}

@@ -166,6 +166,10 @@ pub fn run_case(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<V
     Ok(summary)
 }
 
+/// Runs `f` inside a rayon pool of `threads` workers (default: all cores).
+/// Always inside a pool: parallel loops called from a thread outside any pool
+/// hand every loop to the global pool and wait, which costs more than the
+/// loop itself on a small scene.
 pub fn with_threads<T>(
     threads: Option<usize>,
     f: impl FnOnce() -> std::io::Result<T> + Send,
@@ -173,14 +177,14 @@ pub fn with_threads<T>(
 where
     T: Send,
 {
-    match threads {
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .map_err(|e| std::io::Error::other(e.to_string()))?
-            .install(f),
-        None => f(),
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        builder = builder.num_threads(n);
     }
+    builder
+        .build()
+        .map_err(|e| std::io::Error::other(e.to_string()))?
+        .install(f)
 }
 
 pub fn panic_message(panic: Box<dyn std::any::Any + Send>) -> String {
