@@ -105,6 +105,8 @@ pub struct FieldMetrics {
 #[derive(Clone, Copy, Debug)]
 struct Candidate {
     p: u32,
+    /// |dv| / dt.
+    a: f64,
     z: f64,
     rules: u32,
     last_fast: i64,
@@ -296,13 +298,17 @@ impl Monitor {
                 // A kick adds kinetic energy; an impact that stops particles does not count.
                 let wants_z = speed2 > prev2 && a >= cfg.kick_accel_g * g;
                 need_z |= wants_z;
-                self.flagged.push(Candidate {
-                    p: p as u32,
-                    z: if wants_z { f64::NAN } else { 0.0 },
-                    rules,
-                    last_fast: h.last_fast_step[p],
-                    last_deformed: h.last_deformed_step[p],
-                });
+                // A candidate with no rule and no z to come would be dropped below.
+                if rules != 0 || wants_z {
+                    self.flagged.push(Candidate {
+                        p: p as u32,
+                        a,
+                        z: if wants_z { f64::NAN } else { 0.0 },
+                        rules,
+                        last_fast: h.last_fast_step[p],
+                        last_deformed: h.last_deformed_step[p],
+                    });
+                }
             }
             h.ke_recent[p] = e.max(h.ke_recent[p] * decay);
             if speed2 > quiescent2 {
@@ -319,7 +325,8 @@ impl Monitor {
         }
         let max_speed = max_speed.sqrt();
         let max_a = max_dv2.sqrt() * inv_dt;
-        if need_z || !self.flagged.is_empty() {
+        if need_z {
+            // The z windows read every particle's acceleration.
             self.fill_accel(v);
         }
 
@@ -480,7 +487,7 @@ impl Monitor {
             let label = self.cell_label[self.geom.cell_index(v.x[p])] as usize;
             let c = &mut self.clusters[label];
             c.rules |= f.rules;
-            c.peak_accel = c.peak_accel.max(self.accel[p]);
+            c.peak_accel = c.peak_accel.max(f.a);
             c.peak_z = c.peak_z.max(f.z);
             c.count += 1;
             if f.last_fast < step - recent {
