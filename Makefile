@@ -35,6 +35,8 @@ bench: build
 	$(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape linear --transfer flip
 	$(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape bspline2 --transfer apic
 	$(KICK) bench --scene dam-break --steps 2000 --threads 2 --shape bspline2 --transfer apic
+	$(KICK) bench --scene dam-break --cell 0.0025 --steps 500 --threads 1 --shape bspline2 --transfer apic
+	$(KICK) bench --scene dam-break --cell 0.0025 --steps 500 --threads 2 --shape bspline2 --transfer apic
 
 fmt:
 	$(CARGO) fmt --all
