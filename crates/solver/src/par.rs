@@ -7,6 +7,14 @@ use rayon::prelude::*;
 /// Particles per reduction chunk.
 pub const CHUNK: usize = 1024;
 
+/// Fewest particles one parallel work item takes. Waking a second worker
+/// costs more than a few thousand particles' work on a small scene, so those
+/// run on one thread; the split never changes results (see above).
+pub const MIN_PARTICLES: usize = 2 * CHUNK;
+
+/// The same in chunks of `CHUNK`.
+pub const MIN_CHUNKS: usize = MIN_PARTICLES / CHUNK;
+
 pub fn chunk_count(n: usize) -> usize {
     n.div_ceil(CHUNK).max(1)
 }
@@ -20,6 +28,7 @@ where
     let chunks = chunk_count(n);
     partials[..chunks]
         .par_iter_mut()
+        .with_min_len(MIN_CHUNKS)
         .enumerate()
         .for_each(|(c, out)| {
             let mut acc = [0.0; K];
@@ -47,6 +56,7 @@ where
 {
     (0..n)
         .into_par_iter()
+        .with_min_len(MIN_PARTICLES)
         .map(item)
         .reduce(|| f64::NEG_INFINITY, f64::max)
 }

@@ -95,6 +95,10 @@ pub fn p2g(inputs: &Inputs, terms: Terms, grid: &mut Grid) {
     }
 }
 
+/// Fewest tiles one parallel work item takes (a tile holds up to a few
+/// hundred particles; see `par::MIN_PARTICLES`).
+const MIN_TILES: usize = 2;
+
 /// Active nodes per parallel work item in the node loops.
 const NODE_CHUNK: usize = 4096;
 
@@ -104,6 +108,7 @@ fn scatter_colours<const W: usize>(pass: &Pass, terms: Terms) {
             for tiles in &pass.inputs.bins.by_colour {
                 tiles
                     .par_iter()
+                    .with_min_len(MIN_TILES)
                     .for_each(|&tile| scatter_tile::<W, $m, $p, $f>(pass, tile as usize));
             }
         };

@@ -90,6 +90,7 @@ fn run<const W: usize>(
         partials[..n_chunks].par_iter_mut(),
     )
         .into_par_iter()
+        .with_min_len(crate::par::MIN_CHUNKS)
         .for_each(
             |(f, j, vol, stress, pressure, dev_rate, wave, stored, vol0, mat, st, work)| {
                 let mut acc = 0.0;
