@@ -71,14 +71,17 @@ impl WindowStats {
         // A fixed stride keeps at most MAX_SAMPLES values: same estimate, bounded cost.
         let stride = total.div_ceil(MAX_SAMPLES).max(1);
         self.values.clear();
-        let mut k = 0;
+        // Every stride-th particle in window order (a countdown, not k % stride).
+        let mut skip = 0;
         for j in j0..=j1 {
             for i in i0..=i1 {
                 for &q in bins.particles(i + j * nx) {
-                    if k % stride == 0 {
+                    if skip == 0 {
                         self.values.push(accel[q as usize]);
+                        skip = stride - 1;
+                    } else {
+                        skip -= 1;
                     }
-                    k += 1;
                 }
             }
         }
