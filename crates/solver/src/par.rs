@@ -7,13 +7,25 @@ use rayon::prelude::*;
 /// Particles per reduction chunk.
 pub const CHUNK: usize = 1024;
 
-/// Fewest particles one parallel work item takes. Waking a second worker
-/// costs more than a few thousand particles' work on a small scene, so those
-/// run on one thread; the split never changes results (see above).
-pub const MIN_PARTICLES: usize = 2 * CHUNK;
+/// Below this many items a loop runs on one thread: handing work to a second
+/// worker costs tens of microseconds on a small VM, more than ~16 000
+/// particles' worth of a stage. Splitting never changes results (see above).
+pub const MIN_PARALLEL: usize = 16 * CHUNK;
 
-/// The same in chunks of `CHUNK`.
-pub const MIN_CHUNKS: usize = MIN_PARTICLES / CHUNK;
+/// Fewest items per parallel work item for a loop over `n` items: all of them
+/// below `MIN_PARALLEL`, else 2 chunks (small pieces balance best).
+pub fn min_len(n: usize) -> usize {
+    if n < MIN_PARALLEL {
+        n.max(1)
+    } else {
+        2 * CHUNK
+    }
+}
+
+/// `min_len` for a loop over the `CHUNK`-sized chunks of `n` particles.
+pub fn min_chunks(n: usize) -> usize {
+    min_len(n).div_ceil(CHUNK)
+}
 
 pub fn chunk_count(n: usize) -> usize {
     n.div_ceil(CHUNK).max(1)
@@ -28,7 +40,7 @@ where
     let chunks = chunk_count(n);
     partials[..chunks]
         .par_iter_mut()
-        .with_min_len(MIN_CHUNKS)
+        .with_min_len(min_chunks(n))
         .enumerate()
         .for_each(|(c, out)| {
             let mut acc = [0.0; K];
@@ -56,7 +68,7 @@ where
 {
     (0..n)
         .into_par_iter()
-        .with_min_len(MIN_PARTICLES)
+        .with_min_len(min_len(n))
         .map(item)
         .reduce(|| f64::NEG_INFINITY, f64::max)
 }

@@ -60,24 +60,28 @@ pub fn p2g(inputs: &Inputs, terms: Terms, grid: &mut Grid) {
         inv_h: 1.0 / grid.h,
     };
     let (pass, active) = (&pass, &grid.active[..]);
+    let node_chunks = crate::par::min_len(active.len()).div_ceil(NODE_CHUNK);
     // SAFETY (both loops): active nodes are distinct and below `len`.
-    active.par_chunks(NODE_CHUNK).for_each(|nodes| {
-        for &n in nodes {
-            let n = n as usize;
-            debug_assert!(n < pass.len);
-            unsafe {
-                if terms.mass {
-                    *pass.mass.add(n) = 0.0;
-                }
-                if terms.momentum {
-                    *pass.momentum.add(n) = Vec2::zeros();
-                }
-                if terms.force {
-                    *pass.force.add(n) = Vec2::zeros();
+    active
+        .par_chunks(NODE_CHUNK)
+        .with_min_len(node_chunks)
+        .for_each(|nodes| {
+            for &n in nodes {
+                let n = n as usize;
+                debug_assert!(n < pass.len);
+                unsafe {
+                    if terms.mass {
+                        *pass.mass.add(n) = 0.0;
+                    }
+                    if terms.momentum {
+                        *pass.momentum.add(n) = Vec2::zeros();
+                    }
+                    if terms.force {
+                        *pass.force.add(n) = Vec2::zeros();
+                    }
                 }
             }
-        }
-    });
+        });
     match inputs.width {
         2 => scatter_colours::<2>(pass, terms),
         3 => scatter_colours::<3>(pass, terms),
@@ -86,30 +90,41 @@ pub fn p2g(inputs: &Inputs, terms: Terms, grid: &mut Grid) {
     if terms.force {
         // sum_p N m g = m_i g: gravity once per node rather than per particle.
         let g = inputs.gravity;
-        active.par_chunks(NODE_CHUNK).for_each(|nodes| {
-            for &n in nodes {
-                let n = n as usize;
-                unsafe { *pass.force.add(n) += g * *pass.mass.add(n) };
-            }
-        });
+        active
+            .par_chunks(NODE_CHUNK)
+            .with_min_len(node_chunks)
+            .for_each(|nodes| {
+                for &n in nodes {
+                    let n = n as usize;
+                    unsafe { *pass.force.add(n) += g * *pass.mass.add(n) };
+                }
+            });
     }
 }
 
 /// Fewest tiles one parallel work item takes (a tile holds up to a few
-/// hundred particles; see `par::MIN_PARTICLES`).
+/// hundred particles; see `par::min_len`).
 const MIN_TILES: usize = 2;
 
 /// Active nodes per parallel work item in the node loops.
-const NODE_CHUNK: usize = 4096;
+const NODE_CHUNK: usize = 2048;
 
 fn scatter_colours<const W: usize>(pass: &Pass, terms: Terms) {
+    // Four joins per pass cost more than they save on a small scene.
+    let parallel = pass.inputs.particles.len() >= crate::par::MIN_PARALLEL;
     macro_rules! go {
         ($m:literal, $p:literal, $f:literal) => {
             for tiles in &pass.inputs.bins.by_colour {
-                tiles
-                    .par_iter()
-                    .with_min_len(MIN_TILES)
-                    .for_each(|&tile| scatter_tile::<W, $m, $p, $f>(pass, tile as usize));
+                if parallel {
+                    tiles
+                        .par_iter()
+                        .with_min_len(MIN_TILES)
+                        .for_each(|&tile| scatter_tile::<W, $m, $p, $f>(pass, tile as usize));
+                } else {
+                    for &tile in tiles {
+                        scatter_tile::<W, $m, $p, $f>(pass, tile as usize);
+                    }
+                }
             }
         };
     }

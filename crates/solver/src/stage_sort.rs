@@ -60,7 +60,7 @@ pub fn sort(
     stencils
         .par_iter_mut()
         .zip(particles.x.par_iter())
-        .with_min_len(crate::par::MIN_PARTICLES)
+        .with_min_len(crate::par::min_len(particles.len()))
         .for_each(|(st, x)| {
             let r = (x - origin) * inv_h;
             let (bx, fx) = shape.locate(r.x);
