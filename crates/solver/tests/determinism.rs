@@ -49,6 +49,24 @@ fn one_and_two_threads_give_identical_bits() {
     }
 }
 
+/// Scenes under `par::MIN_PARALLEL` particles run each loop on one thread;
+/// this one (20 000 particles) takes the parallel paths: coloured P2G tiles,
+/// split particle and node loops, chunked sums.
+#[test]
+fn large_scene_takes_parallel_paths_with_identical_bits() {
+    for cfg in configs().into_iter().take(2) {
+        let mut cfg = cfg;
+        cfg.scene.cell = 0.004;
+        let n = Solver::new(cfg.clone()).unwrap().particle_count();
+        assert!(n >= solver::par::MIN_PARALLEL, "{n} particles");
+        let one = run_in_pool(1, &cfg, 150);
+        let two = run_in_pool(2, &cfg, 150);
+        let three = run_in_pool(3, &cfg, 150);
+        assert_eq!(one, two, "{:?}", cfg.method);
+        assert_eq!(one, three, "{:?}", cfg.method);
+    }
+}
+
 #[test]
 fn restart_from_checkpoint_is_bit_identical() {
     for cfg in configs() {
