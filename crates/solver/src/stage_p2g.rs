@@ -60,28 +60,19 @@ pub fn p2g(inputs: &Inputs, terms: Terms, grid: &mut Grid) {
         inv_h: 1.0 / grid.h,
     };
     let (pass, active) = (&pass, &grid.active[..]);
-    let node_chunks = crate::par::min_len(active.len()).div_ceil(NODE_CHUNK);
-    // SAFETY (both loops): active nodes are distinct and below `len`.
-    active
-        .par_chunks(NODE_CHUNK)
-        .with_min_len(node_chunks)
-        .for_each(|nodes| {
-            for &n in nodes {
-                let n = n as usize;
-                debug_assert!(n < pass.len);
-                unsafe {
-                    if terms.mass {
-                        *pass.mass.add(n) = 0.0;
-                    }
-                    if terms.momentum {
-                        *pass.momentum.add(n) = Vec2::zeros();
-                    }
-                    if terms.force {
-                        *pass.force.add(n) = Vec2::zeros();
-                    }
-                }
-            }
-        });
+    // SAFETY (both node loops): active nodes are distinct and below `len`.
+    each_node(active, |n| unsafe {
+        debug_assert!(n < pass.len);
+        if terms.mass {
+            *pass.mass.add(n) = 0.0;
+        }
+        if terms.momentum {
+            *pass.momentum.add(n) = Vec2::zeros();
+        }
+        if terms.force {
+            *pass.force.add(n) = Vec2::zeros();
+        }
+    });
     match inputs.width {
         2 => scatter_colours::<2>(pass, terms),
         3 => scatter_colours::<3>(pass, terms),
@@ -90,16 +81,23 @@ pub fn p2g(inputs: &Inputs, terms: Terms, grid: &mut Grid) {
     if terms.force {
         // sum_p N m g = m_i g: gravity once per node rather than per particle.
         let g = inputs.gravity;
-        active
-            .par_chunks(NODE_CHUNK)
-            .with_min_len(node_chunks)
-            .for_each(|nodes| {
-                for &n in nodes {
-                    let n = n as usize;
-                    unsafe { *pass.force.add(n) += g * *pass.mass.add(n) };
-                }
-            });
+        each_node(active, |n| unsafe {
+            *pass.force.add(n) += g * *pass.mass.add(n)
+        });
     }
+}
+
+/// Runs `f` on every active node, in parallel pieces of `NODE_CHUNK` nodes.
+fn each_node(active: &[u32], f: impl Fn(usize) + Sync) {
+    let min_chunks = crate::par::min_len(active.len()).div_ceil(NODE_CHUNK);
+    active
+        .par_chunks(NODE_CHUNK)
+        .with_min_len(min_chunks)
+        .for_each(|nodes| {
+            for &n in nodes {
+                f(n as usize);
+            }
+        });
 }
 
 /// Fewest tiles one parallel work item takes (a tile holds up to a few
