@@ -16,7 +16,8 @@ impl Material {
     /// Unclamped EOS at the mechanical J (thermal J_res applied here).
     #[inline]
     pub fn eos(&self, j: f64) -> EosState {
-        let je = j / self.j_res;
+        // j / 1 is j exactly: skip the division in the usual case.
+        let je = if self.j_res == 1.0 { j } else { j / self.j_res };
         let (p, kt, u) = match self.eos {
             EosKind::Power => eos_power::eval(self.k, self.gamma, je),
             EosKind::Tait => eos_tait::eval(self.k, je),
