@@ -5,7 +5,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use monitor::{Monitor, MonitorConfig};
-use solver::{EosKind, Material, Method, Scene, Solver, SolverConfig};
+use solver::{ShapeKind, Solver, SolverConfig, TransferKind};
 
 fn monitor(c: &mut Criterion) {
     // This thread becomes the one worker of a one-thread global pool, as
@@ -19,13 +19,7 @@ fn monitor(c: &mut Criterion) {
 }
 
 fn monitor_in_pool(c: &mut Criterion) {
-    let mut mat = Material::water(1.5e5);
-    mat.eos = EosKind::Power;
-    let cfg = SolverConfig {
-        scene: Scene::dam_break(mat),
-        method: Method::baseline(),
-        perturb: vec![],
-    };
+    let cfg = SolverConfig::benchmark_dam_break(ShapeKind::Linear, TransferKind::Flip, 0.01);
     let mut solver = Solver::new(cfg).expect("dam break config");
     let mut monitor = Monitor::new(MonitorConfig::default(), &solver.view());
     for _ in 0..200 {

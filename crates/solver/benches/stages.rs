@@ -5,22 +5,11 @@
 //! One rayon thread. Run with `cargo bench -p kick-solver`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use solver::{
-    EosKind, Material, Method, Scene, ShapeKind, Solver, SolverConfig, Stage, TransferKind,
-};
+use solver::{ShapeKind, Solver, SolverConfig, Stage, TransferKind};
 use std::time::{Duration, Instant};
 
 fn dam_break(shape: ShapeKind, transfer: TransferKind) -> Solver {
-    let mut mat = Material::water(1.5e5);
-    mat.eos = EosKind::Power;
-    let mut method = Method::baseline();
-    method.shape = shape;
-    method.transfer = transfer;
-    let cfg = SolverConfig {
-        scene: Scene::dam_break(mat),
-        method,
-        perturb: vec![],
-    };
+    let cfg = SolverConfig::benchmark_dam_break(shape, transfer, 0.01);
     let mut solver = Solver::new(cfg).expect("dam break config");
     for _ in 0..100 {
         solver.step().expect("dam break step");

@@ -237,6 +237,23 @@ fn check(ok: bool, key: &str, message: impl Into<String>) -> Result<(), ConfigEr
 }
 
 impl SolverConfig {
+    /// The dam break the benchmarks time (`kick bench`, criterion): power law
+    /// gamma 7 at K = 150 kPa, the baseline method with `shape` and `transfer`.
+    pub fn benchmark_dam_break(shape: ShapeKind, transfer: TransferKind, cell: f64) -> Self {
+        let mut mat = Material::water(1.5e5);
+        mat.eos = EosKind::Power;
+        let mut scene = Scene::dam_break(mat);
+        scene.cell = cell;
+        let mut method = Method::baseline();
+        method.shape = shape;
+        method.transfer = transfer;
+        SolverConfig {
+            scene,
+            method,
+            perturb: vec![],
+        }
+    }
+
     /// Checks what the solver relies on; the study crate checks ranges earlier with file context.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let s = &self.scene;

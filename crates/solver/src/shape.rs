@@ -19,9 +19,6 @@ pub struct Stencil {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Weights1d {
     pub base: i64,
-    /// Particle position minus the first stencil node (cell units), so node
-    /// `base + k` sits at `k - frac` cells from the particle.
-    pub frac: f64,
     pub w: [f64; MAX_STENCIL],
     /// dN/dx in units of 1/cell (divide by h for 1/m).
     pub dw: [f64; MAX_STENCIL],
@@ -72,23 +69,12 @@ impl Shape {
         }
     }
 
-    /// Weights on the stencil of a particle at `xr` (cell units).
-    #[inline]
+    /// Weights on the stencil of a particle at `xr` (cell units), as the
+    /// stages compute them with [`Shape::stencil_weights`].
     pub fn weights(&self, xr: f64) -> Weights1d {
-        let base = self.base(xr);
-        Weights1d {
-            base,
-            ..self.weights_at(xr - base as f64)
-        }
-    }
-
-    /// Weights of a particle `f` cells past its first stencil node (`base`
-    /// left 0); see [`Shape::stencil_weights`].
-    #[inline(always)]
-    pub fn weights_at(&self, f: f64) -> Weights1d {
+        let (base, f) = self.locate(xr);
         let mut out = Weights1d {
-            base: 0,
-            frac: f,
+            base,
             ..Default::default()
         };
         fn put<const W: usize>(out: &mut Weights1d, (w, dw): ([f64; W], [f64; W])) {

@@ -83,21 +83,6 @@ pub fn mpm88() -> (SolverConfig, Particles) {
     )
 }
 
-pub fn dam_break(shape: ShapeKind, transfer: TransferKind, cell: f64) -> SolverConfig {
-    let mut mat = Material::water(1.5e5);
-    mat.eos = EosKind::Power;
-    let mut method = Method::baseline();
-    method.shape = shape;
-    method.transfer = transfer;
-    let mut scene = Scene::dam_break(mat);
-    scene.cell = cell;
-    SolverConfig {
-        scene,
-        method,
-        perturb: vec![],
-    }
-}
-
 pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads)
@@ -111,8 +96,12 @@ pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
                 (Solver::with_particles(cfg, ps), "mpm88", shape, transfer)
             }
             BenchScene::DamBreak => (
-                Solver::new(dam_break(opts.shape, opts.transfer, opts.cell))
-                    .map_err(|e| e.to_string())?,
+                Solver::new(SolverConfig::benchmark_dam_break(
+                    opts.shape,
+                    opts.transfer,
+                    opts.cell,
+                ))
+                .map_err(|e| e.to_string())?,
                 "dam_break",
                 opts.shape,
                 opts.transfer,
