@@ -4,6 +4,13 @@ STUDY ?= studies/dam_break.toml
 OUT ?= reports
 KICK = $(CARGO) run --release -q -p kick-study --
 
+# .cargo/config.toml builds for x86-64-v3 (AVX2, FMA); older x86-64 CPUs get the baseline.
+ifeq ($(shell uname -m),x86_64)
+ifneq ($(shell grep -qw avx2 /proc/cpuinfo 2>/dev/null && grep -qw fma /proc/cpuinfo 2>/dev/null && echo yes),yes)
+export RUSTFLAGS ?= -Ctarget-cpu=x86-64
+endif
+endif
+
 .PHONY: run test build matrix bench fmt clean browser
 
 # The report's browser test needs Debian's chromium; install it when we can (root with apt).
