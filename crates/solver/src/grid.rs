@@ -69,9 +69,13 @@ pub struct Grid {
     pub active: Vec<u32>,
     /// The active nodes inside the box (not ghosts), ascending.
     pub inside: Vec<u32>,
-    active_flag: Vec<bool>,
-    /// First and last interior node index per axis (no ghost, no wall).
-    interior: [(usize, usize); 2],
+    /// Active nodes as bits, `row_words` u64 per row of nodes.
+    active_bits: Vec<u64>,
+    row_words: usize,
+    /// Two rows of bits for `mark_active` (bins, then their stencils).
+    row_scratch: Vec<u64>,
+    /// (ghost index, partner index) per axis.
+    ghosts: [Vec<(usize, usize)>; 2],
     /// Wall/ghost operations per axis, x then y.
     fold_ops: [Vec<BoundaryOp>; 2],
     fill_ops: [Vec<BoundaryOp>; 2],
@@ -87,14 +91,20 @@ impl Grid {
                 .collect()
         });
         let n = dims[0] * dims[1];
-        let interior = [0, 1].map(|a: usize| {
-            let inner = |i: &usize| roles[a][*i] == NodeRole::Interior;
-            let first = (0..dims[a]).find(inner).unwrap_or(dims[a]);
-            let last = (0..dims[a]).rev().find(inner).unwrap_or(0);
-            (first, last)
+        let ghosts = [0, 1].map(|a: usize| {
+            (0..dims[a])
+                .filter_map(|i| match roles[a][i] {
+                    NodeRole::Ghost { partner, .. } => Some((i, partner)),
+                    _ => None,
+                })
+                .collect()
         });
+        let row_words = dims[0].div_ceil(64);
         Grid {
-            interior,
+            ghosts,
+            row_words,
+            active_bits: vec![0; row_words * dims[1]],
+            row_scratch: vec![0; 2 * row_words],
             h,
             origin,
             cells,
@@ -109,7 +119,6 @@ impl Grid {
             accel: vec![Vec2::zeros(); n],
             active: Vec::with_capacity(n),
             inside: Vec::with_capacity(n),
-            active_flag: vec![false; n],
             fold_ops: [dims[1], dims[0]].map(|d| Vec::with_capacity(2 * (PAD + 1) * d)),
             fill_ops: [dims[1], dims[0]].map(|d| Vec::with_capacity(2 * (PAD + 1) * d)),
             roles,
@@ -149,103 +158,111 @@ impl Grid {
     /// the stencil origin node; `occupied(b)` says whether it holds particles)
     /// and the lists the grid stage walks: in-box active nodes and the
     /// wall/ghost operations of `fold` and `fill` in their fixed order.
+    ///
+    /// The set is built as one bit per node: each row of occupied bins is
+    /// widened by the stencil in x with shifts, ORed into the `width` rows it
+    /// covers, then mirrored onto the ghosts' partners (x, then y).
     pub(crate) fn mark_active(&mut self, occupied: impl Fn(usize) -> bool, width: usize) {
-        for &n in &self.active {
-            self.active_flag[n as usize] = false;
-        }
-        self.active.clear();
         let [nx, ny] = self.dims;
-        let (mut lo, mut hi) = ([usize::MAX; 2], [0usize; 2]);
+        let words = self.row_words;
+        self.active_bits.fill(0);
+        let (bin_row, stencil_row) = self.row_scratch.split_at_mut(words);
         for bj in 0..ny.saturating_sub(width - 1) {
-            for bi in 0..nx.saturating_sub(width - 1) {
-                if !occupied(bi + bj * nx) {
-                    continue;
+            bin_row.fill(0);
+            let row = bj * nx;
+            for bi in 0..nx - (width - 1) {
+                bin_row[bi >> 6] |= (occupied(row + bi) as u64) << (bi & 63);
+            }
+            if bin_row.iter().all(|&w| w == 0) {
+                continue;
+            }
+            // Bin i covers nodes i..i + width: OR of the row shifted by 0..width.
+            stencil_row.copy_from_slice(bin_row);
+            for shift in 1..width {
+                for k in 0..words {
+                    let carry = if k > 0 {
+                        bin_row[k - 1] >> (64 - shift)
+                    } else {
+                        0
+                    };
+                    stencil_row[k] |= (bin_row[k] << shift) | carry;
                 }
-                lo = [lo[0].min(bi), lo[1].min(bj)];
-                hi = [hi[0].max(bi + width - 1), hi[1].max(bj + width - 1)];
-                let interior = |axis: usize, b: usize| {
-                    let (first, last) = self.interior[axis];
-                    b >= first && b + width - 1 <= last
-                };
-                if interior(0, bi) && interior(1, bj) {
-                    // No ghost in the stencil: no mirror partners to mark.
-                    for j in bj..bj + width {
-                        self.active_flag[bi + j * nx..bi + width + j * nx].fill(true);
-                    }
-                    continue;
-                }
-                for j in bj..bj + width {
-                    let pj = self.partner_or_self(1, j);
-                    for i in bi..bi + width {
-                        let pi = self.partner_or_self(0, i);
-                        for (a, b) in [(i, j), (pi, j), (i, pj), (pi, pj)] {
-                            self.active_flag[a + b * nx] = true;
-                            lo = [lo[0].min(a), lo[1].min(b)];
-                            hi = [hi[0].max(a), hi[1].max(b)];
-                        }
-                    }
+            }
+            for j in bj..bj + width {
+                let dst = &mut self.active_bits[j * words..(j + 1) * words];
+                for (d, s) in dst.iter_mut().zip(stencil_row.iter()) {
+                    *d |= s;
                 }
             }
         }
+        // Mirror partners: ghost columns first, then whole ghost rows (which
+        // carries the corner partners along). Partners are never ghosts.
+        for j in 0..ny {
+            let row = &mut self.active_bits[j * words..(j + 1) * words];
+            for &(i, partner) in &self.ghosts[0] {
+                if row[i >> 6] >> (i & 63) & 1 == 1 {
+                    row[partner >> 6] |= 1 << (partner & 63);
+                }
+            }
+        }
+        for &(j, partner) in &self.ghosts[1] {
+            for k in 0..words {
+                self.active_bits[partner * words + k] |= self.active_bits[j * words + k];
+            }
+        }
+
+        self.active.clear();
         self.inside.clear();
         for ops in [&mut self.fold_ops, &mut self.fill_ops] {
             ops.iter_mut().for_each(Vec::clear);
         }
-        if lo[0] > hi[0] {
-            return;
-        }
         let ghost = |r: NodeRole| matches!(r, NodeRole::Ghost { .. });
-        for j in lo[1]..=hi[1] {
+        for j in 0..ny {
             let role_y = self.roles[1][j];
-            for i in lo[0]..=hi[0] {
-                let n = i + j * nx;
-                if !self.active_flag[n] {
-                    continue;
-                }
-                self.active.push(n as u32);
-                let role_x = self.roles[0][i];
-                if !ghost(role_x) && !ghost(role_y) {
-                    self.inside.push(n as u32);
-                }
-                for (axis, role) in [(0, role_x), (1, role_y)] {
-                    let other = |partner: usize| {
-                        (if axis == 0 {
-                            partner + j * nx
-                        } else {
-                            i + partner * nx
-                        }) as u32
-                    };
-                    let op = |other, flip| BoundaryOp {
-                        node: n as u32,
-                        other,
-                        axis: axis as u8,
-                        flip,
-                    };
-                    // Fold in y only over in-box columns (x ghosts are folded first).
-                    if !(axis == 1 && ghost(role_x)) {
-                        match role {
-                            NodeRole::Interior => {}
-                            NodeRole::Wall => self.fold_ops[axis].push(op(n as u32, true)),
-                            NodeRole::Ghost { partner, flip } => {
-                                self.fold_ops[axis].push(op(other(partner), flip))
+            for k in 0..words {
+                let mut bits = self.active_bits[j * words + k];
+                while bits != 0 {
+                    let i = k * 64 + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    let n = i + j * nx;
+                    self.active.push(n as u32);
+                    let role_x = self.roles[0][i];
+                    if !ghost(role_x) && !ghost(role_y) {
+                        self.inside.push(n as u32);
+                    }
+                    for (axis, role) in [(0, role_x), (1, role_y)] {
+                        let other = |partner: usize| {
+                            (if axis == 0 {
+                                partner + j * nx
+                            } else {
+                                i + partner * nx
+                            }) as u32
+                        };
+                        let op = |other, flip| BoundaryOp {
+                            node: n as u32,
+                            other,
+                            axis: axis as u8,
+                            flip,
+                        };
+                        // Fold in y only over in-box columns (x ghosts are folded first).
+                        if !(axis == 1 && ghost(role_x)) {
+                            match role {
+                                NodeRole::Interior => {}
+                                NodeRole::Wall => self.fold_ops[axis].push(op(n as u32, true)),
+                                NodeRole::Ghost { partner, flip } => {
+                                    self.fold_ops[axis].push(op(other(partner), flip))
+                                }
                             }
                         }
-                    }
-                    // Fill in x only over in-box rows (y ghosts are filled after).
-                    if !(axis == 0 && ghost(role_y)) {
-                        if let NodeRole::Ghost { partner, flip } = role {
-                            self.fill_ops[axis].push(op(other(partner), flip));
+                        // Fill in x only over in-box rows (y ghosts are filled after).
+                        if !(axis == 0 && ghost(role_y)) {
+                            if let NodeRole::Ghost { partner, flip } = role {
+                                self.fill_ops[axis].push(op(other(partner), flip));
+                            }
                         }
                     }
                 }
             }
-        }
-    }
-
-    fn partner_or_self(&self, axis: usize, i: usize) -> usize {
-        match self.roles[axis][i] {
-            NodeRole::Ghost { partner, .. } => partner,
-            _ => i,
         }
     }
 
@@ -311,5 +328,81 @@ fn role(i: i64, n: i64, periodic: bool) -> NodeRole {
         }
     } else {
         NodeRole::Interior
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The active set node by node: every stencil node of an occupied bin and
+    /// its mirror partners in x, y and both.
+    fn reference_active(grid: &Grid, occupied: &[bool], width: usize) -> Vec<u32> {
+        let [nx, ny] = grid.dims;
+        let partner = |axis: usize, i: usize| match grid.roles[axis][i] {
+            NodeRole::Ghost { partner, .. } => partner,
+            _ => i,
+        };
+        let mut flag = vec![false; nx * ny];
+        for bj in 0..ny - (width - 1) {
+            for bi in 0..nx - (width - 1) {
+                if !occupied[bi + bj * nx] {
+                    continue;
+                }
+                for j in bj..bj + width {
+                    for i in bi..bi + width {
+                        let (pi, pj) = (partner(0, i), partner(1, j));
+                        for (a, b) in [(i, j), (pi, j), (i, pj), (pi, pj)] {
+                            flag[a + b * nx] = true;
+                        }
+                    }
+                }
+            }
+        }
+        (0..nx * ny)
+            .filter(|&n| flag[n])
+            .map(|n| n as u32)
+            .collect()
+    }
+
+    #[test]
+    fn active_set_matches_the_node_by_node_marking() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut coin = |p_percent: u64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed % 100 < p_percent
+        };
+        // Widths of every shape, one and two words per row, walls and periodic axes.
+        for cells in [[6, 5], [70, 9], [130, 66]] {
+            for periodic in [[false, false], [true, false], [false, true], [true, true]] {
+                for width in 2..=4 {
+                    for density in [0, 1, 10, 60] {
+                        let mut grid = Grid::new(Vec2::zeros(), 0.1, cells, periodic);
+                        let [nx, ny] = grid.dims;
+                        let occupied: Vec<bool> = (0..nx * ny)
+                            .map(|n| {
+                                let (i, j) = (n % nx, n / nx);
+                                i + width <= nx && j + width <= ny && coin(density)
+                            })
+                            .collect();
+                        grid.mark_active(|b| occupied[b], width);
+                        let expected = reference_active(&grid, &occupied, width);
+                        assert_eq!(grid.active, expected, "{cells:?} {periodic:?} w{width}");
+                        let inside: Vec<u32> = expected
+                            .iter()
+                            .copied()
+                            .filter(|&n| {
+                                let (i, j) = grid.coords(n as usize);
+                                !matches!(grid.roles[0][i], NodeRole::Ghost { .. })
+                                    && !matches!(grid.roles[1][j], NodeRole::Ghost { .. })
+                            })
+                            .collect();
+                        assert_eq!(grid.inside, inside);
+                    }
+                }
+            }
+        }
     }
 }
