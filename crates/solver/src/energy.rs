@@ -1,8 +1,6 @@
 //! Energy accounting: kinetic, gravitational, stored (sum V0 U(J)) and the
 //! accumulated viscous dissipation.
 
-use crate::par;
-use crate::particles::Particles;
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -19,30 +17,6 @@ impl Energy {
     /// Conserved total (kinetic + gravitational + stored + dissipated).
     pub fn total(&self) -> f64 {
         self.kinetic + self.gravitational + self.stored + self.dissipated
-    }
-}
-
-pub fn measure(
-    particles: &Particles,
-    gravity: f64,
-    floor: f64,
-    dissipated: f64,
-    partials: &mut [[f64; 4]],
-) -> Energy {
-    let [kinetic, gravitational, stored, _] = par::sum(particles.len(), partials, |p| {
-        let m = particles.mass[p];
-        [
-            0.5 * m * particles.v[p].norm_squared(),
-            m * gravity * (particles.x[p].y - floor),
-            particles.stored_energy[p],
-            0.0,
-        ]
-    });
-    Energy {
-        kinetic,
-        gravitational,
-        stored,
-        dissipated,
     }
 }
 

@@ -168,10 +168,14 @@ impl Grid {
         self.active_bits.fill(0);
         let (bin_row, stencil_row) = self.row_scratch.split_at_mut(words);
         for bj in 0..ny.saturating_sub(width - 1) {
-            bin_row.fill(0);
-            let row = bj * nx;
-            for bi in 0..nx - (width - 1) {
-                bin_row[bi >> 6] |= (occupied(row + bi) as u64) << (bi & 63);
+            let (row, bins) = (bj * nx, nx - (width - 1));
+            for (k, word) in bin_row.iter_mut().enumerate() {
+                // A local word: no store-to-load chain through memory per bin.
+                let mut w = 0u64;
+                for bi in k * 64..((k + 1) * 64).min(bins) {
+                    w |= (occupied(row + bi) as u64) << (bi & 63);
+                }
+                *word = w;
             }
             if bin_row.iter().all(|&w| w == 0) {
                 continue;

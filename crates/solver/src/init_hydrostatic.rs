@@ -40,6 +40,7 @@ pub fn relax(s: &mut Solver) -> Result<(), StepError> {
         }
         let damp = (1.0 - 2.0 * omega * dt).max(0.0);
         s.particles.v.iter_mut().for_each(|v| *v *= damp);
+        s.refresh_signal_speed();
         t += dt;
     };
     s.cfg.method = method;

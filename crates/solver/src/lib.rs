@@ -14,6 +14,7 @@ mod eos_power;
 pub mod eos_tait;
 pub mod grid;
 mod init_hydrostatic;
+mod measure;
 pub mod par;
 pub mod particles;
 pub mod scene;
@@ -107,7 +108,7 @@ pub struct Solver {
     grid: Grid,
     stencils: Vec<Stencil>,
     bins: Bins,
-    partials4: Vec<[f64; 4]>,
+    measure_partials: Vec<measure::Partial>,
     partials1: Vec<[f64; 1]>,
     gravity: Vec2,
     step: u64,
@@ -118,6 +119,8 @@ pub struct Solver {
     dissipated: f64,
     energy: Energy,
     courant: f64,
+    /// max_p(c_p + |v_p|) as of the last `measure`.
+    signal_speed: f64,
     ke_particles_p2g: f64,
     ke_grid_p2g: f64,
     times: StageTimes,
@@ -159,7 +162,7 @@ impl Solver {
             gravity: Vec2::new(0.0, -s.gravity),
             stencils: vec![Stencil::default(); n],
             bins: Bins::new(grid.dims, n),
-            partials4: vec![[0.0; 4]; chunks],
+            measure_partials: vec![measure::Partial::default(); chunks],
             partials1: vec![[0.0; 1]; chunks],
             grid,
             particles,
@@ -171,6 +174,7 @@ impl Solver {
             dissipated: 0.0,
             energy: Energy::default(),
             courant: 0.0,
+            signal_speed: 0.0,
             ke_particles_p2g: 0.0,
             times: StageTimes::default(),
             ke_grid_p2g: 0.0,
@@ -188,17 +192,16 @@ impl Solver {
         self.step = 0;
         self.time = 0.0;
         self.dissipated = 0.0;
+        self.measure();
         self.dt_fixed = self.cfl_dt();
         self.dt = self.dt_fixed;
-        self.measure();
     }
 
     fn cfl_dt(&self) -> f64 {
         if let Some(dt) = self.cfg.method.dt_override {
             return dt;
         }
-        let c = timestep::max_signal_speed(&self.particles);
-        timestep::cfl_step(self.cfg.method.cfl, self.cfg.scene.cell, c)
+        timestep::cfl_step(self.cfg.method.cfl, self.cfg.scene.cell, self.signal_speed)
     }
 
     pub fn config(&self) -> &SolverConfig {
@@ -251,8 +254,7 @@ impl Solver {
         }
         let mut clock = std::time::Instant::now();
         self.dt = dt;
-        let signal = timestep::max_signal_speed(&self.particles);
-        self.courant = signal * dt / self.cfg.scene.cell;
+        self.courant = self.signal_speed * dt / self.cfg.scene.cell;
         self.particles.v_prev.copy_from_slice(&self.particles.v);
         self.ke_particles_p2g = self.energy.kinetic;
         stage_times::lap(&mut self.times.other, &mut clock);
@@ -273,30 +275,31 @@ impl Solver {
         Ok(())
     }
 
-    /// Energies and the blow-out counters after a step.
+    /// Energies, blow-out counters and signal speed after a step.
     fn measure(&mut self) {
         let s = &self.cfg.scene;
-        self.energy = energy::measure(
+        let lo = Vec2::from(s.origin);
+        let bounds = measure::Bounds {
+            lo,
+            hi: lo + Vec2::from(s.size),
+            periodic: s.periodic,
+        };
+        let m = measure::measure(
             &self.particles,
             s.gravity,
-            s.origin[1],
+            &bounds,
             self.dissipated,
-            &mut self.partials4,
+            &mut self.measure_partials,
         );
-        let lo = Vec2::from(s.origin);
-        let hi = lo + Vec2::from(s.size);
-        let periodic = s.periodic;
-        let ps = &self.particles;
-        let [outside, nonfinite, _, _] = par::sum(ps.len(), &mut self.partials4, |p| {
-            let x = ps.x[p];
-            let finite = x.iter().chain(ps.v[p].iter()).all(|c| c.is_finite())
-                && ps.j[p].is_finite()
-                && ps.pressure[p].is_finite();
-            let out = (0..2).any(|k| !periodic[k] && (x[k] < lo[k] || x[k] > hi[k]));
-            [out as u8 as f64, (!finite) as u8 as f64, 0.0, 0.0]
-        });
-        self.n_outside = outside as usize;
-        self.n_nonfinite = nonfinite as usize;
+        self.energy = m.energy;
+        self.n_outside = m.n_outside;
+        self.n_nonfinite = m.n_nonfinite;
+        self.signal_speed = m.signal_speed;
+    }
+
+    /// Recomputes the signal speed after velocities were changed outside a step.
+    fn refresh_signal_speed(&mut self) {
+        self.signal_speed = timestep::max_signal_speed(&self.particles);
     }
 
     /// Adds the perturbations scheduled for the step being taken (after G2P).

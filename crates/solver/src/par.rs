@@ -31,11 +31,14 @@ pub fn chunk_count(n: usize) -> usize {
     n.div_ceil(CHUNK).max(1)
 }
 
-/// Sums `K` per-item values over `0..n` in a fixed order; `partials` holds one
-/// slot per chunk (preallocated by the caller, so nothing is allocated here).
-pub fn sum<const K: usize, F>(n: usize, partials: &mut [[f64; K]], item: F) -> [f64; K]
+/// Folds `item` over `0..n` chunk by chunk (each chunk from `init`) and
+/// combines the chunk results in chunk order; `partials` holds one slot per
+/// chunk (preallocated by the caller, so nothing is allocated here).
+pub fn fold<T, F, C>(n: usize, partials: &mut [T], init: T, item: F, combine: C) -> T
 where
-    F: Fn(usize) -> [f64; K] + Sync,
+    T: Copy + Send + Sync,
+    F: Fn(&mut T, usize) + Sync,
+    C: Fn(&mut T, &T),
 {
     let chunks = chunk_count(n);
     partials[..chunks]
@@ -43,22 +46,30 @@ where
         .with_min_len(min_chunks(n))
         .enumerate()
         .for_each(|(c, out)| {
-            let mut acc = [0.0; K];
+            let mut acc = init;
             for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                let v = item(i);
-                for k in 0..K {
-                    acc[k] += v[k];
-                }
+                item(&mut acc, i);
             }
             *out = acc;
         });
-    let mut total = [0.0; K];
+    let mut total = init;
     for part in &partials[..chunks] {
-        for k in 0..K {
-            total[k] += part[k];
-        }
+        combine(&mut total, part);
     }
     total
+}
+
+/// Sums `K` per-item values over `0..n` in a fixed order (see `fold`).
+pub fn sum<const K: usize, F>(n: usize, partials: &mut [[f64; K]], item: F) -> [f64; K]
+where
+    F: Fn(usize) -> [f64; K] + Sync,
+{
+    let add = |acc: &mut [f64; K], v: &[f64; K]| {
+        for k in 0..K {
+            acc[k] += v[k];
+        }
+    };
+    fold(n, partials, [0.0; K], |acc, i| add(acc, &item(i)), add)
 }
 
 /// Largest value of `item` over `0..n` (max is exact, so any order is deterministic).
