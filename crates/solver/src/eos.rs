@@ -18,6 +18,12 @@ impl Material {
     pub fn eos(&self, j: f64) -> EosState {
         // j / 1 is j exactly: skip the division in the usual case.
         let je = if self.j_res == 1.0 { j } else { j / self.j_res };
+        self.eos_at(je)
+    }
+
+    /// The EOS at the effective J / j_res.
+    #[inline]
+    fn eos_at(&self, je: f64) -> EosState {
         let (p, kt, u) = match self.eos {
             EosKind::Power => eos_power::eval(self.k, self.gamma, je),
             EosKind::Tait => eos_tait::eval(self.k, je),
@@ -27,6 +33,65 @@ impl Material {
             pressure: p,
             tangent_modulus: kt,
             energy: u,
+        }
+    }
+
+    /// Cut pressure, wave speed and stored energy V0 U(J) of a run of
+    /// particles of this material (`out` = pressure, wave speed, stored).
+    /// The power law with integer gamma and the linear EOS run as branch-free
+    /// loops the compiler vectorises; the results are the bits of `eos`.
+    pub fn eval_run(&self, j: &[f64], vol0: &[f64], out: (&mut [f64], &mut [f64], &mut [f64])) {
+        let (k, gamma) = (self.k, self.gamma);
+        match (self.eos, eos_power::integer_exponent(gamma)) {
+            (EosKind::Power, Some(n)) if n != 1 => {
+                self.run_with(|je| eos_power::eval_integer(k, gamma, n, je), j, vol0, out)
+            }
+            (EosKind::Linear, _) => self.run_with(|je| eos_linear::eval(k, je), j, vol0, out),
+            _ => self.run_with(
+                |je| {
+                    let s = self.eos_at(je);
+                    (s.pressure, s.tangent_modulus, s.energy)
+                },
+                j,
+                vol0,
+                out,
+            ),
+        }
+    }
+
+    /// `eval_run` for one EOS form, with the cutoff and J / j_res hoisted.
+    #[inline(always)]
+    fn run_with(
+        &self,
+        eos: impl Fn(f64) -> (f64, f64, f64),
+        j: &[f64],
+        vol0: &[f64],
+        (pressure, wave, stored): (&mut [f64], &mut [f64], &mut [f64]),
+    ) {
+        let n = j.len();
+        let (vol0, pressure, wave, stored) = (
+            &vol0[..n],
+            &mut pressure[..n],
+            &mut wave[..n],
+            &mut stored[..n],
+        );
+        let rho0 = self.rho0;
+        macro_rules! go {
+            ($je:expr, $cut:expr) => {
+                for i in 0..n {
+                    let (p, kt, u) = eos($je(j[i]));
+                    pressure[i] = $cut(p);
+                    wave[i] = (kt * j[i] / rho0).max(0.0).sqrt();
+                    stored[i] = vol0[i] * u;
+                }
+            };
+        }
+        let j_res = self.j_res;
+        match (j_res == 1.0, self.pressure_floor) {
+            (true, None) => go!(|j: f64| j, |p: f64| p),
+            (true, Some(floor)) => go!(|j: f64| j, |p: f64| p.max(floor)),
+            (false, None) => go!(|j: f64| j / j_res, |p: f64| p),
+            (false, Some(floor)) => go!(|j: f64| j / j_res, |p: f64| p.max(floor)),
         }
     }
 

@@ -111,19 +111,41 @@ fn run<const W: usize>(
                     j[k] = j_next;
                     vol[k] = vol0[k] * j_next;
                     let m = &materials[mat[k] as usize];
-                    let state = m.eos(j_next);
-                    let p = m.cut(state.pressure);
-                    wave[k] = m.wave_speed_of(&state, j_next);
-                    stored[k] = vol0[k] * state.energy;
                     let d = 0.5 * (l + l.transpose());
                     let visc = viscosity::newtonian(m.viscosity, &d);
-                    stress[k] = visc.stress - p * Mat2::identity();
-                    pressure[k] = p;
+                    stress[k] = visc.stress;
                     dev_rate[k] = visc.dev_rate;
                     acc += visc.power * vol[k] * dt;
+                }
+                // The EOS over the chunk in one loop per material (vectorised).
+                let out = (&mut pressure[..], &mut wave[..], &mut stored[..]);
+                if let [m] = materials {
+                    m.eval_run(j, vol0, out);
+                } else {
+                    eval_mixed(materials, mat, j, vol0, out);
+                }
+                for (s, &p) in stress.iter_mut().zip(pressure.iter()) {
+                    *s -= p * Mat2::identity();
                 }
                 work[0] = acc;
             },
         );
     partials[..n_chunks].iter().map(|w| w[0]).sum()
+}
+
+/// The EOS particle by particle when several materials are present.
+fn eval_mixed(
+    materials: &[Material],
+    mat: &[u16],
+    j: &[f64],
+    vol0: &[f64],
+    (pressure, wave, stored): (&mut [f64], &mut [f64], &mut [f64]),
+) {
+    for k in 0..j.len() {
+        let m = &materials[mat[k] as usize];
+        let state = m.eos(j[k]);
+        pressure[k] = m.cut(state.pressure);
+        wave[k] = m.wave_speed_of(&state, j[k]);
+        stored[k] = vol0[k] * state.energy;
+    }
 }
