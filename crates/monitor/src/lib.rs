@@ -267,14 +267,28 @@ impl Monitor {
         let inv_dt = 1.0 / dt;
         let candidate_dv2 = (candidate_a * dt).powi(2);
         let mut max_dv2 = 0.0f64;
+        // Every slice cut to n up front: no bounds checks in the loop.
+        let (vel, vel_prev, mass, jac, dev_rate) = (
+            &v.v[..n],
+            &v.v_prev[..n],
+            &v.mass[..n],
+            &v.j[..n],
+            &v.dev_rate[..n],
+        );
+        let (ke_recent, last_fast, last_deformed) = (
+            &mut h.ke_recent[..n],
+            &mut h.last_fast_step[..n],
+            &mut h.last_deformed_step[..n],
+        );
+        let (max_rate, max_rate_step) = (&mut h.max_dev_rate[..n], &mut h.max_dev_rate_step[..n]);
         for p in 0..n {
-            let dv2 = (v.v[p] - v.v_prev[p]).norm_squared();
+            let dv2 = (vel[p] - vel_prev[p]).norm_squared();
             max_dv2 = max_dv2.max(dv2);
             let candidate = dv2 >= candidate_dv2;
-            let speed2 = v.v[p].norm_squared();
-            let prev2 = v.v_prev[p].norm_squared();
-            let e = 0.5 * v.mass[p] * speed2;
-            let ke_ref = h.ke_recent[p].max(0.5 * v.mass[p] * ke_floor_speed2);
+            let speed2 = vel[p].norm_squared();
+            let prev2 = vel_prev[p].norm_squared();
+            let e = 0.5 * mass[p] * speed2;
+            let ke_ref = ke_recent[p].max(0.5 * mass[p] * ke_floor_speed2);
             // Divide only for a candidate or a possible new maximum.
             let ratio = if candidate || e > max_ratio * ke_ref {
                 e / ke_ref
@@ -283,9 +297,9 @@ impl Monitor {
             };
             max_ratio = max_ratio.max(ratio);
             max_speed = max_speed.max(speed2);
-            j_min = j_min.min(v.j[p]);
-            j_max = j_max.max(v.j[p]);
-            let gain = 0.5 * v.mass[p] * (speed2 - prev2);
+            j_min = j_min.min(jac[p]);
+            j_max = j_max.max(jac[p]);
+            let gain = 0.5 * mass[p] * (speed2 - prev2);
             if gain > gain_max.0 {
                 gain_max = (gain, p);
             }
@@ -305,22 +319,22 @@ impl Monitor {
                         a,
                         z: if wants_z { f64::NAN } else { 0.0 },
                         rules,
-                        last_fast: h.last_fast_step[p],
-                        last_deformed: h.last_deformed_step[p],
+                        last_fast: last_fast[p],
+                        last_deformed: last_deformed[p],
                     });
                 }
             }
-            h.ke_recent[p] = e.max(h.ke_recent[p] * decay);
+            ke_recent[p] = e.max(ke_recent[p] * decay);
             if speed2 > quiescent2 {
-                h.last_fast_step[p] = step as i64;
+                last_fast[p] = step as i64;
             }
-            let rate = v.dev_rate[p];
+            let rate = dev_rate[p];
             if rate >= cfg.deformed_rate {
-                h.last_deformed_step[p] = step as i64;
+                last_deformed[p] = step as i64;
             }
-            if rate > h.max_dev_rate[p] {
-                h.max_dev_rate[p] = rate;
-                h.max_dev_rate_step[p] = step as i64;
+            if rate > max_rate[p] {
+                max_rate[p] = rate;
+                max_rate_step[p] = step as i64;
             }
         }
         let max_speed = max_speed.sqrt();
