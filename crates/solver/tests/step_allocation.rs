@@ -1,8 +1,15 @@
 //! The step loop allocates nothing (counted by a global allocator), for every
 //! shape, transfer and scheme, on one thread and on two.
+//!
+//! Steps run inside `pool.install`, so every allocation of a step happens on a
+//! worker of that pool; only those are counted. Other threads are not the
+//! step's: the test harness, a worker of rayon's global pool (started by
+//! `Solver::new`) that comes up late and registers its queues while counting,
+//! or a worker of the previous pool freeing its queues on exit.
 
 use solver::*;
 use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 mod common;
@@ -12,9 +19,14 @@ struct Counting;
 static COUNTING: AtomicBool = AtomicBool::new(false);
 static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
 
+thread_local! {
+    /// Set on the workers of the pool that runs the steps, while they run.
+    static STEP_WORKER: Cell<bool> = const { Cell::new(false) };
+}
+
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if COUNTING.load(Ordering::Relaxed) {
+        if COUNTING.load(Ordering::Relaxed) && STEP_WORKER.with(Cell::get) {
             ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
         }
         unsafe { System.alloc(layout) }
@@ -32,6 +44,8 @@ fn step_does_not_allocate() {
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
+            .start_handler(|_| STEP_WORKER.with(|w| w.set(true)))
+            .exit_handler(|_| STEP_WORKER.with(|w| w.set(false)))
             .build()
             .unwrap();
         for shape in common::SHAPES {
@@ -50,10 +64,12 @@ fn step_does_not_allocate() {
                     };
                     let mut s = Solver::new(cfg).unwrap();
                     pool.install(|| {
-                        // Warm-up: let rayon set up its workers.
+                        // Warm-up: first steps, and every worker started (one
+                        // spawned late would set up its queues while counting).
                         for _ in 0..5 {
                             s.step().unwrap();
                         }
+                        pool.broadcast(|_| ());
                         ALLOCATIONS.store(0, Ordering::SeqCst);
                         COUNTING.store(true, Ordering::SeqCst);
                         for _ in 0..50 {
