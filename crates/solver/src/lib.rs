@@ -255,7 +255,8 @@ impl Solver {
         let mut clock = std::time::Instant::now();
         self.dt = dt;
         self.courant = self.signal_speed * dt / self.cfg.scene.cell;
-        self.particles.v_prev.copy_from_slice(&self.particles.v);
+        let ps = &mut self.particles;
+        par::keep_warm(|| ps.v_prev.copy_from_slice(&ps.v));
         self.ke_particles_p2g = self.energy.kinetic;
         stage_times::lap(&mut self.times.other, &mut clock);
         stage_sort::sort(

@@ -3,6 +3,7 @@
 //! order, so any thread count gives the same bits.
 
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Particles per reduction chunk.
 pub const CHUNK: usize = 1024;
@@ -12,19 +13,28 @@ pub const CHUNK: usize = 1024;
 /// particles' worth of a stage. Splitting never changes results (see above).
 pub const MIN_PARALLEL: usize = 16 * CHUNK;
 
-/// Fewest items per parallel work item for a loop over `n` items: all of them
-/// below `MIN_PARALLEL`, else 2 chunks (small pieces balance best).
-pub fn min_len(n: usize) -> usize {
-    if n < MIN_PARALLEL {
+/// Items per parallel work item for a loop over `n` items: all of them on one
+/// thread or below `MIN_PARALLEL`, else one chunk. Loops take it as both their
+/// fewest and their most: with rayon's adaptive split alone a loop ended on
+/// one piece of up to a quarter of the loop while the other thread waited,
+/// fell asleep and took up to ~100 us to wake (see `keep_warm`).
+pub fn piece_len(n: usize) -> usize {
+    if !parallel(n) {
         n.max(1)
     } else {
-        2 * CHUNK
+        CHUNK
     }
 }
 
-/// `min_len` for a loop over the `CHUNK`-sized chunks of `n` particles.
-pub fn min_chunks(n: usize) -> usize {
-    min_len(n).div_ceil(CHUNK)
+/// Whether a loop over `n` items is worth splitting: more than one thread and
+/// at least `MIN_PARALLEL` items.
+pub fn parallel(n: usize) -> bool {
+    n >= MIN_PARALLEL && rayon::current_num_threads() > 1
+}
+
+/// `piece_len` for a loop over the `CHUNK`-sized chunks of `n` particles.
+pub fn piece_chunks(n: usize) -> usize {
+    piece_len(n).div_ceil(CHUNK)
 }
 
 pub fn chunk_count(n: usize) -> usize {
@@ -43,7 +53,8 @@ where
     let chunks = chunk_count(n);
     partials[..chunks]
         .par_iter_mut()
-        .with_min_len(min_chunks(n))
+        .with_min_len(piece_chunks(n))
+        .with_max_len(piece_chunks(n))
         .enumerate()
         .for_each(|(c, out)| {
             let mut acc = init;
@@ -79,7 +90,34 @@ where
 {
     (0..n)
         .into_par_iter()
-        .with_min_len(min_len(n))
+        .with_min_len(piece_len(n))
+        .with_max_len(piece_len(n))
         .map(item)
         .reduce(|| f64::NEG_INFINITY, f64::max)
+}
+
+/// Runs `serial` on this thread while an idle worker of the pool spins, so
+/// that the next parallel loop finds it awake: on this VM a worker idle for
+/// more than a few microseconds falls asleep and joins the next loop 60-120
+/// us late (`examples/wake_probe.rs`), a third of a large scene's stage. Only for work with no parallel loop inside (a
+/// spinning worker takes no part in one). Changes no result; on one thread it
+/// is just `serial()`.
+pub fn keep_warm<R: Send>(serial: impl FnOnce() -> R + Send) -> R {
+    if rayon::current_num_threads() < 2 {
+        return serial();
+    }
+    let done = AtomicBool::new(false);
+    let (out, ()) = rayon::join(
+        || {
+            let out = serial();
+            done.store(true, Ordering::Release);
+            out
+        },
+        || {
+            while !done.load(Ordering::Acquire) {
+                std::hint::spin_loop();
+            }
+        },
+    );
+    out
 }

@@ -3,7 +3,7 @@
 use crate::config::{SchemeKind, TransferKind};
 use crate::stage_p2g::{self, Terms};
 use crate::stage_times::lap;
-use crate::{stage_g2p, stage_grid, stage_stress, Solver};
+use crate::{par, stage_g2p, stage_grid, stage_stress, Solver};
 use std::time::Instant;
 
 const MASS_MOMENTUM: Terms = Terms {
@@ -58,20 +58,25 @@ pub fn advance(s: &mut Solver, clock: &mut Instant) {
             g2p(s, clock);
             // Re-project the updated particle velocities (weights of the step start).
             p2g(s, MOMENTUM, clock);
-            stage_grid::project_momentum(&mut s.grid);
+            let grid = &mut s.grid;
+            par::keep_warm(|| stage_grid::project_momentum(grid));
             lap(&mut s.times.grid, clock);
             stress(s, StressVelocity::Start, clock);
         }
     }
 }
 
+// The grid stage is serial (a fraction of the particle stages): `keep_warm`
+// keeps the pool's other worker awake for the particle stage that follows.
 fn grid_velocities(s: &mut Solver, clock: &mut Instant) {
-    s.ke_grid_p2g = stage_grid::velocities(&mut s.grid);
+    let grid = &mut s.grid;
+    s.ke_grid_p2g = par::keep_warm(|| stage_grid::velocities(grid));
     lap(&mut s.times.grid, clock);
 }
 
 fn grid_update(s: &mut Solver, clock: &mut Instant) {
-    stage_grid::update(&mut s.grid, s.dt);
+    let (grid, dt) = (&mut s.grid, s.dt);
+    par::keep_warm(|| stage_grid::update(grid, dt));
     lap(&mut s.times.grid, clock);
 }
 
@@ -87,12 +92,9 @@ fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
     };
     stage_p2g::p2g(&inputs, terms, &mut s.grid);
     if terms.mass {
-        s.grid_mass_p2g = s
-            .grid
-            .active
-            .iter()
-            .map(|&n| s.grid.mass_raw[n as usize])
-            .sum();
+        let grid = &s.grid;
+        s.grid_mass_p2g =
+            par::keep_warm(|| grid.active.iter().map(|&n| grid.mass_raw[n as usize]).sum());
     }
     lap(&mut s.times.p2g, clock);
 }

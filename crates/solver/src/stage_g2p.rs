@@ -78,7 +78,8 @@ fn run<const W: usize, const MODE: u8>(
         stencils.par_iter(),
     )
         .into_par_iter()
-        .with_min_len(crate::par::min_len(stencils.len()))
+        .with_min_len(crate::par::piece_len(stencils.len()))
+        .with_max_len(crate::par::piece_len(stencils.len()))
         .for_each(|(x, v, affine, st)| {
             let [fx, fy] = st.frac;
             let (wx, dwx) = shape.stencil_weights::<W>(fx);

@@ -89,10 +89,11 @@ pub fn p2g(inputs: &Inputs, terms: Terms, grid: &mut Grid) {
 
 /// Runs `f` on every active node, in parallel pieces of `NODE_CHUNK` nodes.
 fn each_node(active: &[u32], f: impl Fn(usize) + Sync) {
-    let min_chunks = crate::par::min_len(active.len()).div_ceil(NODE_CHUNK);
+    let piece = crate::par::piece_len(active.len()).div_ceil(NODE_CHUNK);
     active
         .par_chunks(NODE_CHUNK)
-        .with_min_len(min_chunks)
+        .with_min_len(piece)
+        .with_max_len(piece)
         .for_each(|nodes| {
             for &n in nodes {
                 f(n as usize);
@@ -100,23 +101,24 @@ fn each_node(active: &[u32], f: impl Fn(usize) + Sync) {
         });
 }
 
-/// Fewest tiles one parallel work item takes (a tile holds up to a few
-/// hundred particles; see `par::min_len`).
-const MIN_TILES: usize = 2;
+/// Tiles per parallel work item (a tile holds up to a few
+/// hundred particles; see `par::piece_len`).
+const TILES_PER_PIECE: usize = 1;
 
 /// Active nodes per parallel work item in the node loops.
 const NODE_CHUNK: usize = 2048;
 
 fn scatter_colours<const W: usize>(pass: &Pass, terms: Terms) {
     // Four joins per pass cost more than they save on a small scene.
-    let parallel = pass.inputs.particles.len() >= crate::par::MIN_PARALLEL;
+    let parallel = crate::par::parallel(pass.inputs.particles.len());
     macro_rules! go {
         ($m:literal, $p:literal, $f:literal) => {
             for tiles in &pass.inputs.bins.by_colour {
                 if parallel {
                     tiles
                         .par_iter()
-                        .with_min_len(MIN_TILES)
+                        .with_min_len(TILES_PER_PIECE)
+                        .with_max_len(TILES_PER_PIECE)
                         .for_each(|&tile| scatter_tile::<W, $m, $p, $f>(pass, tile as usize));
                 } else {
                     for &tile in tiles {

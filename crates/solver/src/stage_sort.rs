@@ -60,7 +60,8 @@ pub fn sort(
     stencils
         .par_iter_mut()
         .zip(particles.x.par_iter())
-        .with_min_len(crate::par::min_len(particles.len()))
+        .with_min_len(crate::par::piece_len(particles.len()))
+        .with_max_len(crate::par::piece_len(particles.len()))
         .for_each(|(st, x)| {
             let r = (x - origin) * inv_h;
             let (bx, fx) = shape.locate(r.x);
@@ -79,17 +80,20 @@ pub fn sort(
             };
             st.frac = [fx, fy];
         });
-    if let Some(p) = stencils.iter().position(|st| st.node == OUTSIDE) {
-        return Err(StepError::OutsideGrid {
-            id: particles.id[p],
-            x: [particles.x[p].x, particles.x[p].y],
-        });
-    }
-    counting_sort(bins, stencils);
-    mark_tiles(bins, dims);
-    let start = &bins.start;
-    grid.mark_active(|b| start[b + 1] > start[b], width as usize);
-    Ok(())
+    let stencils = &*stencils;
+    crate::par::keep_warm(|| {
+        if let Some(p) = stencils.iter().position(|st| st.node == OUTSIDE) {
+            return Err(StepError::OutsideGrid {
+                id: particles.id[p],
+                x: [particles.x[p].x, particles.x[p].y],
+            });
+        }
+        counting_sort(bins, stencils);
+        mark_tiles(bins, dims);
+        let start = &bins.start;
+        grid.mark_active(|b| start[b + 1] > start[b], width as usize);
+        Ok(())
+    })
 }
 
 /// Stable counting sort of particle indices by key.

@@ -75,7 +75,7 @@ fn run<const W: usize>(
     let nx = grid.dims[0];
     let inv_h = 1.0 / grid.h;
     let n_chunks = crate::par::chunk_count(particles.len());
-    let min_chunks = crate::par::min_chunks(particles.len());
+    let piece = crate::par::piece_chunks(particles.len());
     (
         particles.f.par_chunks_mut(CHUNK),
         particles.j.par_chunks_mut(CHUNK),
@@ -91,7 +91,8 @@ fn run<const W: usize>(
         partials[..n_chunks].par_iter_mut(),
     )
         .into_par_iter()
-        .with_min_len(min_chunks)
+        .with_min_len(piece)
+        .with_max_len(piece)
         .for_each(
             |(f, j, vol, stress, pressure, dev_rate, wave, stored, vol0, mat, st, work)| {
                 let mut acc = 0.0;

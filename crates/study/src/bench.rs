@@ -122,7 +122,10 @@ pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
             solver.step().map_err(|e| e.to_string())?;
             let t1 = Instant::now();
             let v = solver.view();
-            monitor.observe(&v);
+            // The monitor is serial: keep the other worker awake for the next step.
+            solver::par::keep_warm(|| {
+                monitor.observe(&v);
+            });
             if k % FIELD_EVERY == 0 {
                 let t2 = Instant::now();
                 monitor.field_metrics(&v);

@@ -83,8 +83,10 @@ impl Driver {
         if let Err(e) = self.solver.step() {
             return Stepped::Stop(format!("step {}: {e}", self.solver.step_count() + 1));
         }
-        let report = self.monitor.observe(&self.solver.view());
-        self.peaks.add(report);
+        // The monitor is serial: keep the other worker awake for the next step.
+        let (monitor, view) = (&mut self.monitor, self.solver.view());
+        let report = solver::par::keep_warm(|| monitor.observe(&view).clone());
+        self.peaks.add(&report);
         match &report.blow_out {
             Some(reason) => Stepped::Stop(format!("step {}: {reason}", report.step)),
             None => Stepped::Ok,
