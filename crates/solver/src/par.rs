@@ -99,11 +99,13 @@ where
 /// Runs `serial` on this thread while an idle worker of the pool spins, so
 /// that the next parallel loop finds it awake: on this VM a worker idle for
 /// more than a few microseconds falls asleep and joins the next loop 60-120
-/// us late (`examples/wake_probe.rs`), a third of a large scene's stage. Only for work with no parallel loop inside (a
-/// spinning worker takes no part in one). Changes no result; on one thread it
-/// is just `serial()`.
+/// us late (`examples/wake_probe.rs`), a third of a large scene's stage.
+/// Only for work with no parallel loop inside (a spinning worker takes no
+/// part in one). Changes no result; on one thread or outside a pool it is
+/// just `serial()`.
 pub fn keep_warm<R: Send>(serial: impl FnOnce() -> R + Send) -> R {
-    if rayon::current_num_threads() < 2 {
+    // Outside any pool a join would hand the work to the global pool and wait.
+    if rayon::current_thread_index().is_none() || rayon::current_num_threads() < 2 {
         return serial();
     }
     let done = AtomicBool::new(false);
