@@ -32,6 +32,16 @@ pub fn parallel(n: usize) -> bool {
     n >= MIN_PARALLEL && rayon::current_num_threads() > 1
 }
 
+/// Splits an indexed parallel loop into pieces of exactly `len` items (the
+/// last one shorter); `len` comes from `piece_len` or `piece_chunks`.
+pub trait Pieces: IndexedParallelIterator + Sized {
+    fn pieces(self, len: usize) -> rayon::iter::MaxLen<rayon::iter::MinLen<Self>> {
+        self.with_min_len(len).with_max_len(len)
+    }
+}
+
+impl<I: IndexedParallelIterator> Pieces for I {}
+
 /// `piece_len` for a loop over the `CHUNK`-sized chunks of `n` particles.
 pub fn piece_chunks(n: usize) -> usize {
     piece_len(n).div_ceil(CHUNK)
@@ -53,8 +63,7 @@ where
     let chunks = chunk_count(n);
     partials[..chunks]
         .par_iter_mut()
-        .with_min_len(piece_chunks(n))
-        .with_max_len(piece_chunks(n))
+        .pieces(piece_chunks(n))
         .enumerate()
         .for_each(|(c, out)| {
             let mut acc = init;
@@ -90,8 +99,7 @@ where
 {
     (0..n)
         .into_par_iter()
-        .with_min_len(piece_len(n))
-        .with_max_len(piece_len(n))
+        .pieces(piece_len(n))
         .map(item)
         .reduce(|| f64::NEG_INFINITY, f64::max)
 }

@@ -4,6 +4,7 @@
 
 use crate::config::TransferKind;
 use crate::grid::Grid;
+use crate::par::Pieces;
 use crate::particles::{Mat2, Particles, Vec2};
 use crate::shape::{Shape, Stencil};
 use rayon::prelude::*;
@@ -78,8 +79,7 @@ fn run<const W: usize, const MODE: u8>(
         stencils.par_iter(),
     )
         .into_par_iter()
-        .with_min_len(crate::par::piece_len(stencils.len()))
-        .with_max_len(crate::par::piece_len(stencils.len()))
+        .pieces(crate::par::piece_len(stencils.len()))
         .for_each(|(x, v, affine, st)| {
             let [fx, fy] = st.frac;
             let (wx, dwx) = shape.stencil_weights::<W>(fx);

@@ -5,6 +5,7 @@
 //! order (colour, then bin, then particle index) for any thread count.
 
 use crate::grid::Grid;
+use crate::par::Pieces;
 use crate::particles::{Mat2, Particles, Vec2};
 use crate::shape::{Shape, Stencil};
 use crate::stage_sort::{Bins, TILE};
@@ -92,8 +93,7 @@ fn each_node(active: &[u32], f: impl Fn(usize) + Sync) {
     let piece = crate::par::piece_len(active.len()).div_ceil(NODE_CHUNK);
     active
         .par_chunks(NODE_CHUNK)
-        .with_min_len(piece)
-        .with_max_len(piece)
+        .pieces(piece)
         .for_each(|nodes| {
             for &n in nodes {
                 f(n as usize);
@@ -101,8 +101,8 @@ fn each_node(active: &[u32], f: impl Fn(usize) + Sync) {
         });
 }
 
-/// Tiles per parallel work item (a tile holds up to a few
-/// hundred particles; see `par::piece_len`).
+/// Tiles per parallel work item (a tile holds up to a few hundred
+/// particles; see `par::piece_len`).
 const TILES_PER_PIECE: usize = 1;
 
 /// Active nodes per parallel work item in the node loops.
@@ -117,8 +117,7 @@ fn scatter_colours<const W: usize>(pass: &Pass, terms: Terms) {
                 if parallel {
                     tiles
                         .par_iter()
-                        .with_min_len(TILES_PER_PIECE)
-                        .with_max_len(TILES_PER_PIECE)
+                        .pieces(TILES_PER_PIECE)
                         .for_each(|&tile| scatter_tile::<W, $m, $p, $f>(pass, tile as usize));
                 } else {
                     for &tile in tiles {

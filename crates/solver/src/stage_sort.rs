@@ -3,6 +3,7 @@
 //! walks, and the active-node set.
 
 use crate::grid::Grid;
+use crate::par::Pieces;
 use crate::particles::Particles;
 use crate::shape::{Shape, Stencil};
 use crate::StepError;
@@ -60,8 +61,7 @@ pub fn sort(
     stencils
         .par_iter_mut()
         .zip(particles.x.par_iter())
-        .with_min_len(crate::par::piece_len(particles.len()))
-        .with_max_len(crate::par::piece_len(particles.len()))
+        .pieces(crate::par::piece_len(particles.len()))
         .for_each(|(st, x)| {
             let r = (x - origin) * inv_h;
             let (bx, fx) = shape.locate(r.x);

@@ -4,7 +4,7 @@
 
 use crate::config::{JUpdate, Material};
 use crate::grid::Grid;
-use crate::par::CHUNK;
+use crate::par::{Pieces, CHUNK};
 use crate::particles::{Mat2, Particles, Vec2};
 use crate::shape::{Shape, Stencil};
 use crate::viscosity;
@@ -91,8 +91,7 @@ fn run<const W: usize>(
         partials[..n_chunks].par_iter_mut(),
     )
         .into_par_iter()
-        .with_min_len(piece)
-        .with_max_len(piece)
+        .pieces(piece)
         .for_each(
             |(f, j, vol, stress, pressure, dev_rate, wave, stored, vol0, mat, st, work)| {
                 let mut acc = 0.0;
