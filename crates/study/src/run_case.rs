@@ -85,8 +85,11 @@ impl Driver {
         }
         // The monitor is serial: keep the other worker awake for the next step.
         let (monitor, view) = (&mut self.monitor, self.solver.view());
-        let report = solver::par::keep_warm(|| monitor.observe(&view).clone());
-        self.peaks.add(&report);
+        solver::par::keep_warm(|| {
+            monitor.observe(&view);
+        });
+        let report = self.monitor.report();
+        self.peaks.add(report);
         match &report.blow_out {
             Some(reason) => Stepped::Stop(format!("step {}: {reason}", report.step)),
             None => Stepped::Ok,
