@@ -1,33 +1,19 @@
 //! End-to-end tests of the `kick` binary.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn kick(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_kick"))
-        .args(args)
-        .current_dir(repo())
-        .output()
-        .expect("kick runs")
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+use common::{kick, stderr};
+use monitor::EventKind;
+use std::path::PathBuf;
+use std::process::Command;
+use study::summary::{Status, Summary};
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("kick-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::scratch("cli", name)
 }
 
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
+fn summary(dir: &std::path::Path) -> Summary {
+    Summary::read(dir).unwrap()
 }
 
 #[test]
@@ -51,14 +37,14 @@ fn run_completes_and_writes_the_case_folder() {
     assert!(o.status.success(), "{}", stderr(&o));
     let dir = out.join("dam_break");
     let s = summary(&dir);
-    assert_eq!(s["status"], "completed");
-    assert_eq!(s["params"]["method.shape"], "bspline2");
-    assert!((s["t_end"].as_f64().unwrap() - 0.05).abs() < 1e-12);
-    let steps = s["steps"].as_u64().unwrap();
+    assert_eq!(s.status, Status::Completed);
+    assert_eq!(s.params["method.shape"], "bspline2");
+    assert!((s.t_end - 0.05).abs() < 1e-12);
+    let steps = s.steps;
     assert!(steps > 10);
-    assert!(s["wall_s"].as_f64().unwrap() > 0.0);
-    assert!(s["particle_steps_per_s"].as_f64().unwrap() > 0.0);
-    assert_eq!(s["particles"], 3200);
+    assert!(s.wall_s > 0.0);
+    assert!(s.particle_steps_per_s > 0.0);
+    assert_eq!(s.particles, 3200);
     let csv = std::fs::read_to_string(dir.join("timeseries.csv")).unwrap();
     let last = csv.lines().last().unwrap();
     assert!(last.starts_with(&format!("{steps},")), "{last}");
@@ -85,6 +71,9 @@ fn run_completes_and_writes_the_case_folder() {
     }
     let case_toml = std::fs::read_to_string(dir.join("case.toml")).unwrap();
     assert!(case_toml.contains("bspline2"), "{case_toml}");
+    // The file itself: a versioned schema with every metric present (null when undefined).
+    let raw = common::summary_json(&dir);
+    assert_eq!(raw["schema_version"], study::summary::SCHEMA_VERSION);
     for k in [
         "hydro_rel_rms_late",
         "hydro_max_late",
@@ -95,13 +84,14 @@ fn run_completes_and_writes_the_case_folder() {
         "front_rms_error",
     ] {
         assert!(
-            s["metrics"].get(k).is_some(),
+            raw["metrics"].get(k).is_some(),
             "metric {k}: {}",
-            s["metrics"]
+            raw["metrics"]
         );
     }
+    assert!(s.metrics.hydro_rel_rms_late.is_some());
     // 0.05 s is T = 0.5, before the first Martin & Moyce point (T = 0.83).
-    assert!(s["metrics"]["front_rms_error"].is_null());
+    assert_eq!(s.metrics.front_rms_error, None);
 }
 
 #[test]
@@ -120,21 +110,20 @@ fn blow_up_is_a_result_with_step_and_reason() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let s = summary(&out.join("dam_break"));
-    assert_eq!(s["status"], "blew_up", "{s}");
-    let steps = s["steps"].as_u64().unwrap();
-    let reason = s["reason"].as_str().unwrap();
+    assert_eq!(s.status, Status::BlewUp, "{s:?}");
+    let steps = s.steps;
+    let reason = &s.reason;
     assert!(reason.contains(&format!("step {steps}")), "{reason}");
     assert!(
         reason.contains("left the box") || reason.contains("non-finite") || reason.contains("grid")
     );
-    assert!(s["t_end"].as_f64().unwrap() < 1.0);
+    assert!(s.t_end < 1.0);
     // The blow-out is logged as an event at the last step, and the front was
     // compared with Martin & Moyce up to then (Z units).
-    let events = s["events"].as_array().unwrap();
-    let last = events.last().unwrap();
-    assert_eq!(last["kind"], "blow_out", "{last}");
-    assert_eq!(last["first_step"].as_u64(), Some(steps));
-    let front = s["metrics"]["front_rms_error"].as_f64().unwrap();
+    let last = s.events.last().unwrap();
+    assert_eq!(last.kind, EventKind::BlowOut, "{last:?}");
+    assert_eq!(last.first_step, steps);
+    let front = s.metrics.front_rms_error.unwrap();
     assert!(front > 0.0 && front < 1.0, "{front}");
 }
 
@@ -155,7 +144,10 @@ fn list_expands_the_bug_report_matrix() {
 }
 
 fn bad(study_text: &str, extra: &[&str]) -> String {
-    let dir = scratch("bad");
+    // One folder per call: tests run in parallel.
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    let dir = scratch(&format!("bad{call}"));
     let path = dir.join("bad.toml");
     std::fs::write(&path, study_text).unwrap();
     let mut args = vec![
@@ -238,6 +230,65 @@ fn bad_study_files_exit_2_naming_file_key_and_range() {
         e.contains("perturb[0].step") && e.contains("required"),
         "{e}"
     );
+}
+
+#[test]
+fn an_unknown_key_in_any_section_exits_2_naming_it_and_the_allowed_keys() {
+    let perturb = "[[perturb]]\nstep = 1\nregion = [0, 0, 1, 1]\ndv = [1, 0]\n";
+    for (text, key, allowed) in [
+        (format!("colour = 1\n{GOOD}"), "colour", "materials"),
+        (
+            GOOD.replace("t_end = 0.01", "t_end = 0.01\nbogus = 1"),
+            "scene.bogus",
+            "ppc",
+        ),
+        (
+            GOOD.replace("material = \"water\"", "material = \"water\"\nspin = 1"),
+            "scene.body[0].spin",
+            "velocity",
+        ),
+        (
+            GOOD.replace("K = 1.5e5", "K = 1.5e5\nmu = 1"),
+            "materials.water.mu",
+            "viscosity",
+        ),
+        (
+            format!("{GOOD}\n[method]\nflip = 1\n"),
+            "method.flip",
+            "flip_alpha",
+        ),
+        (
+            format!("{GOOD}\n[monitor]\nkick_g = 1\n"),
+            "monitor.kick_g",
+            "kick_accel_g",
+        ),
+        (
+            format!("{GOOD}\n[output]\nrows = 1\n"),
+            "output.rows",
+            "timeseries_rows",
+        ),
+        (
+            format!("{GOOD}\n{perturb}size = 1\n"),
+            "perturb[0].size",
+            "region",
+        ),
+    ] {
+        let e = bad(&text, &[]);
+        assert!(
+            e.contains(&format!("`{key}`")) && e.contains("unknown key") && e.contains(allowed),
+            "{key}: {e}"
+        );
+    }
+    // A value of the wrong type or out of range in the typed sections.
+    let e = bad(&format!("{GOOD}\n[monitor]\nkick_z = -1.0\n"), &[]);
+    assert!(e.contains("monitor.kick_z") && e.contains("allowed"), "{e}");
+    let e = bad(&format!("{GOOD}\n[output]\ntimeseries_rows = 0\n"), &[]);
+    assert!(
+        e.contains("output.timeseries_rows") && e.contains("allowed"),
+        "{e}"
+    );
+    let e = bad(&GOOD.replace("K = 1.5e5", "K = \"stiff\""), &[]);
+    assert!(e.contains("materials.water.K") && e.contains("f64"), "{e}");
 }
 
 #[test]
@@ -430,9 +481,8 @@ fn matrix_resumes_after_sigkill_without_redoing_finished_cases() {
         done.len()
     );
     for (_, bytes) in &done {
-        let v: serde_json::Value =
-            serde_json::from_slice(bytes).expect("finished summaries are whole");
-        assert!(v["status"].is_string());
+        let v: Summary = serde_json::from_slice(bytes).expect("finished summaries are whole");
+        assert_eq!(v.status, Status::Completed);
     }
     let o = kick(&[
         "matrix",
@@ -506,15 +556,15 @@ dv = [1.0, 0.0]
     assert!(o.status.success(), "{}", stderr(&o));
     let dir = out.join("push");
     let s = summary(&dir);
-    assert_eq!(s["status"], "completed", "{s}");
-    let events = s["events"].as_array().unwrap();
-    let kick_event = events
+    assert_eq!(s.status, Status::Completed, "{s:?}");
+    let kick_event = s
+        .events
         .iter()
-        .find(|e| e["kind"] == "kick" && e["first_step"].as_u64().unwrap() >= 300)
-        .unwrap_or_else(|| panic!("the push is logged: {events:?}"));
-    let first = kick_event["first_step"].as_u64().unwrap();
-    assert!(first <= 301, "{kick_event}");
-    let id = kick_event["id"].to_string();
+        .find(|e| e.kind == EventKind::Kick && e.first_step >= 300)
+        .unwrap_or_else(|| panic!("the push is logged: {:?}", s.events));
+    let first = kick_event.first_step;
+    assert!(first <= 301, "{kick_event:?}");
+    let id = kick_event.id.to_string();
     let o = kick(&[
         "reproduce",
         dir.to_str().unwrap(),
@@ -557,7 +607,7 @@ dv = [1.0, 0.0]
     let o = kick(&["reproduce", dir.to_str().unwrap(), "--event", "999"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("no event 999"), "{}", stderr(&o));
-    let ckpt = dir.join(kick_event["checkpoint"].as_str().unwrap());
+    let ckpt = dir.join(kick_event.checkpoint.as_deref().unwrap());
     let mut bytes = std::fs::read(&ckpt).unwrap();
     let mid = bytes.len() / 2;
     bytes[mid] ^= 0x40;

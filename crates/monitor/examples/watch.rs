@@ -6,7 +6,7 @@ fn main() {
     let a: Vec<String> = std::env::args().collect();
     let shape: ShapeKind = serde_json_like(&a[1]);
     let transfer: TransferKind = serde_json_like(&a[2]);
-    let mut mat = Material::water(a[4].parse().unwrap());
+    let mut mat = Material::tait(a[4].parse().unwrap());
     mat.eos = if a[3] == "tait" {
         EosKind::Tait
     } else {
@@ -46,7 +46,7 @@ fn main() {
         aa = aa.max(r.max_accel_g);
         if r.events_opened > 0 {
             for e in &m.events()[m.events().len() - r.events_opened..] {
-                println!("EVENT {} {:?} step {} t {:.4} cells {:?} a/g {:.1} z {:.1} rules {:?} q {} d {} courant {:.2}", e.id, e.kind, e.first_step, e.t, e.cells, e.peak_accel_g, e.peak_z, e.rules, e.quiescent_before, e.previously_deformed, e.courant);
+                println!("EVENT {} {:?} step {} t {:.4} cells {:?} a/g {:.1} z {:.1} rules {:?} q {} d {} courant {:.2}", e.id, e.kind, e.first_step, e.t, e.cells, e.peak_accel_g, e.peak_z, e.rules.names(), e.quiescent_before, e.previously_deformed(), e.courant);
             }
         }
         if r.blow_out.is_some() {

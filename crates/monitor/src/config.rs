@@ -77,3 +77,40 @@ impl Default for MonitorConfig {
         }
     }
 }
+
+impl MonitorConfig {
+    /// Range check of every threshold: (key, message) for the first bad one.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        macro_rules! non_negative {
+            ($($field:ident),*) => {$(
+                let v = self.$field;
+                if !(v.is_finite() && (0.0..=1e12).contains(&v)) {
+                    return Err((
+                        stringify!($field).to_string(),
+                        format!("{v} is out of range (allowed 0 ..= 1e12)"),
+                    ));
+                }
+            )*};
+        }
+        non_negative!(
+            accel_candidate_g,
+            kick_accel_g,
+            kick_z,
+            ke_spike_ratio,
+            quiescent_speed,
+            ke_history_steps,
+            deformed_rate,
+            distortion_ratio,
+            merge_seconds,
+            injection_floor_factor,
+            escape_speed_factor
+        );
+        if self.window_tile_cells == 0 {
+            return Err((
+                "window_tile_cells".into(),
+                "0 is out of range (allowed >= 1)".into(),
+            ));
+        }
+        Ok(())
+    }
+}

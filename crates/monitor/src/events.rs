@@ -67,29 +67,130 @@ pub struct Region {
     pub y_max: f64,
 }
 
-/// Which detection rule fired (bit flags, listed by name in the event).
-pub mod rule {
-    pub const ACCEL_OUTLIER: u32 = 1;
-    pub const KE_SPIKE: u32 = 2;
-    pub const INJECTION_WINDOW: u32 = 4;
-    pub const OUTSIDE_BOX: u32 = 8;
-    pub const ESCAPE_SPEED: u32 = 16;
-    pub const NON_FINITE: u32 = 32;
+/// A detection rule; an event lists the rules that fired.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Rule {
+    AccelOutlier,
+    KeSpike,
+    InjectionWindow,
+    OutsideBox,
+    EscapeSpeed,
+    NonFinite,
+}
 
-    pub fn names(bits: u32) -> Vec<String> {
-        [
-            (ACCEL_OUTLIER, "accel_outlier"),
-            (KE_SPIKE, "ke_spike"),
-            (INJECTION_WINDOW, "injection_window"),
-            (OUTSIDE_BOX, "outside_box"),
-            (ESCAPE_SPEED, "escape_speed"),
-            (NON_FINITE, "non_finite"),
-        ]
-        .iter()
-        .filter(|(b, _)| bits & b != 0)
-        .map(|(_, n)| n.to_string())
-        .collect()
+impl Rule {
+    /// Every rule, in the order events list them.
+    pub const ALL: [Rule; 6] = [
+        Rule::AccelOutlier,
+        Rule::KeSpike,
+        Rule::InjectionWindow,
+        Rule::OutsideBox,
+        Rule::EscapeSpeed,
+        Rule::NonFinite,
+    ];
+
+    /// The rule's name as events spell it (its serde name).
+    pub fn name(self) -> &'static str {
+        match self {
+            Rule::AccelOutlier => "accel_outlier",
+            Rule::KeSpike => "ke_spike",
+            Rule::InjectionWindow => "injection_window",
+            Rule::OutsideBox => "outside_box",
+            Rule::EscapeSpeed => "escape_speed",
+            Rule::NonFinite => "non_finite",
+        }
     }
+
+    fn bit(self) -> u32 {
+        1 << self as u32
+    }
+}
+
+/// A set of rules (bit set), serialised as the list of its rules' names in
+/// [`Rule::ALL`] order, e.g. `["accel_outlier", "ke_spike"]`.
+#[derive(Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub struct Rules(u32);
+
+impl std::fmt::Debug for Rules {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_set().entries(self.iter()).finish()
+    }
+}
+
+impl Rules {
+    pub const NONE: Rules = Rules(0);
+
+    pub fn contains(self, r: Rule) -> bool {
+        self.0 & r.bit() != 0
+    }
+
+    pub fn insert(&mut self, r: Rule) {
+        self.0 |= r.bit();
+    }
+
+    pub fn union(self, o: Rules) -> Rules {
+        Rules(self.0 | o.0)
+    }
+
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    pub fn len(self) -> usize {
+        self.0.count_ones() as usize
+    }
+
+    /// The rules in the set, in [`Rule::ALL`] order.
+    pub fn iter(self) -> impl Iterator<Item = Rule> {
+        Rule::ALL.into_iter().filter(move |&r| self.contains(r))
+    }
+
+    /// The names of the rules in the set, in [`Rule::ALL`] order.
+    pub fn names(self) -> Vec<&'static str> {
+        self.iter().map(Rule::name).collect()
+    }
+}
+
+impl From<Rule> for Rules {
+    fn from(r: Rule) -> Self {
+        Rules(r.bit())
+    }
+}
+
+impl FromIterator<Rule> for Rules {
+    fn from_iter<I: IntoIterator<Item = Rule>>(rules: I) -> Self {
+        rules
+            .into_iter()
+            .fold(Rules::NONE, |s, r| s.union(r.into()))
+    }
+}
+
+impl Serialize for Rules {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeSeq;
+        // The length up front: binary formats (bincode) need it.
+        let mut seq = s.serialize_seq(Some(self.len()))?;
+        for r in self.iter() {
+            seq.serialize_element(&r)?;
+        }
+        seq.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for Rules {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        Ok(Vec::<Rule>::deserialize(d)?.into_iter().collect())
+    }
+}
+
+/// Why an event counts as previously deformed: most of its particles were
+/// above `deformed_rate` (strain rate) or `distortion_ratio` (distortion).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DeformedBy {
+    StrainRate,
+    Distortion,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -116,15 +217,139 @@ pub struct Event {
     /// Effective Courant number at the first step.
     pub courant: f64,
     pub quiescent_before: bool,
-    pub previously_deformed: bool,
-    /// "strain_rate" and/or "distortion" when previously_deformed.
-    pub deformed_by: Vec<String>,
-    pub rules: Vec<String>,
+    /// Strain rate and/or distortion (in that order); empty when the event
+    /// was not previously deformed (see [`Event::previously_deformed`]).
+    pub deformed_by: Vec<DeformedBy>,
+    pub rules: Rules,
     /// Filled in by the study runner.
     pub state_hash: Option<String>,
     pub checkpoint: Option<String>,
-    #[serde(skip)]
-    pub(crate) rule_bits: u32,
+    /// Energy injected before the event opened (monitor bookkeeping, kept out
+    /// of the summary; the monitor's checkpoint stores it beside the events).
     #[serde(skip)]
     pub(crate) injected_at_open: f64,
+}
+
+impl Event {
+    /// Most of the event's particles were highly deformed before it (by `deformed_by`).
+    pub fn previously_deformed(&self) -> bool {
+        !self.deformed_by.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn event() -> Event {
+        let cells = CellRange::of(3, 4);
+        Event {
+            id: 7,
+            kind: EventKind::Kick,
+            first_step: 120,
+            last_step: 125,
+            t: 0.25,
+            last_t: 0.26,
+            cells,
+            region: Region {
+                x_min: 0.03,
+                y_min: 0.04,
+                x_max: 0.04,
+                y_max: 0.05,
+            },
+            extent: cells.union(&CellRange::of(5, 6)),
+            n_particles: 9,
+            particles: vec![4, 8, 15],
+            peak_accel_g: 120.5,
+            peak_z: 31.0,
+            energy_injected: 1e-3,
+            courant: 0.2,
+            quiescent_before: true,
+            deformed_by: vec![DeformedBy::StrainRate, DeformedBy::Distortion],
+            rules: [Rule::KeSpike, Rule::AccelOutlier].into_iter().collect(),
+            state_hash: Some("00ff".into()),
+            checkpoint: None,
+            injected_at_open: 0.0,
+        }
+    }
+
+    #[test]
+    fn json_lists_rules_and_deformations_by_name() {
+        let e = event();
+        let json = serde_json::to_value(&e).unwrap();
+        assert_eq!(
+            json["rules"],
+            serde_json::json!(["accel_outlier", "ke_spike"])
+        );
+        assert_eq!(
+            json["deformed_by"],
+            serde_json::json!(["strain_rate", "distortion"])
+        );
+        // One stored fact each: no bit set, flag or bookkeeping beside them.
+        for key in ["rule_bits", "previously_deformed", "injected_at_open"] {
+            assert!(json.get(key).is_none(), "{key} in {json}");
+        }
+        let back: Event = serde_json::from_value(json).unwrap();
+        assert_eq!(back, e);
+    }
+
+    #[test]
+    fn summaries_with_the_former_previously_deformed_key_still_read() {
+        let mut json = serde_json::to_value(event()).unwrap();
+        json["previously_deformed"] = serde_json::json!(true);
+        let back: Event = serde_json::from_value(json).unwrap();
+        assert!(back.previously_deformed());
+    }
+
+    #[test]
+    fn previously_deformed_is_a_nonempty_deformed_by() {
+        let mut e = event();
+        assert!(e.previously_deformed());
+        e.deformed_by.clear();
+        assert!(!e.previously_deformed());
+        let json = serde_json::to_value(&e).unwrap();
+        assert_eq!(json["deformed_by"], serde_json::json!([]));
+    }
+
+    #[test]
+    fn rule_names_are_their_serde_names_in_bit_order() {
+        let all: Rules = Rule::ALL.into_iter().collect();
+        assert_eq!(all.len(), Rule::ALL.len());
+        assert_eq!(
+            all.names(),
+            [
+                "accel_outlier",
+                "ke_spike",
+                "injection_window",
+                "outside_box",
+                "escape_speed",
+                "non_finite"
+            ]
+        );
+        for r in Rule::ALL {
+            assert_eq!(serde_json::to_value(r).unwrap(), r.name());
+            assert_eq!(all.iter().position(|x| x == r), Some(r as usize));
+        }
+    }
+
+    #[test]
+    fn rules_set_operations() {
+        let mut rules = Rules::NONE;
+        assert!(rules.is_empty() && rules.names().is_empty());
+        rules.insert(Rule::EscapeSpeed);
+        rules.insert(Rule::EscapeSpeed);
+        assert_eq!(rules.len(), 1);
+        assert!(rules.contains(Rule::EscapeSpeed) && !rules.contains(Rule::OutsideBox));
+        let both = rules.union(Rule::OutsideBox.into());
+        assert_eq!(both.names(), ["outside_box", "escape_speed"]);
+        assert_eq!(both.union(rules), both);
+        assert_eq!(serde_json::to_string(&Rules::NONE).unwrap(), "[]");
+        assert_eq!(format!("{both:?}"), "{OutsideBox, EscapeSpeed}");
+    }
+
+    #[test]
+    fn unknown_rule_names_are_refused() {
+        let r: Result<Rules, _> = serde_json::from_str(r#"["ke_spike", "gut_feeling"]"#);
+        assert!(r.is_err());
+    }
 }

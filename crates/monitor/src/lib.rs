@@ -18,14 +18,13 @@ pub mod particle_history;
 mod state;
 
 pub use config::MonitorConfig;
-pub use events::{CellRange, Event, EventKind, Region};
+pub use events::{CellRange, DeformedBy, Event, EventKind, Region, Rule, Rules};
 pub use geometry::Geometry;
 
 use accel_outliers::WindowStats;
 use cells::CellBins;
 use checkerboard::CellField;
 use energy_budget::EnergyBudget;
-use events::rule;
 use front::Front;
 use hydrostatic::Hydrostatic;
 use particle_history::{ParticleHistory, NEVER};
@@ -107,16 +106,128 @@ struct Candidate {
     p: u32,
     /// |dv| / dt.
     a: f64,
+    /// NaN until scored (a gaining candidate above `kick_accel_g`), 0 when not scored.
     z: f64,
-    rules: u32,
+    rules: Rules,
     last_fast: i64,
     last_deformed: i64,
+}
+
+/// The thresholds of the per-particle pass, from the config, g and dt.
+#[derive(Clone, Copy, Debug)]
+struct ScanThresholds {
+    /// Per-step decay of the kinetic-energy history.
+    decay: f64,
+    /// Quiescent speed squared (also floors the kinetic-energy history as 1/2 m v_q^2).
+    quiescent2: f64,
+    inv_dt: f64,
+    /// Squared velocity jump of a candidate: (accel_candidate_g g dt)^2.
+    candidate_dv2: f64,
+    ke_spike_ratio: f64,
+    /// kick_accel_g g.
+    kick_a: f64,
+    deformed_rate: f64,
+}
+
+impl ScanThresholds {
+    fn new(cfg: &MonitorConfig, g: f64, dt: f64) -> Self {
+        let candidate_a = cfg.accel_candidate_g * g;
+        ScanThresholds {
+            decay: (-1.0 / cfg.ke_history_steps.max(1.0)).exp(),
+            quiescent2: cfg.quiescent_speed * cfg.quiescent_speed,
+            inv_dt: 1.0 / dt,
+            candidate_dv2: (candidate_a * dt).powi(2),
+            ke_spike_ratio: cfg.ke_spike_ratio,
+            kick_a: cfg.kick_accel_g * g,
+            deformed_rate: cfg.deformed_rate,
+        }
+    }
+
+    /// The candidate particle `p` (velocity jump dv2 >= candidate_dv2), or None
+    /// when no rule fired and no z is to come. `gaining`: its kinetic energy grew.
+    fn candidate(
+        &self,
+        p: usize,
+        dv2: f64,
+        ke_ratio: f64,
+        gaining: bool,
+        (last_fast, last_deformed): (i64, i64),
+    ) -> Option<Candidate> {
+        let a = dv2.sqrt() * self.inv_dt;
+        let mut rules = Rules::NONE;
+        if ke_ratio >= self.ke_spike_ratio {
+            rules.insert(Rule::KeSpike);
+        }
+        // A kick adds kinetic energy; an impact that stops particles does not count.
+        let wants_z = gaining && a >= self.kick_a;
+        (!rules.is_empty() || wants_z).then_some(Candidate {
+            p: p as u32,
+            a,
+            z: if wants_z { f64::NAN } else { 0.0 },
+            rules,
+            last_fast,
+            last_deformed,
+        })
+    }
+}
+
+/// The cheap figures of the per-particle pass.
+#[derive(Clone, Copy, Debug)]
+struct Scan {
+    max_ratio: f64,
+    max_speed2: f64,
+    max_dv2: f64,
+    j_min: f64,
+    j_max: f64,
+    /// Largest kinetic-energy gain 1/2 m (|v|^2 - |v_prev|^2), and its particle.
+    gain_max: (f64, usize),
+    /// Some candidate awaits its z score.
+    need_z: bool,
+}
+
+impl Scan {
+    fn new() -> Self {
+        Scan {
+            max_ratio: 0.0,
+            max_speed2: 0.0,
+            max_dv2: 0.0,
+            j_min: f64::INFINITY,
+            j_max: f64::NEG_INFINITY,
+            gain_max: (f64::NEG_INFINITY, 0),
+            need_z: false,
+        }
+    }
+
+    /// Kinetic energy `e` over its reference `ke_ref`, tracking the largest;
+    /// divided only for a candidate or a possible new maximum (0 otherwise).
+    #[inline(always)]
+    fn ke_ratio(&mut self, e: f64, ke_ref: f64, candidate: bool) -> f64 {
+        let ratio = if candidate || e > self.max_ratio * ke_ref {
+            e / ke_ref
+        } else {
+            0.0
+        };
+        self.max_ratio = self.max_ratio.max(ratio);
+        ratio
+    }
+
+    /// Speed, Jacobian and kinetic-energy gain of particle `p`.
+    #[inline(always)]
+    fn add(&mut self, p: usize, speed2: f64, prev2: f64, mass: f64, j: f64) {
+        self.max_speed2 = self.max_speed2.max(speed2);
+        self.j_min = self.j_min.min(j);
+        self.j_max = self.j_max.max(j);
+        let gain = 0.5 * mass * (speed2 - prev2);
+        if gain > self.gain_max.0 {
+            self.gain_max = (gain, p);
+        }
+    }
 }
 
 #[derive(Clone, Debug)]
 struct Cluster {
     cells: CellRange,
-    rules: u32,
+    rules: Rules,
     peak_accel: f64,
     peak_z: f64,
     quiescent: usize,
@@ -128,7 +239,7 @@ struct Cluster {
 
 impl Cluster {
     /// A cluster over `cells` with no particles tallied yet.
-    fn new(cells: CellRange, rules: u32, peak_accel: f64) -> Self {
+    fn new(cells: CellRange, rules: Rules, peak_accel: f64) -> Self {
         Cluster {
             cells,
             rules,
@@ -245,199 +356,38 @@ impl Monitor {
 
     /// Observes the state after a step.
     pub fn observe(&mut self, v: &StateView) -> &StepReport {
-        let cfg = self.cfg.clone();
         let g = self.g_ref();
-        let step = v.step;
         let dt = v.dt.max(1e-300);
-        let n = v.x.len();
-        let decay = (-1.0 / cfg.ke_history_steps.max(1.0)).exp();
-        let ke_floor_speed2 = cfg.quiescent_speed * cfg.quiescent_speed;
-
-        // One pass over the particles: cheap figures, candidates (with their
-        // history as it was before this step), then the history update.
-        let (mut max_ratio, mut max_speed) = (0.0f64, 0.0f64);
-        let (mut j_min, mut j_max) = (f64::INFINITY, f64::NEG_INFINITY);
-        let mut gain_max = (f64::NEG_INFINITY, 0usize);
-        let mut need_z = false;
-        let candidate_a = cfg.accel_candidate_g * g;
-        let quiescent2 = cfg.quiescent_speed * cfg.quiescent_speed;
-        self.flagged.clear();
-        let h = &mut self.history;
-        // Squared velocity jumps compared against (a dt)^2: no root per particle.
-        let inv_dt = 1.0 / dt;
-        let candidate_dv2 = (candidate_a * dt).powi(2);
-        let mut max_dv2 = 0.0f64;
-        // Every slice cut to n up front: no bounds checks in the loop.
-        let (vel, vel_prev, mass, jac, dev_rate) = (
-            &v.v[..n],
-            &v.v_prev[..n],
-            &v.mass[..n],
-            &v.j[..n],
-            &v.dev_rate[..n],
-        );
-        let (ke_recent, last_fast, last_deformed) = (
-            &mut h.ke_recent[..n],
-            &mut h.last_fast_step[..n],
-            &mut h.last_deformed_step[..n],
-        );
-        let (max_rate, max_rate_step) = (&mut h.max_dev_rate[..n], &mut h.max_dev_rate_step[..n]);
-        for p in 0..n {
-            let dv2 = (vel[p] - vel_prev[p]).norm_squared();
-            max_dv2 = max_dv2.max(dv2);
-            let candidate = dv2 >= candidate_dv2;
-            let speed2 = vel[p].norm_squared();
-            let prev2 = vel_prev[p].norm_squared();
-            let e = 0.5 * mass[p] * speed2;
-            let ke_ref = ke_recent[p].max(0.5 * mass[p] * ke_floor_speed2);
-            // Divide only for a candidate or a possible new maximum.
-            let ratio = if candidate || e > max_ratio * ke_ref {
-                e / ke_ref
-            } else {
-                0.0
-            };
-            max_ratio = max_ratio.max(ratio);
-            max_speed = max_speed.max(speed2);
-            j_min = j_min.min(jac[p]);
-            j_max = j_max.max(jac[p]);
-            let gain = 0.5 * mass[p] * (speed2 - prev2);
-            if gain > gain_max.0 {
-                gain_max = (gain, p);
-            }
-            if candidate {
-                let a = dv2.sqrt() * inv_dt;
-                let mut rules = 0;
-                if ratio >= cfg.ke_spike_ratio {
-                    rules |= rule::KE_SPIKE;
-                }
-                // A kick adds kinetic energy; an impact that stops particles does not count.
-                let wants_z = speed2 > prev2 && a >= cfg.kick_accel_g * g;
-                need_z |= wants_z;
-                // A candidate with no rule and no z to come would be dropped below.
-                if rules != 0 || wants_z {
-                    self.flagged.push(Candidate {
-                        p: p as u32,
-                        a,
-                        z: if wants_z { f64::NAN } else { 0.0 },
-                        rules,
-                        last_fast: last_fast[p],
-                        last_deformed: last_deformed[p],
-                    });
-                }
-            }
-            ke_recent[p] = e.max(ke_recent[p] * decay);
-            if speed2 > quiescent2 {
-                last_fast[p] = step as i64;
-            }
-            let rate = dev_rate[p];
-            if rate >= cfg.deformed_rate {
-                last_deformed[p] = step as i64;
-            }
-            if rate > max_rate[p] {
-                max_rate[p] = rate;
-                max_rate_step[p] = step as i64;
-            }
-        }
-        let max_speed = max_speed.sqrt();
-        let max_a = max_dv2.sqrt() * inv_dt;
-        if need_z {
-            // The z windows read every particle's acceleration.
-            self.fill_accel(v);
-        }
-
-        // Robust z only for gaining candidates above kick_accel_g.
-        let mut max_z = 0.0f64;
-        if need_z {
-            self.bins.rebuild(&self.geom, v.x);
-            for c in self.flagged.iter_mut().filter(|c| c.z.is_nan()) {
-                c.z = self.stats.z(
-                    &self.geom,
-                    &self.bins,
-                    &self.accel,
-                    (cfg.window_tile_cells, cfg.window_half_cells),
-                    c.p as usize,
-                    step.max(1),
-                );
-                max_z = max_z.max(c.z);
-                if c.z >= cfg.kick_z {
-                    c.rules |= rule::ACCEL_OUTLIER;
-                }
-            }
-        }
-        self.flagged.retain(|c| c.rules != 0);
-
-        // Energy budget.
+        let scan = self.scan_particles(v, g, dt);
+        let max_z = if scan.need_z {
+            self.score_candidates(v)
+        } else {
+            0.0
+        };
+        self.flagged.retain(|c| !c.rules.is_empty());
         let injection = self.energy.observe(v.energy.total());
         let floor = solver::energy::injection_noise_floor(self.total_mass, g, self.geom.size.y, dt);
-
         let opened_before = self.events.len();
         if !self.flagged.is_empty() {
             self.cluster_flagged(v, g);
         }
-        if injection.window > cfg.injection_floor_factor * floor {
-            self.fill_accel(v);
-            let (i, j) = self.geom.cell_of(v.x[gain_max.1]);
-            let cluster = Cluster::new(
-                CellRange::of(i, j),
-                rule::INJECTION_WINDOW,
-                self.accel[gain_max.1],
-            );
-            self.attach(EventKind::EnergyInjection, cluster, v, g);
-        }
-        let mut blow_out = None;
-        if v.n_nonfinite > 0 {
-            blow_out = Some(format!("non-finite state in {} particles", v.n_nonfinite));
-            self.blow_out_event(EventKind::NonFinite, rule::NON_FINITE, v, g, |x, vel| {
-                !(x.x.is_finite() && x.y.is_finite() && vel.x.is_finite() && vel.y.is_finite())
-            });
-        } else if v.n_outside > 0 {
-            blow_out = Some(format!("{} particles left the box", v.n_outside));
-            let (lo, hi) = (self.geom.origin, self.geom.origin + self.geom.size);
-            self.blow_out_event(EventKind::BlowOut, rule::OUTSIDE_BOX, v, g, |x, _| {
-                x.x < lo.x || x.y < lo.y || x.x > hi.x || x.y > hi.y
-            });
-        } else {
-            let escape = cfg.escape_speed_factor * (2.0 * g * self.geom.size.y).sqrt();
-            if max_speed > escape {
-                blow_out = Some(format!(
-                    "a particle reached {max_speed:.3} m/s, beyond the escape speed {escape:.3} m/s"
-                ));
-                self.blow_out_event(EventKind::BlowOut, rule::ESCAPE_SPEED, v, g, |_, vel| {
-                    vel.norm() > escape
-                });
-            }
-        }
-        // Energy injected while each event is open.
-        for e in self.events.iter_mut().filter(|e| e.last_step == step) {
-            if e.first_step == step {
-                e.injected_at_open = self.prev_injected;
-            }
-            e.energy_injected = e.energy_injected.max(injection.total - e.injected_at_open);
-        }
-        self.prev_injected = injection.total;
-
-        // Grid figures.
-        let h2 = self.geom.rho0 * self.geom.cell * self.geom.cell;
-        let (mut min_mass, mut max_node_a) = (f64::INFINITY, 0.0f64);
-        for &node in v.grid.active {
-            let m = v.grid.mass[node as usize];
-            if m > 0.0 {
-                min_mass = min_mass.min(m / h2);
-                max_node_a = max_node_a.max(v.grid.acceleration[node as usize].norm());
-            }
-        }
-
+        self.check_energy_injection(v, g, injection.window, floor, scan.gain_max.1);
+        let max_speed = scan.max_speed2.sqrt();
+        let blow_out = self.check_blow_out(v, g, max_speed);
+        self.track_injected_energy(v.step, injection.total);
+        let (min_node_mass_ratio, max_node_a) = self.grid_figures(v);
         self.report = StepReport {
-            step,
+            step: v.step,
             energy_injected: injection.total,
             injection_window: injection.window,
             injection_floor: floor,
-            max_accel_g: max_a / g,
+            max_accel_g: scan.max_dv2.sqrt() * (1.0 / dt) / g,
             max_z,
-            max_ke_ratio: max_ratio,
+            max_ke_ratio: scan.max_ratio,
             max_speed,
-            j_min,
-            j_max,
-            min_node_mass_ratio: if min_mass.is_finite() { min_mass } else { 0.0 },
+            j_min: scan.j_min,
+            j_max: scan.j_max,
+            min_node_mass_ratio,
             max_node_accel_g: max_node_a / g,
             ringing_energy: v.ke_particles_p2g - v.ke_grid_p2g,
             n_outside: v.n_outside,
@@ -450,8 +400,188 @@ impl Monitor {
         &self.report
     }
 
+    /// One pass over the particles: the cheap figures, this step's candidates
+    /// (with their history as it was before this step) into `flagged`, then
+    /// the history update.
+    fn scan_particles(&mut self, v: &StateView, g: f64, dt: f64) -> Scan {
+        let t = ScanThresholds::new(&self.cfg, g, dt);
+        let step = v.step as i64;
+        let n = v.x.len();
+        let mut s = Scan::new();
+        self.flagged.clear();
+        // Every slice cut to n up front: no bounds checks in the loop.
+        let (vel, vel_prev, mass, jac, dev_rate) = (
+            &v.v[..n],
+            &v.v_prev[..n],
+            &v.mass[..n],
+            &v.j[..n],
+            &v.dev_rate[..n],
+        );
+        let h = &mut self.history;
+        let (ke_recent, last_fast, last_deformed) = (
+            &mut h.ke_recent[..n],
+            &mut h.last_fast_step[..n],
+            &mut h.last_deformed_step[..n],
+        );
+        let (max_rate, max_rate_step) = (&mut h.max_dev_rate[..n], &mut h.max_dev_rate_step[..n]);
+        for p in 0..n {
+            // Squared velocity jumps compared against (a dt)^2: no root per particle.
+            let dv2 = (vel[p] - vel_prev[p]).norm_squared();
+            s.max_dv2 = s.max_dv2.max(dv2);
+            let candidate = dv2 >= t.candidate_dv2;
+            let speed2 = vel[p].norm_squared();
+            let prev2 = vel_prev[p].norm_squared();
+            let e = 0.5 * mass[p] * speed2;
+            let ke_ref = ke_recent[p].max(0.5 * mass[p] * t.quiescent2);
+            let ratio = s.ke_ratio(e, ke_ref, candidate);
+            s.add(p, speed2, prev2, mass[p], jac[p]);
+            if candidate {
+                let history = (last_fast[p], last_deformed[p]);
+                if let Some(c) = t.candidate(p, dv2, ratio, speed2 > prev2, history) {
+                    s.need_z |= c.z.is_nan();
+                    self.flagged.push(c);
+                }
+            }
+            ke_recent[p] = e.max(ke_recent[p] * t.decay);
+            if speed2 > t.quiescent2 {
+                last_fast[p] = step;
+            }
+            let rate = dev_rate[p];
+            if rate >= t.deformed_rate {
+                last_deformed[p] = step;
+            }
+            if rate > max_rate[p] {
+                max_rate[p] = rate;
+                max_rate_step[p] = step;
+            }
+        }
+        s
+    }
+
+    /// Robust z of the candidates awaiting one (gaining, above `kick_accel_g`),
+    /// flagging outliers; the largest z.
+    fn score_candidates(&mut self, v: &StateView) -> f64 {
+        // The z windows read every particle's acceleration.
+        self.fill_accel(v);
+        self.bins.rebuild(&self.geom, v.x);
+        let window = (self.cfg.window_tile_cells, self.cfg.window_half_cells);
+        let mut max_z = 0.0f64;
+        for c in self.flagged.iter_mut().filter(|c| c.z.is_nan()) {
+            c.z = self.stats.z(
+                &self.geom,
+                &self.bins,
+                &self.accel,
+                window,
+                c.p as usize,
+                v.step.max(1),
+            );
+            max_z = max_z.max(c.z);
+            if c.z >= self.cfg.kick_z {
+                c.rules.insert(Rule::AccelOutlier);
+            }
+        }
+        max_z
+    }
+
+    /// An energy-injection event at the particle that gained most (`gainer`)
+    /// when the injection over the window exceeds its noise floor.
+    fn check_energy_injection(
+        &mut self,
+        v: &StateView,
+        g: f64,
+        window: f64,
+        floor: f64,
+        gainer: usize,
+    ) {
+        if window > self.cfg.injection_floor_factor * floor {
+            self.fill_accel(v);
+            let (i, j) = self.geom.cell_of(v.x[gainer]);
+            let cluster = Cluster::new(
+                CellRange::of(i, j),
+                Rule::InjectionWindow.into(),
+                self.accel[gainer],
+            );
+            self.attach(EventKind::EnergyInjection, cluster, v, g);
+        }
+    }
+
+    /// Non-finite state, particles outside the box or one faster than the
+    /// escape speed: the blow-out event and why the run must stop.
+    fn check_blow_out(&mut self, v: &StateView, g: f64, max_speed: f64) -> Option<String> {
+        if v.n_nonfinite > 0 {
+            let reason = format!("non-finite state in {} particles", v.n_nonfinite);
+            self.blow_out_event(EventKind::NonFinite, Rule::NonFinite, v, g, |x, vel| {
+                !(x.x.is_finite() && x.y.is_finite() && vel.x.is_finite() && vel.y.is_finite())
+            });
+            return Some(reason);
+        }
+        if v.n_outside > 0 {
+            let reason = format!("{} particles left the box", v.n_outside);
+            let (lo, hi) = (self.geom.origin, self.geom.origin + self.geom.size);
+            self.blow_out_event(EventKind::BlowOut, Rule::OutsideBox, v, g, |x, _| {
+                x.x < lo.x || x.y < lo.y || x.x > hi.x || x.y > hi.y
+            });
+            return Some(reason);
+        }
+        let escape = self.cfg.escape_speed_factor * (2.0 * g * self.geom.size.y).sqrt();
+        if max_speed > escape {
+            let reason = format!(
+                "a particle reached {max_speed:.3} m/s, beyond the escape speed {escape:.3} m/s"
+            );
+            self.blow_out_event(EventKind::BlowOut, Rule::EscapeSpeed, v, g, |_, vel| {
+                vel.norm() > escape
+            });
+            return Some(reason);
+        }
+        None
+    }
+
+    /// Energy injected while each event touched at this step is open (`total`
+    /// is the injection so far).
+    fn track_injected_energy(&mut self, step: u64, total: f64) {
+        for e in self.events.iter_mut().filter(|e| e.last_step == step) {
+            if e.first_step == step {
+                e.injected_at_open = self.prev_injected;
+            }
+            e.energy_injected = e.energy_injected.max(total - e.injected_at_open);
+        }
+        self.prev_injected = total;
+    }
+
+    /// Over the active grid nodes: the smallest nodal mass over rho0 h^2 (0
+    /// without any) and the largest nodal acceleration.
+    fn grid_figures(&self, v: &StateView) -> (f64, f64) {
+        let h2 = self.geom.rho0 * self.geom.cell * self.geom.cell;
+        let (mut min_mass, mut max_node_a) = (f64::INFINITY, 0.0f64);
+        for &node in v.grid.active {
+            let m = v.grid.mass[node as usize];
+            if m > 0.0 {
+                min_mass = min_mass.min(m / h2);
+                max_node_a = max_node_a.max(v.grid.acceleration[node as usize].norm());
+            }
+        }
+        let min_mass = if min_mass.is_finite() { min_mass } else { 0.0 };
+        (min_mass, max_node_a)
+    }
+
     /// Clusters this step's flagged particles by 8-adjacent cells and files them as kicks.
     fn cluster_flagged(&mut self, v: &StateView, g: f64) {
+        self.label_clusters(v);
+        self.tally_clusters(v);
+        for k in 0..self.clusters.len() {
+            let cluster = self.clusters[k].clone();
+            self.clusters[k].event = if cluster.count >= self.cfg.min_cluster_particles {
+                self.attach(EventKind::Kick, cluster, v, g)
+            } else {
+                usize::MAX
+            };
+        }
+        self.count_members(v);
+    }
+
+    /// Labels the cells holding flagged particles by 8-connected component,
+    /// one empty cluster per component (`cell_label` holds its index).
+    fn label_clusters(&mut self, v: &StateView) {
         let nx = self.geom.cells[0];
         let ny = self.geom.cells[1];
         for &c in &self.touched {
@@ -492,15 +622,20 @@ impl Monitor {
                     }
                 }
             }
-            self.clusters.push(Cluster::new(cells, 0, 0.0));
+            self.clusters.push(Cluster::new(cells, Rules::NONE, 0.0));
         }
+    }
+
+    /// Tallies each flagged particle into its cluster: rules, peaks, count and
+    /// the hallmark counts (quiet, deformed, distorted before this step).
+    fn tally_clusters(&mut self, v: &StateView) {
         let step = v.step as i64;
         let recent = self.cfg.recent_steps as i64;
         for f in &self.flagged {
             let p = f.p as usize;
             let label = self.cell_label[self.geom.cell_index(v.x[p])] as usize;
             let c = &mut self.clusters[label];
-            c.rules |= f.rules;
+            c.rules = c.rules.union(f.rules);
             c.peak_accel = c.peak_accel.max(f.a);
             c.peak_z = c.peak_z.max(f.z);
             c.count += 1;
@@ -515,14 +650,11 @@ impl Monitor {
                 c.distorted += 1;
             }
         }
-        for k in 0..self.clusters.len() {
-            let cluster = self.clusters[k].clone();
-            self.clusters[k].event = if cluster.count >= self.cfg.min_cluster_particles {
-                self.attach(EventKind::Kick, cluster, v, g)
-            } else {
-                usize::MAX
-            };
-        }
+    }
+
+    /// Counts each flagged particle once into its cluster's event, keeping the
+    /// first `max_event_ids` ids.
+    fn count_members(&mut self, v: &StateView) {
         let cap = self.cfg.max_event_ids;
         for f in &self.flagged {
             let p = f.p as usize;
@@ -557,65 +689,72 @@ impl Monitor {
             self.events_dropped += 1;
             return usize::MAX;
         }
-        let half = |k: usize| c.count > 0 && 2 * k >= c.count;
         match open {
             Some(k) => {
-                let e = &mut self.events[k];
-                e.last_step = step;
-                e.last_t = v.time;
-                e.extent = e.extent.union(&c.cells);
-                if e.first_step == step {
-                    e.cells = e.cells.union(&c.cells);
-                    e.region = e.cells.metres(&self.geom);
-                }
-                e.peak_accel_g = e.peak_accel_g.max(c.peak_accel / g);
-                e.peak_z = e.peak_z.max(c.peak_z);
-                e.rule_bits |= c.rules;
-                e.rules = rule::names(e.rule_bits);
+                self.merge(k, &c, v, g);
                 k
             }
             None => {
-                let mut deformed_by = vec![];
-                if half(c.deformed_rate) {
-                    deformed_by.push("strain_rate".to_string());
-                }
-                if half(c.distorted) {
-                    deformed_by.push("distortion".to_string());
-                }
-                self.events.push(Event {
-                    id: self.events.len() as u32 + 1,
-                    kind,
-                    first_step: step,
-                    last_step: step,
-                    t: v.time,
-                    last_t: v.time,
-                    cells: c.cells,
-                    region: c.cells.metres(&self.geom),
-                    extent: c.cells,
-                    n_particles: 0,
-                    particles: Vec::new(),
-                    peak_accel_g: c.peak_accel / g,
-                    peak_z: c.peak_z,
-                    energy_injected: 0.0,
-                    courant: v.courant,
-                    quiescent_before: half(c.quiescent),
-                    previously_deformed: !deformed_by.is_empty(),
-                    deformed_by,
-                    rules: rule::names(c.rules),
-                    state_hash: None,
-                    checkpoint: None,
-                    rule_bits: c.rules,
-                    injected_at_open: self.prev_injected,
-                });
+                self.open(kind, &c, v, g);
                 self.events.len() - 1
             }
         }
     }
 
+    /// Extends open event `k` by this step's cluster.
+    fn merge(&mut self, k: usize, c: &Cluster, v: &StateView, g: f64) {
+        let e = &mut self.events[k];
+        e.last_step = v.step;
+        e.last_t = v.time;
+        e.extent = e.extent.union(&c.cells);
+        if e.first_step == v.step {
+            e.cells = e.cells.union(&c.cells);
+            e.region = e.cells.metres(&self.geom);
+        }
+        e.peak_accel_g = e.peak_accel_g.max(c.peak_accel / g);
+        e.peak_z = e.peak_z.max(c.peak_z);
+        e.rules = e.rules.union(c.rules);
+    }
+
+    /// Opens an event for the cluster; a hallmark holds for at least half its particles.
+    fn open(&mut self, kind: EventKind, c: &Cluster, v: &StateView, g: f64) {
+        let half = |k: usize| c.count > 0 && 2 * k >= c.count;
+        let mut deformed_by = vec![];
+        if half(c.deformed_rate) {
+            deformed_by.push(DeformedBy::StrainRate);
+        }
+        if half(c.distorted) {
+            deformed_by.push(DeformedBy::Distortion);
+        }
+        self.events.push(Event {
+            id: self.events.len() as u32 + 1,
+            kind,
+            first_step: v.step,
+            last_step: v.step,
+            t: v.time,
+            last_t: v.time,
+            cells: c.cells,
+            region: c.cells.metres(&self.geom),
+            extent: c.cells,
+            n_particles: 0,
+            particles: Vec::new(),
+            peak_accel_g: c.peak_accel / g,
+            peak_z: c.peak_z,
+            energy_injected: 0.0,
+            courant: v.courant,
+            quiescent_before: half(c.quiescent),
+            deformed_by,
+            rules: c.rules,
+            state_hash: None,
+            checkpoint: None,
+            injected_at_open: self.prev_injected,
+        });
+    }
+
     fn blow_out_event(
         &mut self,
         kind: EventKind,
-        rules: u32,
+        rule: Rule,
         v: &StateView,
         g: f64,
         bad: impl Fn(solver::Vec2, solver::Vec2) -> bool,
@@ -635,7 +774,7 @@ impl Monitor {
             }
         }
         let Some(cells) = cells else { return };
-        let k = self.attach(kind, Cluster::new(cells, rules, peak), v, g);
+        let k = self.attach(kind, Cluster::new(cells, rule.into(), peak), v, g);
         let cap = self.cfg.max_event_ids;
         let e = &mut self.events[k];
         e.n_particles = e.n_particles.max(count);
@@ -674,11 +813,6 @@ impl Monitor {
             front_z,
             front_t,
         }
-    }
-
-    /// The hydrostatic reference pressure of every particle (after `field_metrics`).
-    pub fn hydrostatic_reference(&self) -> &[f64] {
-        &self.hydro.reference
     }
 }
 

@@ -11,7 +11,9 @@ pub struct ParticleHistory {
     pub ke_recent: Vec<f64>,
     pub last_fast_step: Vec<i64>,
     pub last_deformed_step: Vec<i64>,
+    /// Running maximum of |dev D| (written each step and checkpointed; not read yet, kept for a later issue).
     pub max_dev_rate: Vec<f64>,
+    /// Step of `max_dev_rate` (written each step and checkpointed; not read yet, kept for a later issue).
     pub max_dev_rate_step: Vec<i64>,
 }
 

@@ -3,139 +3,64 @@
 //! and window, event membership marks and the events themselves. Per-step
 //! scratch (cell bins, window statistics, labels) is rebuilt each step.
 
-use crate::events::{CellRange, Event, EventKind, Region};
+use crate::events::Event;
 use crate::Monitor;
+use bincode::Options;
 use solver::checkpoint::{unseal, CheckpointError, Reader, Writer};
 
-const MAGIC: &[u8; 8] = b"KICKMON1";
+const MAGIC: &[u8; 8] = b"KICKMON2";
 
-fn kind_code(k: EventKind) -> u64 {
-    match k {
-        EventKind::Kick => 0,
-        EventKind::BlowOut => 1,
-        EventKind::EnergyInjection => 2,
-        EventKind::NonFinite => 3,
+/// The events' encoding: bincode (little-endian, varint integers, f64 bits as
+/// they are) through `Event`'s serde derive, so the checkpoint and the summary
+/// share one schema.
+fn codec() -> impl Options {
+    bincode::DefaultOptions::new()
+}
+
+fn encode_events(events: &[Event]) -> Vec<u8> {
+    codec()
+        .serialize(events)
+        .expect("events serialise: known lengths, no maps")
+}
+
+fn decode_events(mut bytes: &[u8]) -> Result<Vec<Event>, CheckpointError> {
+    let events = codec()
+        .allow_trailing_bytes()
+        .deserialize_from(&mut bytes)
+        .map_err(|e| decode_error(&e))?;
+    match bytes.len() {
+        0 => Ok(events),
+        count => Err(CheckpointError::TrailingBytes { count }),
     }
 }
 
-fn kind_of(code: u64) -> Result<EventKind, CheckpointError> {
-    Ok(match code {
-        0 => EventKind::Kick,
-        1 => EventKind::BlowOut,
-        2 => EventKind::EnergyInjection,
-        3 => EventKind::NonFinite,
-        _ => return Err(CheckpointError::Truncated),
-    })
-}
-
-fn put_cells(w: &mut Writer, c: &CellRange) {
-    for v in [c.i_min, c.j_min, c.i_max, c.j_max] {
-        w.u64(v as u64);
+/// A bincode decode error as the checkpoint error it amounts to.
+fn decode_error(e: &bincode::ErrorKind) -> CheckpointError {
+    use bincode::ErrorKind as K;
+    match e {
+        K::Io(_) => CheckpointError::Truncated,
+        K::InvalidUtf8Encoding(_) | K::InvalidCharEncoding => CheckpointError::BadUtf8,
+        K::InvalidBoolEncoding(code) => CheckpointError::UnknownCode {
+            what: "event flag",
+            code: (*code).into(),
+        },
+        K::InvalidTagEncoding(code) => CheckpointError::UnknownCode {
+            what: "event option tag",
+            code: *code as u64,
+        },
+        // serde's own errors: an enum variant (event kind, rule, deformation)
+        // this build does not know; serde keeps its index only in the message
+        // ("invalid value: integer `7`, expected variant index 0 <= i < 4").
+        other => CheckpointError::UnknownCode {
+            what: "event variant",
+            code: other
+                .to_string()
+                .split('`')
+                .nth(1)
+                .and_then(|c| c.parse().ok())
+                .unwrap_or(u64::MAX),
+        },
     }
-}
-
-fn get_cells(r: &mut Reader) -> Result<CellRange, CheckpointError> {
-    Ok(CellRange {
-        i_min: r.u64()? as usize,
-        j_min: r.u64()? as usize,
-        i_max: r.u64()? as usize,
-        j_max: r.u64()? as usize,
-    })
-}
-
-fn put_strings(w: &mut Writer, v: &[String]) {
-    w.u64(v.len() as u64);
-    v.iter().for_each(|s| w.str(s));
-}
-
-fn get_strings(r: &mut Reader) -> Result<Vec<String>, CheckpointError> {
-    let n = r.u64()? as usize;
-    (0..n).map(|_| r.str()).collect()
-}
-
-fn put_option(w: &mut Writer, s: &Option<String>) {
-    w.bool(s.is_some());
-    if let Some(s) = s {
-        w.str(s);
-    }
-}
-
-fn get_option(r: &mut Reader) -> Result<Option<String>, CheckpointError> {
-    Ok(if r.bool()? { Some(r.str()?) } else { None })
-}
-
-fn put_event(w: &mut Writer, e: &Event) {
-    w.u64(e.id as u64);
-    w.u64(kind_code(e.kind));
-    w.u64(e.first_step);
-    w.u64(e.last_step);
-    w.f64(e.t);
-    w.f64(e.last_t);
-    put_cells(w, &e.cells);
-    w.f64s(&[
-        e.region.x_min,
-        e.region.y_min,
-        e.region.x_max,
-        e.region.y_max,
-    ]);
-    put_cells(w, &e.extent);
-    w.u64(e.n_particles as u64);
-    w.u64(e.particles.len() as u64);
-    w.u32s(&e.particles);
-    w.f64s(&[e.peak_accel_g, e.peak_z, e.energy_injected, e.courant]);
-    w.bool(e.quiescent_before);
-    w.bool(e.previously_deformed);
-    put_strings(w, &e.deformed_by);
-    put_strings(w, &e.rules);
-    put_option(w, &e.state_hash);
-    put_option(w, &e.checkpoint);
-    w.u64(e.rule_bits as u64);
-    w.f64(e.injected_at_open);
-}
-
-fn get_event(r: &mut Reader) -> Result<Event, CheckpointError> {
-    let id = r.u64()? as u32;
-    let kind = kind_of(r.u64()?)?;
-    let first_step = r.u64()?;
-    let last_step = r.u64()?;
-    let t = r.f64()?;
-    let last_t = r.f64()?;
-    let cells = get_cells(r)?;
-    let region = Region {
-        x_min: r.f64()?,
-        y_min: r.f64()?,
-        x_max: r.f64()?,
-        y_max: r.f64()?,
-    };
-    let extent = get_cells(r)?;
-    let n_particles = r.u64()? as usize;
-    let mut particles = vec![0u32; r.u64()? as usize];
-    r.u32s(&mut particles)?;
-    Ok(Event {
-        id,
-        kind,
-        first_step,
-        last_step,
-        t,
-        last_t,
-        cells,
-        region,
-        extent,
-        n_particles,
-        particles,
-        peak_accel_g: r.f64()?,
-        peak_z: r.f64()?,
-        energy_injected: r.f64()?,
-        courant: r.f64()?,
-        quiescent_before: r.bool()?,
-        previously_deformed: r.bool()?,
-        deformed_by: get_strings(r)?,
-        rules: get_strings(r)?,
-        state_hash: get_option(r)?,
-        checkpoint: get_option(r)?,
-        rule_bits: r.u64()? as u32,
-        injected_at_open: r.f64()?,
-    })
 }
 
 impl Monitor {
@@ -160,8 +85,11 @@ impl Monitor {
         w.u64(filled as u64);
         w.f64(self.prev_injected);
         w.u64(self.events_dropped);
-        w.u64(self.events.len() as u64);
-        self.events.iter().for_each(|e| put_event(&mut w, e));
+        w.bytes(&encode_events(&self.events));
+        // Beside the events: monitor bookkeeping kept out of their serde form.
+        for e in &self.events {
+            w.f64(e.injected_at_open);
+        }
         w.seal()
     }
 
@@ -195,13 +123,115 @@ impl Monitor {
         self.energy.restore(minimum, &recent, next, filled);
         self.prev_injected = r.f64()?;
         self.events_dropped = r.u64()?;
-        let events = r.u64()? as usize;
-        self.events = (0..events)
-            .map(|_| get_event(&mut r))
-            .collect::<Result<_, _>>()?;
-        if !r.is_empty() {
-            return Err(CheckpointError::Truncated);
+        let mut events = decode_events(r.bytes()?)?;
+        for e in &mut events {
+            e.injected_at_open = r.f64()?;
         }
+        r.finish()?;
+        self.events = events;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::events::{CellRange, DeformedBy, EventKind, Region, Rule};
+
+    fn event(id: u32) -> Event {
+        let cells = CellRange::of(1, 2);
+        Event {
+            id,
+            kind: EventKind::EnergyInjection,
+            first_step: 3,
+            last_step: 4,
+            t: -0.0,
+            last_t: f64::MIN_POSITIVE / 2.0,
+            cells,
+            region: Region {
+                x_min: f64::NAN,
+                y_min: f64::INFINITY,
+                x_max: f64::NEG_INFINITY,
+                y_max: 1.0 / 3.0,
+            },
+            extent: cells,
+            n_particles: usize::MAX,
+            particles: vec![0, u32::MAX],
+            peak_accel_g: f64::from_bits(0x7ff8_dead_beef_0001),
+            peak_z: f64::MAX,
+            energy_injected: 1e-300,
+            courant: 0.1 + 0.2,
+            quiescent_before: false,
+            deformed_by: vec![DeformedBy::Distortion],
+            rules: Rule::InjectionWindow.into(),
+            state_hash: None,
+            checkpoint: Some("ckpt_000004.bin".into()),
+            injected_at_open: 0.0,
+        }
+    }
+
+    fn bits(e: &Event) -> Vec<u64> {
+        let r = &e.region;
+        [
+            e.t,
+            e.last_t,
+            r.x_min,
+            r.y_min,
+            r.x_max,
+            r.y_max,
+            e.peak_accel_g,
+            e.peak_z,
+            e.energy_injected,
+            e.courant,
+        ]
+        .map(f64::to_bits)
+        .to_vec()
+    }
+
+    #[test]
+    fn events_round_trip_bit_for_bit_including_nan_and_infinities() {
+        let events = vec![event(1), event(2)];
+        let back = decode_events(&encode_events(&events)).unwrap();
+        assert_eq!(back.len(), 2);
+        for (a, b) in events.iter().zip(&back) {
+            assert_eq!(bits(a), bits(b));
+            assert_eq!(
+                (&a.deformed_by, a.rules, &a.particles, a.n_particles),
+                (&b.deformed_by, b.rules, &b.particles, b.n_particles)
+            );
+            assert_eq!(
+                (&a.state_hash, &a.checkpoint),
+                (&b.state_hash, &b.checkpoint)
+            );
+        }
+    }
+
+    #[test]
+    fn damaged_event_bytes_are_refused() {
+        let bytes = encode_events(&[event(1)]);
+        for cut in [0, 1, bytes.len() / 2, bytes.len() - 1] {
+            assert_eq!(
+                decode_events(&bytes[..cut]).unwrap_err(),
+                CheckpointError::Truncated,
+                "cut at {cut}"
+            );
+        }
+        let mut long = bytes.clone();
+        long.extend_from_slice(&[0, 0]);
+        assert_eq!(
+            decode_events(&long).unwrap_err(),
+            CheckpointError::TrailingBytes { count: 2 }
+        );
+        // Varint layout: [event count, id, kind, ...]: an unknown kind.
+        let mut kind = bytes.clone();
+        assert_eq!(kind[2], 2, "EnergyInjection");
+        kind[2] = 9;
+        assert_eq!(
+            decode_events(&kind).unwrap_err(),
+            CheckpointError::UnknownCode {
+                what: "event variant",
+                code: 9
+            }
+        );
     }
 }

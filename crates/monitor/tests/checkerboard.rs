@@ -7,7 +7,7 @@ use monitor::Geometry;
 use solver::{Material, Scene, Vec2};
 
 fn geometry(ppc: usize) -> Geometry {
-    let mut scene = Scene::dam_break(Material::water(1e5));
+    let mut scene = Scene::dam_break(Material::tait(1e5));
     scene.size = [0.3, 0.2];
     scene.ppc = ppc;
     Geometry::from_scene(&scene)

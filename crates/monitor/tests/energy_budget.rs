@@ -8,7 +8,7 @@ mod common;
 
 #[test]
 fn pic_dam_break_injects_nothing_above_the_floor() {
-    let mut mat = Material::water(1.5e4);
+    let mut mat = Material::tait(1.5e4);
     mat.eos = EosKind::Power;
     mat.viscosity = 0.5;
     let mut scene = Scene::dam_break(mat);

@@ -6,7 +6,7 @@
 //! event at all. The injected energy is 1/2 m dv^2 of the perturbed particles.
 //! All with the shipped default thresholds.
 
-use monitor::EventKind;
+use monitor::{EventKind, Rule};
 use solver::*;
 
 mod common;
@@ -57,13 +57,10 @@ fn injected_kicks_in_a_column_at_rest_are_found_where_and_when_they_happen() {
             "{tag}: the column was at rest before"
         );
         assert!(
-            !kick.previously_deformed,
+            !kick.previously_deformed(),
             "{tag}: the column was never deformed"
         );
-        assert!(kick
-            .rules
-            .iter()
-            .any(|r| r == "accel_outlier" || r == "ke_spike"));
+        assert!(kick.rules.contains(Rule::AccelOutlier) || kick.rules.contains(Rule::KeSpike));
     }
 }
 

@@ -8,7 +8,7 @@ use solver::{Material, Scene, Vec2};
 
 #[test]
 fn front_ignores_strays_and_detached_blobs() {
-    let sc = Scene::dam_break(Material::water(1e5));
+    let sc = Scene::dam_break(Material::tait(1e5));
     let g = Geometry::from_scene(&sc);
     let mut x = vec![];
     let mut put = |i: usize, j: usize, n: usize| {

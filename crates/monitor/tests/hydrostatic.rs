@@ -15,7 +15,7 @@ fn exact_on_hydrostatic_lattices() {
         (EosKind::Power, 1.0, 6e3),
     ] {
         for ppc in [1, 2, 3, 4] {
-            let mut mat = Material::water(k);
+            let mut mat = Material::tait(k);
             mat.eos = eos;
             mat.gamma = gamma;
             let mut sc = Scene::dam_break(mat);
@@ -48,7 +48,7 @@ fn exact_on_hydrostatic_lattices() {
 fn matches_hand_computation_on_a_perturbed_column() {
     // One strip, ppc 1 (l = h), three particles of mass m; the middle one is
     // lifted to a quarter row below the top one.
-    let mut sc = Scene::dam_break(Material::water(1e5));
+    let mut sc = Scene::dam_break(Material::tait(1e5));
     sc.ppc = 1;
     sc.bodies[0].rect = [0.0, 0.0, 0.01, 0.03];
     let g = Geometry::from_scene(&sc);

@@ -14,7 +14,7 @@ fn main() {
     };
     let k: f64 = args.get(3).map(|s| s.parse().unwrap()).unwrap_or(1.5e5);
     let t_end: f64 = args.get(4).map(|s| s.parse().unwrap()).unwrap_or(1.0);
-    let mut mat = Material::water(k);
+    let mut mat = Material::tait(k);
     mat.eos = EosKind::Power;
     mat.gamma = 7.0;
     let mut scene = Scene::dam_break(mat);

@@ -12,9 +12,27 @@ pub const VERSION: u32 = 2;
 pub enum CheckpointError {
     BadMagic,
     Version(u32),
+    /// The input ends before a field it should hold.
     Truncated,
-    Checksum { stored: u64, computed: u64 },
-    ParticleCount { stored: u64, expected: u64 },
+    /// `count` bytes are left over after the last field.
+    TrailingBytes {
+        count: usize,
+    },
+    /// A string field is not valid UTF-8.
+    BadUtf8,
+    /// A coded field (`what`, e.g. an enum tag) holds a code this build does not know.
+    UnknownCode {
+        what: &'static str,
+        code: u64,
+    },
+    Checksum {
+        stored: u64,
+        computed: u64,
+    },
+    ParticleCount {
+        stored: u64,
+        expected: u64,
+    },
 }
 
 impl std::fmt::Display for CheckpointError {
@@ -25,6 +43,16 @@ impl std::fmt::Display for CheckpointError {
                 write!(f, "checkpoint version {v}, this build reads {VERSION}")
             }
             CheckpointError::Truncated => write!(f, "checkpoint is truncated"),
+            CheckpointError::TrailingBytes { count } => {
+                write!(
+                    f,
+                    "checkpoint has {count} unexpected bytes after its last field"
+                )
+            }
+            CheckpointError::BadUtf8 => write!(f, "checkpoint holds a string that is not UTF-8"),
+            CheckpointError::UnknownCode { what, code } => {
+                write!(f, "checkpoint holds unknown {what} code {code}")
+            }
             CheckpointError::Checksum { stored, computed } => write!(
                 f,
                 "checkpoint is corrupted (checksum {stored:016x}, computed {computed:016x})"
@@ -188,7 +216,7 @@ impl<'a> Reader<'a> {
         Ok(head)
     }
     pub fn str(&mut self) -> Result<String, CheckpointError> {
-        String::from_utf8(self.bytes()?.to_vec()).map_err(|_| CheckpointError::Truncated)
+        String::from_utf8(self.bytes()?.to_vec()).map_err(|_| CheckpointError::BadUtf8)
     }
     pub fn vec2s(&mut self, out: &mut [Vec2]) -> Result<(), CheckpointError> {
         for v in out {
@@ -224,6 +252,13 @@ impl<'a> Reader<'a> {
     }
     pub fn is_empty(&self) -> bool {
         self.0.is_empty()
+    }
+    /// Ok if every byte was read; `TrailingBytes` otherwise.
+    pub fn finish(&self) -> Result<(), CheckpointError> {
+        match self.0.len() {
+            0 => Ok(()),
+            count => Err(CheckpointError::TrailingBytes { count }),
+        }
     }
 }
 
@@ -286,8 +321,5 @@ pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
     r.f64s(&mut ps.vol0)?;
     r.f64s(&mut ps.pressure)?;
     r.f64s(&mut ps.dev_rate)?;
-    if !r.0.is_empty() {
-        return Err(CheckpointError::Truncated);
-    }
-    Ok(())
+    r.finish()
 }

@@ -77,67 +77,130 @@ pub enum EosKind {
     Linear,
 }
 
+/// A fluid material: a `[materials.NAME]` table of a study file. Every key
+/// but `K` is optional; the defaults below are the only ones.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Material {
+    /// The study file's table name (`water` in `[materials.water]`).
+    #[serde(skip)]
+    pub name: String,
+    /// Reference density (kg/m^3).
+    #[serde(default = "defaults::rho0")]
     pub rho0: f64,
+    #[serde(default = "defaults::eos")]
     pub eos: EosKind,
     /// Low-pressure bulk modulus K (Pa).
+    #[serde(rename = "K")]
     pub k: f64,
+    /// Power-law exponent (power EOS only).
+    #[serde(default = "defaults::gamma")]
     pub gamma: f64,
     /// Dynamic viscosity (Pa s).
+    #[serde(default)]
     pub viscosity: f64,
     /// Free thermal-expansion volume ratio: the EOS sees J / j_res.
+    #[serde(default = "defaults::j_res")]
     pub j_res: f64,
-    /// Tension cutoff: pressure never goes below this (None = no cutoff).
+    /// Tension cutoff (Pa): pressure never goes below this (absent = no cutoff).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pressure_floor: Option<f64>,
 }
 
+/// Defaults of the optional material keys (one definition, used by serde and `Material::new`).
+mod defaults {
+    use super::EosKind;
+    pub fn rho0() -> f64 {
+        1000.0
+    }
+    pub fn eos() -> EosKind {
+        EosKind::Power
+    }
+    pub fn gamma() -> f64 {
+        7.0
+    }
+    pub fn j_res() -> f64 {
+        1.0
+    }
+}
+
 impl Material {
-    pub fn water(k: f64) -> Self {
+    /// Water with every default (power law, gamma 7) and bulk modulus `k`.
+    pub fn new(k: f64) -> Self {
         Material {
-            rho0: 1000.0,
-            eos: EosKind::Tait,
+            name: String::new(),
+            rho0: defaults::rho0(),
+            eos: defaults::eos(),
             k,
-            gamma: 7.0,
+            gamma: defaults::gamma(),
             viscosity: 0.0,
-            j_res: 1.0,
+            j_res: defaults::j_res(),
             pressure_floor: None,
+        }
+    }
+
+    /// Water with the Tait EOS and bulk modulus `k`, otherwise the defaults.
+    pub fn tait(k: f64) -> Self {
+        Material {
+            eos: EosKind::Tait,
+            ..Material::new(k)
+        }
+    }
+
+    /// The study key of field `field` of this material.
+    fn key(&self, index: usize, field: &str) -> String {
+        if self.name.is_empty() {
+            format!("materials[{index}].{field}")
+        } else {
+            format!("materials.{}.{field}", self.name)
         }
     }
 }
 
+/// A `[[scene.body]]`: a rectangle of one material.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Body {
     /// [x0, y0, x1, y1] in metres.
     pub rect: [f64; 4],
-    /// Index into `Scene::materials`.
-    pub material: usize,
-    /// Initial velocity.
+    /// Name of its material; may be left empty when the scene has one material.
+    #[serde(default)]
+    pub material: String,
+    /// Initial velocity (m/s).
+    #[serde(default)]
     pub velocity: [f64; 2],
 }
 
+/// The `[scene]` table. Defaults: the dam-break tank of docs/physics.md section 1.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Scene {
     /// Lower-left corner of the box (metres).
     pub origin: [f64; 2],
     /// Box width and height (metres); must be whole cells.
+    #[serde(rename = "box")]
     pub size: [f64; 2],
+    /// Cell size h (metres).
     pub cell: f64,
     /// Particles per cell along each axis.
     pub ppc: usize,
+    /// Simulated time (s).
     pub t_end: f64,
-    /// Magnitude of gravity, acting in -y.
+    /// Magnitude of gravity (m/s^2), acting in -y.
     pub gravity: f64,
     pub initial: InitialState,
     /// Periodic instead of symmetry-plane walls, per axis.
     pub periodic: [bool; 2],
+    #[serde(rename = "body")]
     pub bodies: Vec<Body>,
+    /// Filled from the study's `[materials]` tables, in file order.
+    #[serde(skip)]
     pub materials: Vec<Material>,
 }
 
-impl Scene {
-    /// PHYSICS.md section 1: 0.8 x 0.6 box, 0.2 x 0.4 water column, h = 1 cm, 2 x 2 ppc.
-    pub fn dam_break(material: Material) -> Self {
+impl Default for Scene {
+    /// The dam-break tank (0.8 x 0.6 m, h = 1 cm, 2 x 2 ppc, 5 s), still empty.
+    fn default() -> Self {
         Scene {
             origin: [0.0, 0.0],
             size: [0.8, 0.6],
@@ -147,12 +210,23 @@ impl Scene {
             gravity: 9.81,
             initial: InitialState::ZeroStress,
             periodic: [false, false],
+            bodies: vec![],
+            materials: vec![],
+        }
+    }
+}
+
+impl Scene {
+    /// docs/physics.md section 1: 0.8 x 0.6 box, 0.2 x 0.4 water column, h = 1 cm, 2 x 2 ppc.
+    pub fn dam_break(material: Material) -> Self {
+        Scene {
             bodies: vec![Body {
                 rect: [0.0, 0.0, 0.2, 0.4],
-                material: 0,
+                material: material.name.clone(),
                 velocity: [0.0, 0.0],
             }],
             materials: vec![material],
+            ..Scene::default()
         }
     }
 
@@ -163,24 +237,37 @@ impl Scene {
             (self.size[1] / self.cell).round() as usize,
         ]
     }
+
+    /// Index of a body's material: by name, or the only one when the name is empty.
+    pub fn material_index(&self, body: &Body) -> Option<usize> {
+        if body.material.is_empty() && self.materials.len() == 1 {
+            return Some(0);
+        }
+        self.materials.iter().position(|m| m.name == body.material)
+    }
 }
 
+/// The `[method]` table: every suspect choice. Defaults: the problem
+/// statement's baseline (linear, FLIP, USF, fixed dt, CFL 0.2, det J).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Method {
     pub shape: ShapeKind,
     pub transfer: TransferKind,
+    /// FLIP fraction of the FLIP/PIC blend (1 = pure FLIP).
     pub flip_alpha: f64,
     pub scheme: SchemeKind,
+    /// Courant number of the time step.
     pub cfl: f64,
     pub dt: DtMode,
-    /// Use this time step instead of the CFL one (benchmarks); None = CFL.
-    pub dt_override: Option<f64>,
+    /// Use this time step (s) instead of the CFL one (benchmarks); absent = CFL.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dt_value: Option<f64>,
     pub j_update: JUpdate,
 }
 
-impl Method {
-    /// The problem statement's baseline: linear, FLIP, USF, fixed dt, CFL 0.2.
-    pub fn baseline() -> Self {
+impl Default for Method {
+    fn default() -> Self {
         Method {
             shape: ShapeKind::Linear,
             transfer: TransferKind::Flip,
@@ -188,14 +275,22 @@ impl Method {
             scheme: SchemeKind::Usf,
             cfl: 0.2,
             dt: DtMode::Fixed,
-            dt_override: None,
+            dt_value: None,
             j_update: JUpdate::Det,
         }
     }
 }
 
-/// Fault injection: at step `step`, after G2P, add `dv` to every particle in `region`.
+impl Method {
+    /// The problem statement's baseline (the defaults).
+    pub fn baseline() -> Self {
+        Method::default()
+    }
+}
+
+/// Fault injection (`[[perturb]]`): at step `step`, after G2P, add `dv` to every particle in `region`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Perturb {
     pub step: u64,
     /// [x0, y0, x1, y1] in metres.
@@ -236,17 +331,34 @@ fn check(ok: bool, key: &str, message: impl Into<String>) -> Result<(), ConfigEr
     }
 }
 
+/// `lo <= v <= hi` (and finite), else "`v` is out of range (allowed lo ..= hi)".
+fn within(v: f64, lo: f64, hi: f64, key: &str) -> Result<(), ConfigError> {
+    check(
+        v.is_finite() && (lo..=hi).contains(&v),
+        key,
+        format!("{v} is out of range (allowed {lo} ..= {hi})"),
+    )
+}
+
+fn ordered_rect(r: &[f64; 4], key: &str) -> Result<(), ConfigError> {
+    check(
+        r.iter().all(|v| v.is_finite()) && r[0] < r[2] && r[1] < r[3],
+        key,
+        "needs x0 < x1 and y0 < y1",
+    )
+}
+
 impl SolverConfig {
     /// The dam break the benchmarks time (`kick bench`, criterion): power law
     /// gamma 7 at K = 150 kPa, the baseline method with `shape` and `transfer`.
     pub fn benchmark_dam_break(shape: ShapeKind, transfer: TransferKind, cell: f64) -> Self {
-        let mut mat = Material::water(1.5e5);
-        mat.eos = EosKind::Power;
-        let mut scene = Scene::dam_break(mat);
+        let mut scene = Scene::dam_break(Material::new(1.5e5));
         scene.cell = cell;
-        let mut method = Method::baseline();
-        method.shape = shape;
-        method.transfer = transfer;
+        let method = Method {
+            shape,
+            transfer,
+            ..Method::baseline()
+        };
         SolverConfig {
             scene,
             method,
@@ -254,40 +366,58 @@ impl SolverConfig {
         }
     }
 
-    /// Checks what the solver relies on; the study crate checks ranges earlier with file context.
+    /// Every range check, named by study key: the one validation pass.
     pub fn validate(&self) -> Result<(), ConfigError> {
+        self.validate_scene()?;
+        self.validate_materials()?;
+        let m = &self.method;
+        within(m.flip_alpha, 0.0, 1.0, "method.flip_alpha")?;
+        within(m.cfl, 1e-4, 1.0, "method.cfl")?;
+        if let Some(dt) = m.dt_value {
+            within(dt, 1e-12, 1.0, "method.dt_value")?;
+        }
+        for (i, p) in self.perturb.iter().enumerate() {
+            check(p.step >= 1, &format!("perturb[{i}].step"), "must be >= 1")?;
+            ordered_rect(&p.region, &format!("perturb[{i}].region"))?;
+            check(
+                p.dv.iter().all(|v| v.is_finite()),
+                &format!("perturb[{i}].dv"),
+                "must be finite",
+            )?;
+        }
+        Ok(())
+    }
+
+    fn validate_scene(&self) -> Result<(), ConfigError> {
         let s = &self.scene;
-        check(
-            s.cell > 0.0 && s.cell.is_finite(),
-            "scene.cell",
-            "must be > 0",
-        )?;
+        within(s.cell, 1e-5, 10.0, "scene.cell")?;
         for a in 0..2 {
             let n = s.size[a] / s.cell;
             check(
-                s.size[a] > 0.0 && (n - n.round()).abs() < 1e-6 && n.round() >= 2.0,
+                s.size[a] > 0.0 && (n - n.round()).abs() < 1e-6 && (2.0..=1e5).contains(&n.round()),
                 "scene.box",
                 format!(
-                    "box must be a whole number (>= 2) of cells of size {}",
-                    s.cell
+                    "axis {a}: {} m is not a whole number (2 ..= 100000) of {} m cells",
+                    s.size[a], s.cell
                 ),
             )?;
         }
-        check((1..=8).contains(&s.ppc), "scene.ppc", "allowed range 1..=8")?;
-        check(s.t_end > 0.0, "scene.t_end", "must be > 0")?;
-        check(s.gravity.is_finite(), "scene.gravity", "must be finite")?;
         check(
-            !s.materials.is_empty(),
-            "materials",
-            "at least one material",
+            s.origin.iter().all(|v| v.is_finite()),
+            "scene.origin",
+            "must be finite",
+        )?;
+        within(s.ppc as f64, 1.0, 8.0, "scene.ppc")?;
+        within(s.t_end, 1e-9, 1e4, "scene.t_end")?;
+        within(s.gravity, 0.0, 1e4, "scene.gravity")?;
+        check(
+            !s.bodies.is_empty(),
+            "scene.body",
+            "at least one [[scene.body]] is required",
         )?;
         for (i, b) in s.bodies.iter().enumerate() {
             let key = format!("scene.body[{i}].rect");
-            check(
-                b.rect[0] < b.rect[2] && b.rect[1] < b.rect[3],
-                &key,
-                "needs x0 < x1 and y0 < y1",
-            )?;
+            ordered_rect(&b.rect, &key)?;
             check(
                 b.rect[0] >= s.origin[0] - 1e-12
                     && b.rect[1] >= s.origin[1] - 1e-12
@@ -296,33 +426,45 @@ impl SolverConfig {
                 &key,
                 "must lie inside the box",
             )?;
+            let names: Vec<&str> = s.materials.iter().map(|m| m.name.as_str()).collect();
             check(
-                b.material < s.materials.len(),
+                s.material_index(b).is_some(),
                 &format!("scene.body[{i}].material"),
-                "unknown material",
+                if b.material.is_empty() {
+                    format!("is required (materials: {})", names.join(", "))
+                } else {
+                    format!(
+                        "unknown material \"{}\" (defined: {})",
+                        b.material,
+                        names.join(", ")
+                    )
+                },
+            )?;
+            check(
+                b.velocity.iter().all(|v| v.is_finite()),
+                &format!("scene.body[{i}].velocity"),
+                "must be finite",
             )?;
         }
+        Ok(())
+    }
+
+    fn validate_materials(&self) -> Result<(), ConfigError> {
+        let s = &self.scene;
+        check(
+            !s.materials.is_empty(),
+            "materials",
+            "at least one [materials.NAME] table is required",
+        )?;
         for (i, m) in s.materials.iter().enumerate() {
-            let key = |k: &str| format!("materials[{i}].{k}");
-            check(m.rho0 > 0.0, &key("rho0"), "must be > 0")?;
-            check(m.k > 0.0, &key("K"), "must be > 0")?;
-            check(m.gamma > 0.0, &key("gamma"), "must be > 0")?;
-            check(m.viscosity >= 0.0, &key("viscosity"), "must be >= 0")?;
-            check(m.j_res > 0.0, &key("j_res"), "must be > 0")?;
-        }
-        let m = &self.method;
-        check(
-            (0.0..=1.0).contains(&m.flip_alpha),
-            "method.flip_alpha",
-            "allowed range 0..=1",
-        )?;
-        check(
-            m.cfl > 0.0 && m.cfl <= 1.0,
-            "method.cfl",
-            "allowed range (0, 1]",
-        )?;
-        if let Some(dt) = m.dt_override {
-            check(dt > 0.0, "method.dt_override", "must be > 0")?;
+            within(m.rho0, 1e-6, 1e6, &m.key(i, "rho0"))?;
+            within(m.k, 1e-6, 1e13, &m.key(i, "K"))?;
+            within(m.gamma, 1.0, 20.0, &m.key(i, "gamma"))?;
+            within(m.viscosity, 0.0, 1e6, &m.key(i, "viscosity"))?;
+            within(m.j_res, 0.5, 2.0, &m.key(i, "j_res"))?;
+            if let Some(p) = m.pressure_floor {
+                within(p, -1e12, 1e12, &m.key(i, "pressure_floor"))?;
+            }
         }
         Ok(())
     }

@@ -60,7 +60,8 @@ pub struct Grid {
     pub mass: Vec<f64>,
     pub momentum: Vec<Vec2>,
     pub force: Vec<Vec2>,
-    /// Velocity after P2G (v^n).
+    /// Velocity p / m of the last projection: v^n after P2G; under MUSL,
+    /// after G2P, the velocity re-projected from the updated particles.
     pub vel: Vec<Vec2>,
     /// Velocity after the grid update (v^{n+1}).
     pub vel_new: Vec<Vec2>,
@@ -125,10 +126,6 @@ impl Grid {
         }
     }
 
-    pub fn node_count(&self) -> usize {
-        self.dims[0] * self.dims[1]
-    }
-
     #[inline]
     pub fn index(&self, i: usize, j: usize) -> usize {
         i + j * self.dims[0]
@@ -148,10 +145,6 @@ impl Grid {
                 (i as f64 - PAD as f64) * self.h,
                 (j as f64 - PAD as f64) * self.h,
             )
-    }
-
-    pub fn role(&self, axis: usize, i: usize) -> NodeRole {
-        self.roles[axis][i]
     }
 
     /// Rebuilds the active set (ascending) from the occupied bins (a bin is

@@ -198,7 +198,7 @@ impl Solver {
     }
 
     fn cfl_dt(&self) -> f64 {
-        if let Some(dt) = self.cfg.method.dt_override {
+        if let Some(dt) = self.cfg.method.dt_value {
             return dt;
         }
         timestep::cfl_step(self.cfg.method.cfl, self.cfg.scene.cell, self.signal_speed)

@@ -79,19 +79,6 @@ where
     total
 }
 
-/// Sums `K` per-item values over `0..n` in a fixed order (see `fold`).
-pub fn sum<const K: usize, F>(n: usize, partials: &mut [[f64; K]], item: F) -> [f64; K]
-where
-    F: Fn(usize) -> [f64; K] + Sync,
-{
-    let add = |acc: &mut [f64; K], v: &[f64; K]| {
-        for k in 0..K {
-            acc[k] += v[k];
-        }
-    };
-    fold(n, partials, [0.0; K], |acc, i| add(acc, &item(i)), add)
-}
-
 /// Largest value of `item` over `0..n` (max is exact, so any order is deterministic).
 pub fn max<F>(n: usize, item: F) -> f64
 where

@@ -9,7 +9,8 @@ pub fn seed(scene: &Scene) -> Particles {
     let h = scene.cell;
     let l = h / scene.ppc as f64;
     for body in &scene.bodies {
-        let mat = &scene.materials[body.material];
+        let material = scene.material_index(body).expect("validated");
+        let mat = &scene.materials[material];
         let [x0, y0, x1, y1] = body.rect;
         // Lattice positions origin + (k + 1/2) l that fall inside the rectangle.
         let first = |lo: f64, o: f64| ((lo - o) / l - 0.5).ceil().max(0.0) as i64;
@@ -28,7 +29,7 @@ pub fn seed(scene: &Scene) -> Particles {
                             Vec2::from(body.velocity),
                             mat.rho0 * l * l,
                             l * l,
-                            body.material as u16,
+                            material as u16,
                         );
                     }
                 }
@@ -48,7 +49,7 @@ pub fn seed(scene: &Scene) -> Particles {
                             Vec2::from(body.velocity),
                             mat.rho0 * l * l,
                             l * l,
-                            body.material as u16,
+                            material as u16,
                         );
                         let q = ps.len() - 1;
                         ps.f[q] = Mat2::new(1.0, 0.0, 0.0, j);

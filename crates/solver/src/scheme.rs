@@ -30,7 +30,11 @@ const MOMENTUM: Terms = Terms {
 /// Which grid velocity the stress stage differentiates.
 #[derive(Clone, Copy)]
 enum StressVelocity {
-    Start,
+    /// `grid.vel` as it stands when the stress stage runs: the P2G velocity
+    /// v^n under USF, the velocity re-projected from the updated particles
+    /// under MUSL.
+    Grid,
+    /// `grid.vel_new`: v^{n+1} after the grid update (USL).
     Updated,
 }
 
@@ -39,7 +43,7 @@ pub fn advance(s: &mut Solver, clock: &mut Instant) {
         SchemeKind::Usf => {
             p2g(s, MASS_MOMENTUM, clock);
             grid_velocities(s, clock);
-            stress(s, StressVelocity::Start, clock);
+            stress(s, StressVelocity::Grid, clock);
             p2g(s, FORCE, clock);
             grid_update(s, clock);
             g2p(s, clock);
@@ -61,7 +65,7 @@ pub fn advance(s: &mut Solver, clock: &mut Instant) {
             let grid = &mut s.grid;
             par::keep_warm(|| stage_grid::project_momentum(grid));
             lap(&mut s.times.grid, clock);
-            stress(s, StressVelocity::Start, clock);
+            stress(s, StressVelocity::Grid, clock);
         }
     }
 }
@@ -101,7 +105,7 @@ fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
 
 fn stress(s: &mut Solver, which: StressVelocity, clock: &mut Instant) {
     let velocity = match which {
-        StressVelocity::Start => &s.grid.vel,
+        StressVelocity::Grid => &s.grid.vel,
         StressVelocity::Updated => &s.grid.vel_new,
     };
     let inputs = stage_stress::Inputs {

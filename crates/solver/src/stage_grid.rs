@@ -23,7 +23,9 @@ pub fn velocities(grid: &mut Grid) -> f64 {
     ke
 }
 
-/// v^n = p / m for the current momentum (already P2G'd), with folded mass.
+/// v = p / m for the current momentum (already P2G'd), with folded mass:
+/// v^n after P2G, or under MUSL the re-projection of the updated particle
+/// velocities.
 pub fn project_momentum(grid: &mut Grid) {
     let mut momentum = std::mem::take(&mut grid.momentum);
     grid.fold(&mut momentum);

@@ -42,6 +42,9 @@ pub struct StateView<'a> {
     pub deformation: &'a [Mat2],
     pub j: &'a [f64],
     pub pressure: &'a [f64],
+    /// In-plane Cauchy stress -p I + 2 mu dev(D) of the last stress stage
+    /// (before the first step: the initial stress).
+    pub stress: &'a [Mat2],
     /// |dev D| of the last step (1/s).
     pub dev_rate: &'a [f64],
     pub material: &'a [u16],
@@ -80,6 +83,7 @@ pub fn make(s: &Solver) -> StateView<'_> {
         deformation: &ps.f,
         j: &ps.j,
         pressure: &ps.pressure,
+        stress: &ps.stress,
         dev_rate: &ps.dev_rate,
         material: &ps.material,
         id: &ps.id,

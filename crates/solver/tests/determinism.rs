@@ -27,7 +27,7 @@ fn configs() -> Vec<SolverConfig> {
         (ShapeKind::Bspline3, TransferKind::Pic, SchemeKind::Usl),
         (ShapeKind::Gimp, TransferKind::Flip, SchemeKind::Usl),
     ] {
-        let mut mat = Material::water(1.5e4);
+        let mut mat = Material::tait(1.5e4);
         mat.viscosity = 0.5;
         out.push(SolverConfig {
             scene: Scene::dam_break(mat),

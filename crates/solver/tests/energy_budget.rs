@@ -7,7 +7,7 @@ mod common;
 
 #[test]
 fn pic_dam_break_energy_stays_under_noise_floor() {
-    let mut mat = Material::water(1.5e4);
+    let mut mat = Material::tait(1.5e4);
     mat.eos = EosKind::Power;
     mat.gamma = 7.0;
     mat.viscosity = 0.5;

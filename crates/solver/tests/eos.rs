@@ -12,7 +12,7 @@ fn materials() -> Vec<Material> {
         (EosKind::Tait, 7.0),
         (EosKind::Linear, 1.0),
     ] {
-        let mut m = Material::water(1.5e6);
+        let mut m = Material::tait(1.5e6);
         m.eos = eos;
         m.gamma = gamma;
         out.push(m);
@@ -71,7 +71,7 @@ fn signs_zero_point_and_inverse() {
 
 #[test]
 fn tangent_modulus_values_from_physics_md() {
-    let mut m = Material::water(1.0);
+    let mut m = Material::tait(1.0);
     m.eos = EosKind::Tait;
     // PHYSICS.md: Tait at J = 0.81 is about 6.8 K.
     let kt = m.eos(0.81).tangent_modulus;
@@ -84,7 +84,7 @@ fn tangent_modulus_values_from_physics_md() {
 
 #[test]
 fn thermal_jres_and_tension_cutoff() {
-    let mut m = Material::water(1.5e6);
+    let mut m = Material::tait(1.5e6);
     m.j_res = 1.02;
     assert!(
         m.eos(1.02).pressure.abs() < 1e-9,
@@ -92,7 +92,7 @@ fn thermal_jres_and_tension_cutoff() {
     );
     assert_eq!(
         m.eos(0.99).pressure,
-        Material::water(1.5e6).eos(0.99 / 1.02).pressure
+        Material::tait(1.5e6).eos(0.99 / 1.02).pressure
     );
     m.pressure_floor = Some(-100.0);
     assert_eq!(m.pressure(1.2), -100.0);
@@ -111,7 +111,7 @@ fn eval_run_matches_eos_bit_for_bit() {
         .collect();
     let mut cases = materials();
     for (eos, gamma) in [(EosKind::Power, 2.5), (EosKind::Power, 16.0)] {
-        let mut m = Material::water(1.5e6);
+        let mut m = Material::tait(1.5e6);
         m.eos = eos;
         m.gamma = gamma;
         cases.push(m);

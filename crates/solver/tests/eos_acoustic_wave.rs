@@ -8,7 +8,7 @@ mod common;
 /// Period from the zero crossings of the mode amplitude sum m v_x sin(2 pi x / L).
 fn measured_period(eos: EosKind, gamma: f64, k: f64) -> (f64, f64) {
     let length = 0.5;
-    let mut mat = Material::water(k);
+    let mut mat = Material::tait(k);
     mat.eos = eos;
     mat.gamma = gamma;
     let c = mat.wave_speed(1.0);

@@ -34,7 +34,7 @@ fn relative_rms(v: &StateView, reference: &[f64], keep: impl Fn(usize) -> bool) 
 
 #[test]
 fn hydrostatic_column_stays_at_rest() {
-    let mut mat = Material::water(1.5e6);
+    let mut mat = Material::tait(1.5e6);
     mat.eos = EosKind::Tait;
     mat.viscosity = 0.5;
     let mut scene = common::box_scene([0.2, 0.6], [0.0, 0.0, 0.2, 0.4], mat, 9.81);

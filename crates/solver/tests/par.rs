@@ -1,4 +1,4 @@
-//! The parallel helpers: fixed pieces, ordered sums and `keep_warm`.
+//! The parallel helpers: fixed pieces, ordered folds and `keep_warm`.
 
 use solver::par;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -10,18 +10,47 @@ fn pool(threads: usize) -> rayon::ThreadPool {
         .unwrap()
 }
 
-/// An ordered sum whose terms differ by many orders of magnitude: any other
-/// summation order would change the last bits.
-fn ordered_sum(n: usize) -> f64 {
-    let mut partials = vec![[0.0f64; 1]; par::chunk_count(n)];
-    let [s] = par::sum(n, &mut partials, |i| {
-        [(i as f64 * 0.37).sin() * 10f64.powi((i % 13) as i32)]
-    });
-    s
+/// A chunked fold as `measure` runs it (a sum, a count and a max per chunk,
+/// combined in chunk order). The summed terms differ by many orders of
+/// magnitude: any other summation order would change the last bits.
+fn ordered_fold(n: usize) -> (f64, usize, f64) {
+    let mut partials = vec![(0.0, 0, 0.0); par::chunk_count(n)];
+    par::fold(
+        n,
+        &mut partials,
+        (0.0, 0, f64::NEG_INFINITY),
+        |acc, i| {
+            let t = (i as f64 * 0.37).sin() * 10f64.powi((i % 13) as i32);
+            acc.0 += t;
+            acc.1 += (t > 0.0) as usize;
+            acc.2 = acc.2.max(t);
+        },
+        |total, part| {
+            total.0 += part.0;
+            total.1 += part.1;
+            total.2 = total.2.max(part.2);
+        },
+    )
+}
+
+/// The same fold term by term on one thread, chunk sums added in chunk order.
+fn reference_fold(n: usize) -> (f64, usize, f64) {
+    let mut total = (0.0, 0, f64::NEG_INFINITY);
+    for c in 0..par::chunk_count(n) {
+        let mut sum = 0.0;
+        for i in c * par::CHUNK..((c + 1) * par::CHUNK).min(n) {
+            let t = (i as f64 * 0.37).sin() * 10f64.powi((i % 13) as i32);
+            sum += t;
+            total.1 += (t > 0.0) as usize;
+            total.2 = total.2.max(t);
+        }
+        total.0 += sum;
+    }
+    total
 }
 
 #[test]
-fn sums_have_the_same_bits_for_any_thread_count_and_size() {
+fn folds_have_the_same_bits_for_any_thread_count_and_size() {
     for n in [
         1,
         1000,
@@ -29,13 +58,16 @@ fn sums_have_the_same_bits_for_any_thread_count_and_size() {
         par::MIN_PARALLEL,
         3 * par::MIN_PARALLEL + 7,
     ] {
-        let one = pool(1).install(|| ordered_sum(n));
-        let two = pool(2).install(|| ordered_sum(n));
-        let three = pool(3).install(|| ordered_sum(n));
-        let outside = ordered_sum(n);
-        assert_eq!(one.to_bits(), two.to_bits(), "n = {n}");
-        assert_eq!(one.to_bits(), three.to_bits(), "n = {n}");
-        assert_eq!(one.to_bits(), outside.to_bits(), "n = {n}");
+        let bits = |(s, c, m): (f64, usize, f64)| (s.to_bits(), c, m.to_bits());
+        let reference = bits(reference_fold(n));
+        let one = bits(pool(1).install(|| ordered_fold(n)));
+        let two = bits(pool(2).install(|| ordered_fold(n)));
+        let three = bits(pool(3).install(|| ordered_fold(n)));
+        let outside = bits(ordered_fold(n));
+        assert_eq!(one, reference, "n = {n}");
+        assert_eq!(one, two, "n = {n}");
+        assert_eq!(one, three, "n = {n}");
+        assert_eq!(one, outside, "n = {n}");
     }
 }
 

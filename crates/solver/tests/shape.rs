@@ -1,5 +1,7 @@
 //! Partition of unity and zero gradient sum for every shape family, and the
-//! kernel derivative against finite differences.
+//! kernel derivative against finite differences; the weights the stages
+//! compute (`locate` + `stencil_weights`) against the kernel and the
+//! completeness conditions, on and around every stencil boundary.
 
 use solver::shape::Shape;
 use solver::ShapeKind;
@@ -68,6 +70,142 @@ fn stencil_width_covers_support() {
             let after = shape.kernel(x - (w.base + shape.width() as i64) as f64).0;
             assert_eq!(before, 0.0, "{kind:?} at {x}");
             assert_eq!(after, 0.0, "{kind:?} at {x}");
+        }
+    }
+}
+
+/// Positions (cell units) on and around every place where a stencil or a
+/// kernel piece changes: nodes and half-nodes with their neighbouring
+/// floats, the GIMP breakpoints (l, 1 - l, 1 + l from a node), tiny and
+/// small offsets, and an even sweep; near the origin and far from it.
+fn edge_positions(gimp_half: f64) -> Vec<f64> {
+    let mut offsets = vec![0.0, 0.5, gimp_half, 1.0 - gimp_half, 1.0 + gimp_half];
+    for d in [1e-15, 1e-12, 1e-9, 1e-6, 1e-3, 0.25] {
+        for o in [0.0, 0.5, gimp_half, 1.0 - gimp_half] {
+            offsets.extend([o + d, o - d]);
+        }
+    }
+    offsets.extend((0..500).map(|k| k as f64 * 0.002_003));
+    let mut out = vec![];
+    for node in [2.0, 3.0, 17.0, 1000.0] {
+        for &o in &offsets {
+            let x: f64 = node + o;
+            out.extend([
+                x,
+                f64::from_bits(x.to_bits() + 1),
+                f64::from_bits(x.to_bits() - 1),
+            ]);
+        }
+    }
+    out
+}
+
+/// The 1D and 2D (tensor-product) weights the stages compute, `locate` then
+/// `stencil_weights`, at a particle `x` cells from node 0.
+fn check_stage_weights<const W: usize>(shape: &Shape, x: f64) -> [f64; 4] {
+    let eps = f64::EPSILON;
+    let what = format!("{shape:?} at x = {x:e}");
+    let (base, f) = shape.locate(x);
+    let (w, dw) = shape.stencil_weights::<W>(f);
+    // The stencil's first node and the offset range it implies.
+    let lo = match shape.kind {
+        ShapeKind::Linear => 0.0,
+        ShapeKind::Gimp | ShapeKind::Bspline2 => 0.5,
+        ShapeKind::Bspline3 => 1.0,
+    };
+    assert!((lo..lo + 1.0).contains(&f), "{what}: offset {f}");
+    assert_eq!(base as f64 + f, x, "{what}: base {base} + {f}");
+    // Nodes just outside the stencil carry nothing.
+    assert_eq!(shape.kernel(f + 1.0), (0.0, 0.0), "{what}");
+    assert_eq!(shape.kernel(f - W as f64), (0.0, 0.0), "{what}");
+    let mut err = [0.0f64; 4];
+    // Agreement with the kernel node by node (its argument f - k may round).
+    for k in 0..W {
+        let (n, dn) = shape.kernel(f - k as f64);
+        err[0] = err[0].max((w[k] - n).abs()).max((dw[k] - dn).abs());
+        assert!(w[k] >= 0.0, "{what}: N_{k} = {}", w[k]);
+    }
+    // Partition of unity, zero gradient sum, linear completeness: sums of
+    // W terms of size <= 1 (times k < W for the moments).
+    let sum: f64 = w.iter().sum();
+    let dsum: f64 = dw.iter().sum();
+    let moment: f64 = (0..W).map(|k| w[k] * k as f64).sum();
+    let dmoment: f64 = (0..W).map(|k| dw[k] * k as f64).sum();
+    err[1] = err[1].max((sum - 1.0).abs()).max(dsum.abs());
+    err[2] = err[2].max((moment - f).abs()).max((dmoment - 1.0).abs());
+    // In absolute node coordinates: sum N_i x_i = x to round-off of x.
+    let absolute: f64 = (0..W).map(|k| w[k] * (base + k as i64) as f64).sum();
+    assert!(
+        (absolute - x).abs() <= 4.0 * eps * x,
+        "{what}: sum N x = {absolute}"
+    );
+    // 2D as the stages take it: N = Nx Ny, grad N = (dNx Ny, Nx dNy).
+    let (mut sum2, mut grad2, mut moment2) = (0.0, [0.0; 2], [[0.0; 2]; 2]);
+    for c in 0..W {
+        for a in 0..W {
+            let n = w[a] * w[c];
+            let g = [dw[a] * w[c], w[a] * dw[c]];
+            let xi = [a as f64, c as f64];
+            sum2 += n;
+            for r in 0..2 {
+                grad2[r] += g[r];
+                for s in 0..2 {
+                    // sum_i grad N_i x_i^T = I.
+                    moment2[r][s] += g[r] * xi[s];
+                }
+            }
+        }
+    }
+    err[3] = err[3]
+        .max((sum2 - 1.0).abs())
+        .max(grad2[0].abs().max(grad2[1].abs()));
+    for (r, row) in moment2.iter().enumerate() {
+        for (s, m) in row.iter().enumerate() {
+            let id = if r == s { 1.0 } else { 0.0 };
+            err[3] = err[3].max((m - id).abs());
+        }
+    }
+    for (e, bound, name) in [
+        (err[0], 2.0, "kernel agreement"),
+        (err[1], 4.0, "unity / gradient sum"),
+        (err[2], 8.0, "linear completeness"),
+        (err[3], 16.0, "2D sums"),
+    ] {
+        assert!(e <= bound * eps, "{what}: {name} off by {e:e}");
+    }
+    err
+}
+
+/// What P2G, G2P and the stress stage use (`locate`, then the closed-form
+/// `stencil_weights`) for every shape: partition of unity, zero gradient
+/// sum, sum N_i x_i = x_p and sum dN_i x_i = 1 (in 2D: sum grad N_i x_i^T =
+/// I), and the same values and derivatives as `kernel` node by node, at
+/// positions on and around every stencil and kernel-piece boundary.
+#[test]
+fn stage_weights_are_complete_and_match_the_kernel() {
+    for kind in common::SHAPES {
+        for ppc in [1, 2, 3] {
+            let shape = Shape::new(kind, ppc);
+            let positions = edge_positions(0.5 / ppc as f64);
+            let mut worst = [0.0f64; 4];
+            for &x in &positions {
+                let err = match shape.width() {
+                    2 => check_stage_weights::<2>(&shape, x),
+                    3 => check_stage_weights::<3>(&shape, x),
+                    _ => check_stage_weights::<4>(&shape, x),
+                };
+                for (w, e) in worst.iter_mut().zip(err) {
+                    *w = w.max(e / f64::EPSILON);
+                }
+            }
+            eprintln!(
+                "{kind:?} ppc {ppc}: {} positions, max error in ulps: kernel {:.1}, unity {:.1}, completeness {:.1}, 2D {:.1}",
+                positions.len(),
+                worst[0],
+                worst[1],
+                worst[2],
+                worst[3]
+            );
         }
     }
 }

@@ -51,7 +51,7 @@ fn step_does_not_allocate() {
         for shape in common::SHAPES {
             for transfer in common::TRANSFERS {
                 for scheme in common::SCHEMES {
-                    let mut mat = Material::water(1.5e4);
+                    let mut mat = Material::tait(1.5e4);
                     mat.viscosity = 0.5;
                     let cfg = SolverConfig {
                         scene: Scene::dam_break(mat),

@@ -10,7 +10,7 @@ fn periodic_swirl(shape: ShapeKind, transfer: TransferKind, scheme: SchemeKind) 
     let mut scene = common::box_scene(
         [0.3, 0.3],
         [0.05, 0.07, 0.22, 0.25],
-        Material::water(1e4),
+        Material::tait(1e4),
         0.0,
     );
     scene.periodic = [true, true];
@@ -73,7 +73,7 @@ fn periodic_momentum_is_conserved_to_round_off() {
 #[test]
 fn grid_mass_equals_particle_mass_with_walls() {
     for shape in common::SHAPES {
-        let scene = Scene::dam_break(Material::water(1.5e4));
+        let scene = Scene::dam_break(Material::tait(1.5e4));
         let mut s = common::solver(
             scene,
             common::method(shape, TransferKind::Flip, SchemeKind::Usf),
@@ -95,7 +95,7 @@ fn free_slip_floor_keeps_tangential_momentum() {
     for shape in common::SHAPES {
         for transfer in common::TRANSFERS {
             let mut scene =
-                common::box_scene([1.2, 0.3], [0.5, 0.0, 0.6, 0.1], Material::water(1e4), 9.81);
+                common::box_scene([1.2, 0.3], [0.5, 0.0, 0.6, 0.1], Material::tait(1e4), 9.81);
             scene.bodies[0].velocity = [0.7, 0.0];
             let mut s = common::solver(scene, common::method(shape, transfer, SchemeKind::Usf));
             let mass: f64 = s.view().mass.iter().sum();

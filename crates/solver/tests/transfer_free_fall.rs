@@ -13,7 +13,7 @@ fn free_fall_is_exact() {
         for transfer in common::TRANSFERS {
             for scheme in common::SCHEMES {
                 let scene =
-                    common::box_scene([0.6, 0.6], [0.2, 0.3, 0.3, 0.4], Material::water(1.5e5), g);
+                    common::box_scene([0.6, 0.6], [0.2, 0.3, 0.3, 0.4], Material::tait(1.5e5), g);
                 let mut s = common::solver(scene, common::method(shape, transfer, scheme));
                 let x0: Vec<Vec2> = s.view().x.to_vec();
                 for _ in 0..200 {

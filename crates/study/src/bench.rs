@@ -33,7 +33,7 @@ pub struct BenchOptions {
 pub fn mpm88() -> (SolverConfig, Particles) {
     let n_grid = 128;
     let h = 1.0 / n_grid as f64;
-    let mut mat = Material::water(400.0);
+    let mut mat = Material::tait(400.0);
     mat.rho0 = 1.0;
     mat.eos = EosKind::Linear;
     let scene = Scene {
@@ -55,7 +55,7 @@ pub fn mpm88() -> (SolverConfig, Particles) {
         scheme: SchemeKind::Usl,
         cfl: 1.0,
         dt: DtMode::Fixed,
-        dt_override: Some(2e-4),
+        dt_value: Some(2e-4),
         j_update: JUpdate::Det,
     };
     let mut ps = Particles::default();

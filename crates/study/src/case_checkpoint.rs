@@ -26,9 +26,7 @@ pub fn load(
     let mut r = Reader(unseal(bytes, MAGIC)?);
     let s = r.bytes()?;
     let m = r.bytes()?;
-    if !r.is_empty() {
-        return Err(CheckpointError::Truncated);
-    }
+    r.finish()?;
     solver.restore(s)?;
     monitor.restore_state(m)
 }

@@ -104,10 +104,10 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         threads: usize,
         /// Shape function (dam_break only).
-        #[arg(long, value_parser = parse_shape, default_value = "linear")]
+        #[arg(long, value_parser = parse_choice::<ShapeKind>, default_value = "linear")]
         shape: ShapeKind,
         /// Transfer (dam_break only).
-        #[arg(long, value_parser = parse_transfer, default_value = "flip")]
+        #[arg(long, value_parser = parse_choice::<TransferKind>, default_value = "flip")]
         transfer: TransferKind,
         /// Cell size in metres (dam_break only; 0.0025 gives 51 200 particles).
         #[arg(long, default_value_t = 0.01)]
@@ -115,15 +115,17 @@ enum Command {
     },
 }
 
-fn parse_shape(s: &str) -> Result<ShapeKind, String> {
-    serde_json::from_value(serde_json::Value::String(s.into())).map_err(|_| {
-        format!("\"{s}\" is not allowed (allowed: linear | gimp | bspline2 | bspline3)")
+/// A method choice by its study-file name (the serde spelling is the only one).
+fn parse_choice<T: serde::de::DeserializeOwned>(s: &str) -> Result<T, String> {
+    serde_json::from_value(serde_json::Value::String(s.into())).map_err(|e| {
+        // serde's "unknown variant `x`, expected one of `a`, `b`" without the line and column.
+        let message = e.to_string();
+        message
+            .split(" at line")
+            .next()
+            .unwrap_or(&message)
+            .to_string()
     })
-}
-
-fn parse_transfer(s: &str) -> Result<TransferKind, String> {
-    serde_json::from_value(serde_json::Value::String(s.into()))
-        .map_err(|_| format!("\"{s}\" is not allowed (allowed: pic | flip | apic)"))
 }
 
 /// Exit code for bad input (study files, keys, values, case names).
@@ -169,16 +171,16 @@ fn main() -> ExitCode {
                 csv,
             };
             match run_case::run_case(chosen, &dir, &opts) {
-                Ok(summary) => {
+                Ok(s) => {
                     println!(
                         "case {}: {} after {} steps, t = {:.4} s ({}), wall {:.1} s, {:.2} M particle-steps/s",
                         chosen.name,
-                        summary["status"].as_str().unwrap_or("?"),
-                        summary["steps"],
-                        summary["t_end"].as_f64().unwrap_or(0.0),
-                        summary["reason"].as_str().filter(|r| !r.is_empty()).unwrap_or("no fault"),
-                        summary["wall_s"].as_f64().unwrap_or(0.0),
-                        summary["particle_steps_per_s"].as_f64().unwrap_or(0.0) / 1e6
+                        s.status.as_str(),
+                        s.steps,
+                        s.t_end,
+                        if s.reason.is_empty() { "no fault" } else { &s.reason },
+                        s.wall_s,
+                        s.particle_steps_per_s / 1e6
                     );
                     println!("results in {}", dir.display());
                     ExitCode::SUCCESS

@@ -2,12 +2,13 @@
 //! a progress bar per running case and one overall, resumable, shardable
 //! across a cluster, and joined into OUT/summary.{parquet,csv} + manifest.json.
 
-use crate::output_files::write_atomic;
+use crate::output_files::{relative_path, write_atomic};
 use crate::run_case::{progress_style, run_case, RunOptions};
 use crate::study_file::{Case, Study};
-use crate::tables;
+use crate::summary::{Status, Summary};
+use crate::tables::{self, SummaryRow};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
-use serde_json::{json, Value};
+use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -57,18 +58,16 @@ pub fn estimated_cost(case: &Case) -> f64 {
     particles * s.t_end / dt
 }
 
-/// A finished case's summary, if its folder holds a readable one.
-pub fn finished_summary(dir: &Path) -> Option<Value> {
-    let bytes = std::fs::read(dir.join("summary.json")).ok()?;
-    let v: Value = serde_json::from_slice(&bytes).ok()?;
-    v["status"].as_str()?;
-    Some(v)
+/// A finished case's summary, if its folder holds a readable one of this
+/// schema version (anything else is run again by `--resume`).
+pub fn finished_summary(dir: &Path) -> Option<Summary> {
+    Summary::read(dir).ok()
 }
 
 pub struct MatrixResult {
     pub ran: usize,
     pub skipped: usize,
-    pub rows: Vec<(String, Value)>,
+    pub rows: Vec<SummaryRow>,
     pub wall_s: f64,
 }
 
@@ -136,11 +135,9 @@ pub fn run_matrix(study: &Study, opts: &MatrixOptions) -> std::io::Result<Matrix
                 };
                 let dir = opts.out.join(&case.name);
                 match run_case(case, &dir, &ro) {
-                    Ok(s) => overall.set_message(format!(
-                        "last: {} {}",
-                        case.name,
-                        s["status"].as_str().unwrap_or("?")
-                    )),
+                    Ok(s) => {
+                        overall.set_message(format!("last: {} {}", case.name, s.status.as_str()))
+                    }
                     Err(e) => failures
                         .lock()
                         .expect("not poisoned")
@@ -157,11 +154,13 @@ pub fn run_matrix(study: &Study, opts: &MatrixOptions) -> std::io::Result<Matrix
     if !failures.is_empty() {
         return Err(std::io::Error::other(failures.join("; ")));
     }
-    let rows: Vec<(String, Value)> = selected
+    let rows: Vec<SummaryRow> = selected
         .iter()
         .filter_map(|c| {
-            let dir = opts.out.join(&c.name);
-            finished_summary(&dir).map(|s| (c.name.clone(), s))
+            finished_summary(&opts.out.join(&c.name)).map(|summary| SummaryRow {
+                case_dir: c.name.clone(),
+                summary,
+            })
         })
         .collect();
     tables::write_summary(&rows, &opts.out)?;
@@ -176,10 +175,10 @@ pub fn run_matrix(study: &Study, opts: &MatrixOptions) -> std::io::Result<Matrix
 }
 
 /// Joins the case folders of several matrix outputs (e.g. shards) into OUT's
-/// summary table; the rows keep each case's folder in `case_dir`.
-pub fn merge(dirs: &[PathBuf], out: &Path) -> std::io::Result<Vec<(String, Value)>> {
+/// summary table; `case_dir` is each case's folder relative to OUT.
+pub fn merge(dirs: &[PathBuf], out: &Path) -> std::io::Result<Vec<SummaryRow>> {
     std::fs::create_dir_all(out)?;
-    let mut rows: Vec<(String, Value)> = vec![];
+    let mut rows: Vec<SummaryRow> = vec![];
     for d in dirs {
         let mut entries: Vec<PathBuf> = std::fs::read_dir(d)?
             .filter_map(|e| e.ok().map(|e| e.path()))
@@ -187,10 +186,12 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> std::io::Result<Vec<(String, Value
             .collect();
         entries.sort();
         for case_dir in entries {
-            if let Some(s) = finished_summary(&case_dir) {
-                let name = s["case"].as_str().unwrap_or_default().to_string();
-                rows.retain(|(_, r)| r["case"].as_str() != Some(&name));
-                rows.push((case_dir.display().to_string(), s));
+            if let Some(summary) = finished_summary(&case_dir) {
+                rows.retain(|r| r.summary.case != summary.case);
+                rows.push(SummaryRow {
+                    case_dir: relative_path(out, &case_dir),
+                    summary,
+                });
             }
         }
     }
@@ -198,7 +199,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> std::io::Result<Vec<(String, Value
     let m = json!({
         "state": "merged",
         "merged_from": dirs.iter().map(|d| d.display().to_string()).collect::<Vec<_>>(),
-        "cases": rows.iter().map(|(_, s)| s["case"].clone()).collect::<Vec<_>>(),
+        "cases": rows.iter().map(|r| r.summary.case.clone()).collect::<Vec<_>>(),
     });
     write_atomic(
         &out.join("manifest.json"),
@@ -208,36 +209,46 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> std::io::Result<Vec<(String, Value
 }
 
 /// The one-paragraph matrix summary printed at the end.
-pub fn describe(rows: &[(String, Value)]) -> String {
-    let count = |st: &str| rows.iter().filter(|(_, s)| s["status"] == st).count();
-    let kicked: Vec<&str> = rows
-        .iter()
-        .filter(|(_, s)| s["metrics"]["t_first_kick"].is_number())
-        .map(|(_, s)| s["case"].as_str().unwrap_or("?"))
-        .collect();
+pub fn describe(rows: &[SummaryRow]) -> String {
+    let count = |st: Status| rows.iter().filter(|r| r.summary.status == st).count();
+    let kicked = rows.iter().filter(|r| r.summary.kicked()).count();
     let mut text = format!(
         "{} cases: {} completed, {} blew up, {} failed; {} kicked",
         rows.len(),
-        count("completed"),
-        count("blew_up"),
-        count("failed"),
-        kicked.len()
+        count(Status::Completed),
+        count(Status::BlewUp),
+        count(Status::Failed),
+        kicked
     );
-    for (_, s) in rows {
-        let m = &s["metrics"];
+    for r in rows {
+        let s = &r.summary;
         text.push_str(&format!(
             "\n  {:<32} {:<9} t = {:>6.3} s  first kick {:>8}  hydro late {:>9}  wall {:>7.1} s",
-            s["case"].as_str().unwrap_or("?"),
-            s["status"].as_str().unwrap_or("?"),
-            s["t_end"].as_f64().unwrap_or(0.0),
-            m["t_first_kick"]
-                .as_f64()
+            s.case,
+            s.status.as_str(),
+            s.t_end,
+            s.metrics
+                .t_first_kick
                 .map_or("-".into(), |t| format!("{t:.3} s")),
-            m["hydro_rel_rms_late"]
-                .as_f64()
+            s.metrics
+                .hydro_rel_rms_late
                 .map_or("-".into(), |h| format!("{h:.3e}")),
-            s["wall_s"].as_f64().unwrap_or(0.0),
+            s.wall_s,
         ));
     }
     text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_shard;
+
+    #[test]
+    fn shards_are_i_of_n_with_i_below_n() {
+        assert_eq!(parse_shard("0/4"), Ok((0, 4)));
+        assert_eq!(parse_shard("3/4"), Ok((3, 4)));
+        for bad in ["4/4", "1/0", "x/2", "1", "-1/2", "1/2/3", ""] {
+            assert!(parse_shard(bad).is_err(), "{bad}");
+        }
+    }
 }

@@ -1,9 +1,9 @@
 //! Case metrics for summary.json, computed from the timeseries and events
-//! (PHYSICS.md section 4: "late" = the last simulated second).
+//! (docs/physics.md section 4: "late" = the last simulated second).
 
+use crate::summary::Metrics;
 use crate::timeseries::Timeseries;
 use monitor::{Event, EventKind};
-use serde_json::{json, Value};
 
 /// Martin & Moyce (1952), a = 2.25 in, n^2 = 2: (T, Z) pairs (source in the file).
 const MARTIN_MOYCE: &str = include_str!("../../../data/martin_moyce_1952_a2.25in.csv");
@@ -60,8 +60,8 @@ pub fn front_rms_error(ts: &Timeseries, z_wall: f64) -> Option<f64> {
     (n > 0).then(|| (sum / n as f64).sqrt())
 }
 
-/// The summary.json metrics block.
-pub fn summarise(ts: &Timeseries, events: &[Event], z_wall: Option<f64>) -> Value {
+/// The summary.json metrics block (`events_dropped` is the monitor's to fill).
+pub fn summarise(ts: &Timeseries, events: &[Event], z_wall: Option<f64>) -> Metrics {
     let t = ts.column("t");
     let t_last = t.last().copied().unwrap_or(0.0);
     let late = |name: &str| {
@@ -86,17 +86,72 @@ pub fn summarise(ts: &Timeseries, events: &[Event], z_wall: Option<f64>) -> Valu
         .map(|e| e.t)
         .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.min(t))));
     let count = |k: EventKind| events.iter().filter(|e| e.kind == k).count();
-    json!({
-        "hydro_rel_rms_late": late("hydro_rel_rms"),
-        "hydro_max_late": late("hydro_max"),
-        "checkerboard_late": late("checkerboard"),
-        "checkerboard_peak": peak("checkerboard"),
-        "energy_injected_max": peak("energy_injected"),
-        "t_first_kick": first_kick,
-        "n_kicks": count(EventKind::Kick),
-        "n_energy_injections": count(EventKind::EnergyInjection),
-        "courant_max": peak("courant"),
-        "max_accel_g": peak("max_accel_g"),
-        "front_rms_error": z_wall.and_then(|z| front_rms_error(ts, z)),
-    })
+    Metrics {
+        hydro_rel_rms_late: late("hydro_rel_rms"),
+        hydro_max_late: late("hydro_max"),
+        checkerboard_late: late("checkerboard"),
+        checkerboard_peak: peak("checkerboard"),
+        energy_injected_max: peak("energy_injected"),
+        t_first_kick: first_kick,
+        n_kicks: count(EventKind::Kick),
+        n_energy_injections: count(EventKind::EnergyInjection),
+        courant_max: peak("courant"),
+        max_accel_g: peak("max_accel_g"),
+        front_rms_error: z_wall.and_then(|z| front_rms_error(ts, z)),
+        events_dropped: 0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::timeseries::Peaks;
+    use monitor::{FieldMetrics, StepReport};
+
+    /// A timeseries whose only content is the front trajectory (T, Z).
+    fn front(points: &[(f64, f64)]) -> Timeseries {
+        let mut ts = Timeseries::new();
+        for (k, &(t, z)) in points.iter().enumerate() {
+            let fields = FieldMetrics {
+                front_t: t,
+                front_z: Some(z),
+                ..Default::default()
+            };
+            let report = StepReport {
+                step: k as u64,
+                ..Default::default()
+            };
+            ts.push(&report, &Peaks::default(), &fields);
+        }
+        ts
+    }
+
+    #[test]
+    fn front_error_is_the_rms_over_the_data_short_of_the_wall() {
+        let data = martin_moyce();
+        assert_eq!(data.len(), 15);
+        // Z_sim = Z_data + e_k at each data time (exact: the interpolation is linear
+        // between the rows). Below the wall at Z = 4 are the first four data points.
+        let offsets = [0.1, 0.2, 0.3, 0.4];
+        let mut pts = vec![(0.0, 1.0)];
+        for (k, &(t, z)) in data.iter().enumerate() {
+            pts.push((t, z + offsets.get(k).copied().unwrap_or(5.0)));
+        }
+        let want = ((0.01 + 0.04 + 0.09 + 0.16) / 4.0f64).sqrt();
+        let got = front_rms_error(&front(&pts), 4.0).unwrap();
+        assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+        // A constant offset gives exactly that offset.
+        let shifted: Vec<(f64, f64)> = data.iter().map(|&(t, z)| (t, z - 0.25)).collect();
+        let got = front_rms_error(&front(&shifted), 100.0).unwrap();
+        assert!((got - 0.25).abs() < 1e-12, "{got}");
+        // Data times outside the run are skipped; no overlap gives no figure.
+        let early = front(&[(0.0, 1.0), (1.0, 1.5)]);
+        let got = front_rms_error(&early, 100.0).unwrap();
+        let z_at = 1.0 + 0.5 * 0.832;
+        assert!((got - (z_at - 1.217f64).abs()).abs() < 1e-12, "{got}");
+        assert_eq!(
+            front_rms_error(&front(&[(0.0, 1.0), (0.5, 1.1)]), 100.0),
+            None
+        );
+    }
 }

@@ -9,9 +9,10 @@ use crate::output_files::write_atomic;
 use crate::run_case::{with_threads, Driver, Stepped};
 use crate::snapshot::Snapshot;
 use crate::study_file;
+use crate::summary::Summary;
 use crate::tables;
 use monitor::Event;
-use serde_json::{json, Value};
+use serde_json::json;
 use std::path::{Path, PathBuf};
 
 pub struct ReproduceOptions {
@@ -33,25 +34,12 @@ pub struct Outcome {
     pub out: PathBuf,
 }
 
-fn read_json(path: &Path) -> Result<Value, ReproduceError> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| ReproduceError(format!("{}: cannot read: {e}", path.display())))?;
-    serde_json::from_slice(&bytes)
-        .map_err(|e| ReproduceError(format!("{}: not valid JSON: {e}", path.display())))
-}
-
 pub fn reproduce(
     case_dir: &Path,
     id: u32,
     opts: &ReproduceOptions,
 ) -> Result<Outcome, ReproduceError> {
-    let summary = read_json(&case_dir.join("summary.json"))?;
-    let events: Vec<Event> = serde_json::from_value(summary["events"].clone()).map_err(|e| {
-        ReproduceError(format!(
-            "{}: key `events`: {e}",
-            case_dir.join("summary.json").display()
-        ))
-    })?;
+    let events = Summary::read(case_dir).map_err(ReproduceError)?.events;
     let Some(logged) = events.iter().find(|e| e.id == id).cloned() else {
         let ids: Vec<String> = events.iter().map(|e| e.id.to_string()).collect();
         return Err(ReproduceError(format!(

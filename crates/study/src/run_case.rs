@@ -8,12 +8,13 @@ use crate::metrics;
 use crate::output_files::write_atomic;
 use crate::snapshot::Snapshot;
 use crate::study_file::Case;
+use crate::summary::{Metrics, Status, Summary, SCHEMA_VERSION};
 use crate::tables;
 use crate::timeseries::{Peaks, Timeseries};
 use indicatif::{ProgressBar, ProgressStyle};
 use monitor::{Event, Monitor};
 use serde_json::{json, Value};
-use solver::{Scene, Solver};
+use solver::{Scene, Solver, StateView};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -32,23 +33,6 @@ pub struct RunOptions {
     pub bar: Option<ProgressBar>,
     /// Also write the timeseries as CSV.
     pub csv: bool,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Status {
-    Completed,
-    BlewUp,
-    Failed,
-}
-
-impl Status {
-    pub fn as_str(&self) -> &'static str {
-        match self {
-            Status::Completed => "completed",
-            Status::BlewUp => "blew_up",
-            Status::Failed => "failed",
-        }
-    }
 }
 
 /// What one step did.
@@ -127,7 +111,7 @@ pub fn front_wall_z(scene: &Scene) -> Option<f64> {
 
 /// Runs a case into `dir` and returns its summary (also written as summary.json).
 /// Panics inside the solver become status "failed"; nothing else is lost.
-pub fn run_case(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Value> {
+pub fn run_case(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Summary> {
     std::fs::create_dir_all(dir)?;
     write_atomic(
         &dir.join("case.toml"),
@@ -144,30 +128,31 @@ pub fn run_case(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<V
         Ok(r) => r?,
         Err(panic) => Simulated::failed(format!("panic: {}", panic_message(panic))),
     };
-    let params: serde_json::Map<String, Value> = case
-        .params
-        .iter()
-        .map(|(k, v)| (k.clone(), toml_to_json(v)))
-        .collect();
     let particle_steps = run.particles as f64 * run.steps as f64;
-    let summary = json!({
-        "case": case.name,
-        "params": params,
-        "status": run.status.as_str(),
-        "reason": run.reason,
-        "steps": run.steps,
-        "t_end": run.t_end,
-        "wall_s": wall_s,
-        "particles": run.particles,
-        "particle_steps_per_s": if wall_s > 0.0 { particle_steps / wall_s } else { 0.0 },
-        "final_state_hash": format!("{:016x}", run.final_hash),
-        "events": run.events,
-        "metrics": run.metrics,
-    });
-    write_atomic(
-        &dir.join("summary.json"),
-        serde_json::to_string_pretty(&summary)?.as_bytes(),
-    )?;
+    let summary = Summary {
+        schema_version: SCHEMA_VERSION,
+        case: case.name.clone(),
+        params: case
+            .params
+            .iter()
+            .map(|(k, v)| (k.clone(), toml_to_json(v)))
+            .collect(),
+        status: run.status,
+        reason: run.reason,
+        steps: run.steps,
+        t_end: run.t_end,
+        wall_s,
+        particles: run.particles,
+        particle_steps_per_s: if wall_s > 0.0 {
+            particle_steps / wall_s
+        } else {
+            0.0
+        },
+        final_state_hash: format!("{:016x}", run.final_hash),
+        events: run.events,
+        metrics: run.metrics,
+    };
+    summary.write(dir)?;
     Ok(summary)
 }
 
@@ -208,7 +193,7 @@ struct Simulated {
     particles: usize,
     final_hash: u64,
     events: Vec<Event>,
-    metrics: Value,
+    metrics: Metrics,
 }
 
 impl Simulated {
@@ -221,7 +206,7 @@ impl Simulated {
             particles: 0,
             final_hash: 0,
             events: vec![],
-            metrics: json!({}),
+            metrics: Metrics::default(),
         }
     }
 }
@@ -229,6 +214,182 @@ impl Simulated {
 /// A ring checkpoint's path relative to the case folder.
 pub fn ring_name(step: u64) -> String {
     format!("checkpoints/ring_{step:09}.ckpt")
+}
+
+/// Ring checkpoints every `every` steps (plus step 0), the last
+/// `CHECKPOINT_RING` kept, and any that precedes an event kept for good.
+struct CheckpointRing<'a> {
+    dir: &'a Path,
+    every: u64,
+    ring: Vec<(u64, PathBuf)>,
+    pinned: BTreeSet<u64>,
+}
+
+impl<'a> CheckpointRing<'a> {
+    /// Writes the step-0 checkpoint, which precedes any event, even one at step 1.
+    fn start(dir: &'a Path, every: u64, d: &Driver) -> std::io::Result<Self> {
+        let mut ring = CheckpointRing {
+            dir,
+            every,
+            ring: vec![],
+            pinned: BTreeSet::new(),
+        };
+        if every > 0 {
+            ring.save(0, d)?;
+        }
+        Ok(ring)
+    }
+
+    fn save(&mut self, step: u64, d: &Driver) -> std::io::Result<()> {
+        let path = self.dir.join(ring_name(step));
+        write_atomic(&path, &case_checkpoint::save(&d.solver, &d.monitor))?;
+        self.ring.push((step, path));
+        Ok(())
+    }
+
+    /// The latest checkpoint (it precedes an event opened now), kept for good.
+    fn pin_latest(&mut self) -> Option<String> {
+        let (step, _) = self.ring.last()?;
+        self.pinned.insert(*step);
+        Some(ring_name(*step))
+    }
+
+    fn after_step(&mut self, step: u64, d: &Driver) -> std::io::Result<()> {
+        if self.every == 0 || !step.is_multiple_of(self.every) {
+            return Ok(());
+        }
+        self.save(step, d)?;
+        if self.ring.len() > CHECKPOINT_RING {
+            let (old, path) = self.ring.remove(0);
+            if !self.pinned.contains(&old) {
+                let _ = std::fs::remove_file(path);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Particle frames around the first `EVENT_WINDOWS` events: every
+/// `EVENT_FRAME_EVERY` steps, `EVENT_FRAMES` before (from a ring of recent
+/// frames) to `EVENT_FRAMES` after, into `particles/event_K/`.
+struct EventFrames {
+    dir: PathBuf,
+    recent: Vec<Snapshot>,
+    next: usize,
+    now: Snapshot,
+    /// (event id, last step of its window)
+    open: Vec<(u32, u64)>,
+    opened: usize,
+}
+
+impl EventFrames {
+    fn new(dir: PathBuf, particles: usize) -> Self {
+        EventFrames {
+            dir,
+            recent: (0..EVENT_FRAMES)
+                .map(|_| Snapshot::with_capacity(particles))
+                .collect(),
+            next: 0,
+            now: Snapshot::with_capacity(particles),
+            open: vec![],
+            opened: 0,
+        }
+    }
+
+    fn write(dir: &Path, id: u32, snap: &Snapshot) -> std::io::Result<()> {
+        write_atomic(
+            &dir.join(format!("event_{id}"))
+                .join(format!("particles_{:09}.vtk", snap.step)),
+            &snap.vtk(),
+        )
+    }
+
+    /// Events `ids` opened at `step`: the recent frames and this one.
+    fn opened(&mut self, ids: &[u32], v: &StateView, step: u64) -> std::io::Result<()> {
+        self.now.capture(v);
+        for &id in ids {
+            if self.opened >= EVENT_WINDOWS {
+                break;
+            }
+            self.opened += 1;
+            for f in self
+                .recent
+                .iter()
+                .filter(|f| !f.x.is_empty() && f.step < step)
+            {
+                Self::write(&self.dir, id, f)?;
+            }
+            Self::write(&self.dir, id, &self.now)?;
+            self.open
+                .push((id, step + EVENT_FRAME_EVERY * EVENT_FRAMES as u64));
+        }
+        Ok(())
+    }
+
+    fn after_step(&mut self, v: &StateView, step: u64) -> std::io::Result<()> {
+        if !step.is_multiple_of(EVENT_FRAME_EVERY) {
+            return Ok(());
+        }
+        let f = &mut self.recent[self.next];
+        f.capture(v);
+        self.next = (self.next + 1) % EVENT_FRAMES;
+        self.open.retain(|&(_, until)| until >= step);
+        for &(id, _) in &self.open {
+            Self::write(&self.dir, id, f)?;
+        }
+        Ok(())
+    }
+}
+
+/// VTK files at the study's times (`output.vtk_times`), in order.
+struct VtkSchedule {
+    dir: PathBuf,
+    times: Vec<f64>,
+    next: usize,
+}
+
+impl VtkSchedule {
+    fn new(dir: PathBuf, mut times: Vec<f64>) -> Self {
+        times.sort_by(f64::total_cmp);
+        VtkSchedule {
+            dir,
+            times,
+            next: 0,
+        }
+    }
+
+    fn write(&self, s: &Solver) -> std::io::Result<()> {
+        let v = s.view();
+        write_atomic(
+            &self.dir.join(format!("particles_{:09}.vtk", v.step)),
+            &Snapshot::of(&v).vtk(),
+        )
+    }
+
+    /// Writes one file per time reached since the last call.
+    fn catch_up(&mut self, s: &Solver) -> std::io::Result<()> {
+        while self.next < self.times.len() && self.times[self.next] <= s.time() {
+            self.write(s)?;
+            self.next += 1;
+        }
+        Ok(())
+    }
+}
+
+/// Stamps the events opened this step with the state hash and the
+/// checkpoint before them; returns their ids.
+fn stamp_new_events(d: &mut Driver, ring: &mut CheckpointRing, opened: usize) -> Vec<u32> {
+    let hash = format!("{:016x}", d.solver.state_hash());
+    let checkpoint = ring.pin_latest();
+    let n = d.monitor.events().len();
+    d.monitor.events_mut()[n - opened..]
+        .iter_mut()
+        .map(|e| {
+            e.state_hash = Some(hash.clone());
+            e.checkpoint = checkpoint.clone();
+            e.id
+        })
+        .collect()
 }
 
 fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simulated> {
@@ -242,48 +403,12 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
     let bar = opts.bar.clone().unwrap_or_else(ProgressBar::hidden);
     bar.set_length(1000);
     bar.set_prefix(case.name.clone());
-    let mut vtk_times: Vec<f64> = case.output.vtk_times.clone();
-    vtk_times.sort_by(f64::total_cmp);
-    let mut next_vtk = 0;
     let particles_dir = dir.join("particles");
-    let write_vtk = |s: &Solver| -> std::io::Result<()> {
-        let v = s.view();
-        write_atomic(
-            &particles_dir.join(format!("particles_{:09}.vtk", v.step)),
-            &Snapshot::of(&v).vtk(),
-        )
-    };
-    let event_frame = |id: u32, snap: &Snapshot| -> std::io::Result<()> {
-        write_atomic(
-            &particles_dir
-                .join(format!("event_{id}"))
-                .join(format!("particles_{:09}.vtk", snap.step)),
-            &snap.vtk(),
-        )
-    };
-    let n = d.solver.particle_count();
-    let mut ring_frames: Vec<Snapshot> = (0..EVENT_FRAMES)
-        .map(|_| Snapshot::with_capacity(n))
-        .collect();
-    let mut frame_next = 0;
-    let mut now = Snapshot::with_capacity(n);
-    // (event id, last step of its window)
-    let mut windows: Vec<(u32, u64)> = vec![];
-    let mut windows_opened = 0;
-    while next_vtk < vtk_times.len() && vtk_times[next_vtk] <= 0.0 {
-        write_vtk(&d.solver)?;
-        next_vtk += 1;
-    }
+    let mut vtk = VtkSchedule::new(particles_dir.clone(), case.output.vtk_times.clone());
+    let mut frames = EventFrames::new(particles_dir, d.solver.particle_count());
+    vtk.catch_up(&d.solver)?;
     d.push_row();
-    // The step-0 checkpoint precedes any event, even one at step 1.
-    let mut ring: Vec<(u64, PathBuf)> = vec![];
-    let mut pinned: BTreeSet<u64> = BTreeSet::new();
-    let every = case.output.checkpoint_every;
-    if every > 0 {
-        let path = dir.join(ring_name(0));
-        write_atomic(&path, &case_checkpoint::save(&d.solver, &d.monitor))?;
-        ring.push((0, path));
-    }
+    let mut ring = CheckpointRing::start(dir, case.output.checkpoint_every, &d)?;
     let (status, reason) = loop {
         if d.solver.finished() {
             break (Status::Completed, String::new());
@@ -292,43 +417,10 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
         let step = d.solver.step_count();
         let opened = d.monitor.report().events_opened;
         if opened > 0 {
-            let hash = format!("{:016x}", d.solver.state_hash());
-            let n = d.monitor.events().len();
-            let mut new_ids = vec![];
-            for e in &mut d.monitor.events_mut()[n - opened..] {
-                e.state_hash = Some(hash.clone());
-                // The latest ring checkpoint precedes the event: keep it for good.
-                if let Some((ring_step, _)) = ring.last() {
-                    e.checkpoint = Some(ring_name(*ring_step));
-                    pinned.insert(*ring_step);
-                }
-                new_ids.push(e.id);
-            }
-            now.capture(&d.solver.view());
-            for id in new_ids {
-                if windows_opened >= EVENT_WINDOWS {
-                    break;
-                }
-                windows_opened += 1;
-                for f in ring_frames
-                    .iter()
-                    .filter(|f| !f.x.is_empty() && f.step < step)
-                {
-                    event_frame(id, f)?;
-                }
-                event_frame(id, &now)?;
-                windows.push((id, step + EVENT_FRAME_EVERY * EVENT_FRAMES as u64));
-            }
+            let ids = stamp_new_events(&mut d, &mut ring, opened);
+            frames.opened(&ids, &d.solver.view(), step)?;
         }
-        if step % EVENT_FRAME_EVERY == 0 {
-            let f = &mut ring_frames[frame_next];
-            f.capture(&d.solver.view());
-            frame_next = (frame_next + 1) % EVENT_FRAMES;
-            windows.retain(|&(_, until)| until >= step);
-            for &(id, _) in &windows {
-                event_frame(id, f)?;
-            }
-        }
+        frames.after_step(&d.solver.view(), step)?;
         if step % row_every == 0 || opened > 0 || matches!(stepped, Stepped::Stop(_)) {
             d.push_row();
             let t = d.solver.time();
@@ -338,27 +430,15 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
         if let Stepped::Stop(reason) = stepped {
             break (Status::BlewUp, reason);
         }
-        while next_vtk < vtk_times.len() && vtk_times[next_vtk] <= d.solver.time() {
-            write_vtk(&d.solver)?;
-            next_vtk += 1;
-        }
-        if every > 0 && step % every == 0 {
-            let path = dir.join(ring_name(step));
-            write_atomic(&path, &case_checkpoint::save(&d.solver, &d.monitor))?;
-            ring.push((step, path));
-            if ring.len() > CHECKPOINT_RING {
-                let (old, path) = ring.remove(0);
-                if !pinned.contains(&old) {
-                    let _ = std::fs::remove_file(path);
-                }
-            }
-        }
+        vtk.catch_up(&d.solver)?;
+        ring.after_step(step, &d)?;
     };
     d.push_row();
-    write_vtk(&d.solver)?;
+    vtk.write(&d.solver)?;
     tables::write_timeseries(&d.series, dir, opts.csv)?;
     let events = d.monitor.events().to_vec();
-    let scene = &case.solver.scene;
+    let mut metrics = metrics::summarise(&d.series, &events, front_wall_z(&case.solver.scene));
+    metrics.events_dropped = d.monitor.events_dropped();
     Ok(Simulated {
         status,
         reason,
@@ -366,11 +446,7 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
         t_end: d.solver.time(),
         particles: d.solver.particle_count(),
         final_hash: d.solver.state_hash(),
-        metrics: {
-            let mut m = metrics::summarise(&d.series, &events, front_wall_z(scene));
-            m["events_dropped"] = json!(d.monitor.events_dropped());
-            m
-        },
+        metrics,
         events,
     })
 }

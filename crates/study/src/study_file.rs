@@ -1,11 +1,13 @@
-//! Study files: TOML schema, validation with file/key/allowed-range errors,
-//! `--set` overrides and matrix expansion into named cases.
+//! Study files. `--set` overrides and `[matrix]` axes are applied to the
+//! TOML table; each expanded case is then deserialised into the typed
+//! sections (the serde types are the one definition of every key, default
+//! and unit) and validated once. Errors name the file, the dotted key and
+//! what is allowed.
 
+use indexmap::IndexMap;
 use monitor::MonitorConfig;
-use solver::{
-    Body, DtMode, EosKind, InitialState, JUpdate, Material, Method, Perturb, Scene, SchemeKind,
-    ShapeKind, SolverConfig, TransferKind,
-};
+use serde::{Deserialize, Serialize};
+use solver::{Material, Method, Perturb, Scene, SolverConfig};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use toml::{Table, Value};
@@ -30,15 +32,72 @@ impl std::fmt::Display for StudyError {
 
 impl std::error::Error for StudyError {}
 
-/// Output cadence of a case.
-#[derive(Clone, Debug, PartialEq)]
+/// The `[output]` table: what a case writes besides its summary.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Output {
     /// Target number of timeseries rows over the run.
     pub timeseries_rows: u64,
     /// Steps between ring checkpoints (0 = none).
     pub checkpoint_every: u64,
-    /// Simulated times at which particle VTK files are written.
+    /// Simulated times (s) at which particle VTK files are written; times
+    /// past `scene.t_end` are allowed and never reached.
     pub vtk_times: Vec<f64>,
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Output {
+            timeseries_rows: 1000,
+            checkpoint_every: 20_000,
+            vtk_times: vec![],
+        }
+    }
+}
+
+impl Output {
+    fn validate(&self) -> Result<(), KeyError> {
+        let rows = self.timeseries_rows;
+        if !(1..=10_000_000).contains(&rows) {
+            return Err((
+                "output.timeseries_rows".into(),
+                format!("{rows} is out of range (allowed 1 ..= 10000000)"),
+            ));
+        }
+        if let Some(t) = self
+            .vtk_times
+            .iter()
+            .find(|t| !(t.is_finite() && **t >= 0.0))
+        {
+            return Err((
+                "output.vtk_times".into(),
+                format!("{t} is out of range (allowed finite times >= 0 s)"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// One case's study file as written (the `[matrix]` table removed).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StudyDoc {
+    #[serde(default)]
+    #[allow(dead_code)]
+    name: Option<String>,
+    #[serde(default)]
+    #[allow(dead_code)]
+    description: Option<String>,
+    scene: Scene,
+    materials: IndexMap<String, Material>,
+    #[serde(default)]
+    method: Method,
+    #[serde(default)]
+    monitor: MonitorConfig,
+    #[serde(default)]
+    output: Output,
+    #[serde(default)]
+    perturb: Vec<Perturb>,
 }
 
 /// One expanded case of a study.
@@ -76,29 +135,13 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Study, StudyError> {
         let (key, value) = parse_override(o).map_err(|m| err(o, m))?;
         set_path(&mut root, &key, value).map_err(|m| err(&key, m))?;
     }
-    let matrix = match root.remove("matrix") {
-        None => vec![],
-        Some(Value::Table(t)) => t.into_iter().collect::<Vec<_>>(),
-        Some(_) => return Err(err("matrix", "must be a table of key = [values]".into())),
-    };
-    let mut axes = vec![];
-    for (key, values) in matrix {
-        let Value::Array(values) = values else {
-            return Err(err(
-                &format!("matrix.{key}"),
-                "must be an array of values".into(),
-            ));
-        };
-        if values.is_empty() {
-            return Err(err(
-                &format!("matrix.{key}"),
-                "needs at least one value".into(),
-            ));
-        }
-        axes.push((key, values));
-    }
-    let mut cases = vec![];
+    let axes = matrix_axes(root.remove("matrix")).map_err(|(k, m)| err(&k, m))?;
+    let base = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "case".into());
     let total: usize = axes.iter().map(|(_, v)| v.len()).product();
+    let mut cases = vec![];
     for index in 0..total {
         let mut table = root.clone();
         let mut rest = index;
@@ -110,40 +153,112 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Study, StudyError> {
             name_parts.push(name_part(key, v));
         }
         name_parts.reverse();
-        let mut reader = Reader {
-            file: &file,
-            table: &table,
-        };
-        let (solver, output, monitor) = reader.case()?;
-        let base = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "case".into());
         let name = if name_parts.is_empty() {
-            base
+            base.clone()
         } else {
             name_parts.join("_")
         };
-        let mut params = flatten(&table);
-        // Every method key appears in every case, defaults included.
-        if let Ok(Value::Table(m)) = Value::try_from(&solver.method) {
-            for (k, v) in m {
-                params.entry(format!("method.{k}")).or_insert(v);
-            }
-        }
-        cases.push(Case {
-            name,
-            monitor,
-            params,
-            table,
-            solver,
-            output,
-        });
+        cases.push(case(name, table).map_err(|(k, m)| err(&k, m))?);
     }
     Ok(Study {
         file: path.to_path_buf(),
         cases,
     })
+}
+
+/// A bad key of a case: (dotted key, message).
+type KeyError = (String, String);
+
+/// A `[matrix]` axis: (dotted key, values).
+type Axis = (String, Vec<Value>);
+
+/// The `[matrix]` table as axes, in file order.
+fn matrix_axes(matrix: Option<Value>) -> Result<Vec<Axis>, KeyError> {
+    let table = match matrix {
+        None => return Ok(vec![]),
+        Some(Value::Table(t)) => t,
+        Some(_) => return Err(("matrix".into(), "must be a table of key = [values]".into())),
+    };
+    table
+        .into_iter()
+        .map(|(key, values)| match values {
+            Value::Array(v) if !v.is_empty() => Ok((key, v)),
+            Value::Array(_) => Err((format!("matrix.{key}"), "needs at least one value".into())),
+            _ => Err((format!("matrix.{key}"), "must be an array of values".into())),
+        })
+        .collect()
+}
+
+/// Deserialises and validates one case's table.
+fn case(name: String, table: Table) -> Result<Case, KeyError> {
+    let doc: StudyDoc =
+        serde_path_to_error::deserialize(Value::Table(table.clone())).map_err(schema_error)?;
+    let mut scene = doc.scene;
+    scene.materials = doc
+        .materials
+        .into_iter()
+        .map(|(name, m)| Material { name, ..m })
+        .collect();
+    let solver = SolverConfig {
+        scene,
+        method: doc.method,
+        perturb: doc.perturb,
+    };
+    solver.validate().map_err(|e| (e.key, e.message))?;
+    doc.monitor
+        .validate()
+        .map_err(|(k, m)| (format!("monitor.{k}"), m))?;
+    doc.output.validate()?;
+    let mut params = flatten(&table);
+    // Every method key appears in every case, defaults included.
+    if let Ok(Value::Table(m)) = Value::try_from(&solver.method) {
+        for (k, v) in m {
+            params.entry(format!("method.{k}")).or_insert(v);
+        }
+    }
+    Ok(Case {
+        name,
+        monitor: doc.monitor,
+        params,
+        table,
+        solver,
+        output: doc.output,
+    })
+}
+
+/// A serde error as (dotted key, message in the study file's words).
+fn schema_error(e: serde_path_to_error::Error<toml::de::Error>) -> KeyError {
+    let path = e.path().to_string();
+    let path = if path == "." { String::new() } else { path };
+    let message = e.inner().message().to_string();
+    let join = |field: &str| {
+        if path.is_empty() || path.ends_with(&format!(".{field}")) || path == field {
+            if path.is_empty() {
+                field.to_string()
+            } else {
+                path.clone()
+            }
+        } else {
+            format!("{path}.{field}")
+        }
+    };
+    // serde's wording: "missing field `x`", "unknown field `x`, expected one of `a`, `b`",
+    // "unknown variant `x`, expected one of `a`, `b`".
+    let quoted: Vec<&str> = message.split('`').skip(1).step_by(2).collect();
+    if message.starts_with("missing field") {
+        (join(quoted[0]), "is required".into())
+    } else if message.starts_with("unknown field") {
+        let allowed = quoted[1..].join(", ");
+        (join(quoted[0]), format!("unknown key (allowed: {allowed})"))
+    } else if message.starts_with("unknown variant") {
+        let allowed = quoted[1..].join(" | ");
+        (
+            path,
+            format!("\"{}\" is not allowed (allowed: {allowed})", quoted[0]),
+        )
+    } else {
+        (path, message)
+    }
 }
 
 /// `key=value`, the value read as TOML (bare words as strings).
@@ -249,529 +364,107 @@ fn si_pascal(p: f64) -> String {
     format!("{}{unit}", (p / scale * 1e6).round() / 1e6)
 }
 
-/// Walks one case's table, consuming known keys and rejecting the rest.
-struct Reader<'a> {
-    file: &'a str,
-    table: &'a Table,
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-impl Reader<'_> {
-    fn err(&self, key: &str, message: impl Into<String>) -> StudyError {
-        StudyError {
-            file: self.file.to_string(),
-            key: key.to_string(),
-            message: message.into(),
-        }
+    fn toml(text: &str) -> Value {
+        format!("v = {text}")
+            .parse::<Table>()
+            .unwrap()
+            .remove("v")
+            .unwrap()
     }
 
-    fn section<'t>(
-        &self,
-        parent: &'t Table,
-        name: &str,
-        path: &str,
-    ) -> Result<Option<&'t Table>, StudyError> {
-        match parent.get(name) {
-            None => Ok(None),
-            Some(Value::Table(t)) => Ok(Some(t)),
-            Some(_) => Err(self.err(path, "must be a table")),
-        }
+    #[test]
+    fn overrides_read_values_as_toml_and_bare_words_as_strings() {
+        assert_eq!(
+            parse_override("materials.water.K=1.5e6").unwrap(),
+            ("materials.water.K".into(), Value::Float(1.5e6))
+        );
+        assert_eq!(
+            parse_override(" scene.ppc = 3 ").unwrap(),
+            ("scene.ppc".into(), Value::Integer(3))
+        );
+        assert_eq!(
+            parse_override("method.shape=bspline2").unwrap().1,
+            Value::String("bspline2".into())
+        );
+        assert_eq!(parse_override("a=[1, 2]").unwrap().1, toml("[1, 2]"));
+        assert!(parse_override("no equals sign").is_err());
+        assert!(parse_override("=3").is_err());
     }
 
-    fn known(&self, t: &Table, path: &str, allowed: &[&str]) -> Result<(), StudyError> {
-        for k in t.keys() {
-            if !allowed.contains(&k.as_str()) {
-                let key = if path.is_empty() {
-                    k.clone()
-                } else {
-                    format!("{path}.{k}")
-                };
-                return Err(self.err(
-                    &key,
-                    format!("unknown key (allowed: {})", allowed.join(", ")),
-                ));
-            }
-        }
-        Ok(())
+    #[test]
+    fn set_path_creates_tables_and_merges_table_values() {
+        let mut root = Table::new();
+        set_path(&mut root, "materials.water.K", Value::Float(1.0)).unwrap();
+        set_path(
+            &mut root,
+            "materials.water.eos",
+            Value::String("tait".into()),
+        )
+        .unwrap();
+        set_path(&mut root, "materials.water", toml("{ gamma = 4.0 }")).unwrap();
+        let water = root["materials"]["water"].as_table().unwrap();
+        assert_eq!(water.len(), 3, "{water:?}");
+        assert_eq!(water["K"], Value::Float(1.0));
+        assert_eq!(water["gamma"], Value::Float(4.0));
+        // A non-table value replaces; a path through a non-table is refused.
+        set_path(&mut root, "materials.water.K", Value::Float(2.0)).unwrap();
+        assert_eq!(root["materials"]["water"]["K"], Value::Float(2.0));
+        assert!(set_path(&mut root, "materials.water.K.x", Value::Float(1.0)).is_err());
     }
 
-    fn float(
-        &self,
-        t: &Table,
-        path: &str,
-        key: &str,
-        default: Option<f64>,
-        lo: f64,
-        hi: f64,
-    ) -> Result<f64, StudyError> {
-        let full = format!("{path}.{key}");
-        let v = match t.get(key) {
-            None => default.ok_or_else(|| self.err(&full, "is required"))?,
-            Some(Value::Float(f)) => *f,
-            Some(Value::Integer(i)) => *i as f64,
-            Some(other) => {
-                return Err(self.err(&full, format!("must be a number, got {other}")));
-            }
+    #[test]
+    fn name_parts_are_short_and_readable() {
+        assert_eq!(name_part("materials.water.K", &toml("1.5e6")), "K1.5MPa");
+        assert_eq!(name_part("materials.water.K", &toml("15000")), "K15kPa");
+        assert_eq!(name_part("materials.water.K", &toml("2e9")), "K2GPa");
+        assert_eq!(
+            name_part("materials.water.viscosity", &toml("0.5")),
+            "mu0.5"
+        );
+        assert_eq!(name_part("method.dt", &toml("\"dynamic\"")), "dyn");
+        assert_eq!(name_part("method.dt", &toml("\"fixed\"")), "fixed");
+        assert_eq!(
+            name_part("materials.water", &toml("{ eos = \"power\", gamma = 7.0 }")),
+            "power-g7"
+        );
+        assert_eq!(name_part("method.cfl", &toml("0.1")), "cfl0.1");
+    }
+
+    #[test]
+    fn serde_errors_become_dotted_keys_and_allowed_values() {
+        let bad = |text: &str| -> KeyError {
+            let table: Table = text.parse().unwrap();
+            case("c".into(), table).expect_err("refused")
         };
-        if !(v.is_finite() && v >= lo && v <= hi) {
-            return Err(self.err(
-                &full,
-                format!("{v} is out of range (allowed {lo} ..= {hi})"),
-            ));
-        }
-        Ok(v)
-    }
-
-    fn int(
-        &self,
-        t: &Table,
-        path: &str,
-        key: &str,
-        default: i64,
-        lo: i64,
-        hi: i64,
-    ) -> Result<i64, StudyError> {
-        let full = format!("{path}.{key}");
-        let v = match t.get(key) {
-            None => default,
-            Some(Value::Integer(i)) => *i,
-            Some(other) => return Err(self.err(&full, format!("must be an integer, got {other}"))),
-        };
-        if v < lo || v > hi {
-            return Err(self.err(
-                &full,
-                format!("{v} is out of range (allowed {lo} ..= {hi})"),
-            ));
-        }
-        Ok(v)
-    }
-
-    fn choice<T: Copy>(
-        &self,
-        t: &Table,
-        path: &str,
-        key: &str,
-        default: T,
-        options: &[(&str, T)],
-    ) -> Result<T, StudyError> {
-        let full = format!("{path}.{key}");
-        let names: Vec<String> = options.iter().map(|(n, _)| format!("\"{n}\"")).collect();
-        match t.get(key) {
-            None => Ok(default),
-            Some(Value::String(s)) => options
-                .iter()
-                .find(|(n, _)| n == s)
-                .map(|(_, v)| *v)
-                .ok_or_else(|| {
-                    self.err(
-                        &full,
-                        format!("\"{s}\" is not allowed (allowed: {})", names.join(" | ")),
-                    )
-                }),
-            Some(other) => Err(self.err(
-                &full,
-                format!(
-                    "must be a string, got {other} (allowed: {})",
-                    names.join(" | ")
-                ),
-            )),
-        }
-    }
-
-    fn floats<const N: usize>(
-        &self,
-        t: &Table,
-        path: &str,
-        key: &str,
-        default: Option<[f64; N]>,
-    ) -> Result<[f64; N], StudyError> {
-        let full = format!("{path}.{key}");
-        let Some(v) = t.get(key) else {
-            return default.ok_or_else(|| self.err(&full, "is required"));
-        };
-        let bad = || self.err(&full, format!("must be an array of {N} numbers"));
-        let arr = v.as_array().ok_or_else(bad)?;
-        if arr.len() != N {
-            return Err(bad());
-        }
-        let mut out = [0.0; N];
-        for (o, x) in out.iter_mut().zip(arr) {
-            *o = match x {
-                Value::Float(f) if f.is_finite() => *f,
-                Value::Integer(i) => *i as f64,
-                _ => return Err(bad()),
-            };
-        }
-        Ok(out)
-    }
-
-    fn case(&mut self) -> Result<(SolverConfig, Output, MonitorConfig), StudyError> {
-        let root = self.table;
-        self.known(
-            root,
-            "",
-            &[
-                "scene",
-                "materials",
-                "method",
-                "monitor",
-                "output",
-                "perturb",
-                "name",
-                "description",
-            ],
-        )?;
-        let materials_t = self
-            .section(root, "materials", "materials")?
-            .ok_or_else(|| {
-                self.err(
-                    "materials",
-                    "at least one [materials.NAME] table is required",
-                )
-            })?;
-        let mut names = vec![];
-        let mut materials = vec![];
-        for (name, v) in materials_t {
-            let path = format!("materials.{name}");
-            let t = v
-                .as_table()
-                .ok_or_else(|| self.err(&path, "must be a table"))?;
-            names.push(name.clone());
-            materials.push(self.material(t, &path)?);
-        }
-        let scene_t = self
-            .section(root, "scene", "scene")?
-            .ok_or_else(|| self.err("scene", "the [scene] table is required"))?;
-        let scene = self.scene(scene_t, &names, materials)?;
-        let method_t = self
-            .section(root, "method", "method")?
-            .cloned()
-            .unwrap_or_default();
-        let method = self.method(&method_t)?;
-        let monitor = match self.section(root, "monitor", "monitor")? {
-            Some(t) => self.monitor(t)?,
-            None => MonitorConfig::default(),
-        };
-        let output_t = self
-            .section(root, "output", "output")?
-            .cloned()
-            .unwrap_or_default();
-        let output = self.output(&output_t, scene.t_end)?;
-        let perturb = self.perturbations(root.get("perturb"))?;
-        let cfg = SolverConfig {
-            scene,
-            method,
-            perturb,
-        };
-        cfg.validate().map_err(|e| self.err(&e.key, e.message))?;
-        Ok((cfg, output, monitor))
-    }
-
-    /// Every `[monitor]` key is a non-negative number named as in `MonitorConfig`.
-    fn monitor(&self, t: &Table) -> Result<MonitorConfig, StudyError> {
-        let defaults = Value::try_from(MonitorConfig::default()).expect("config serialises");
-        let defaults = defaults.as_table().expect("a table");
-        let allowed: Vec<&str> = defaults.keys().map(|k| k.as_str()).collect();
-        self.known(t, "monitor", &allowed)?;
-        let mut merged = defaults.clone();
-        for k in t.keys() {
-            let integer = defaults[k].is_integer();
-            let value = self.float(t, "monitor", k, None, 0.0, 1e12)?;
-            if integer && value.fract() != 0.0 {
-                return Err(self.err(
-                    &format!("monitor.{k}"),
-                    format!("{value} must be a whole number"),
-                ));
-            }
-            merged.insert(
-                k.clone(),
-                if integer {
-                    Value::Integer(value as i64)
-                } else {
-                    Value::Float(value)
-                },
-            );
-        }
-        Value::Table(merged)
-            .try_into()
-            .map_err(|e: toml::de::Error| self.err("monitor", e.message().to_string()))
-    }
-
-    fn material(&self, t: &Table, path: &str) -> Result<Material, StudyError> {
-        self.known(
-            t,
-            path,
-            &[
-                "rho0",
-                "eos",
-                "K",
-                "gamma",
-                "viscosity",
-                "j_res",
-                "pressure_floor",
-            ],
-        )?;
-        let floor = match t.get("pressure_floor") {
-            None => None,
-            Some(_) => Some(self.float(t, path, "pressure_floor", None, -1e12, 1e12)?),
-        };
-        Ok(Material {
-            rho0: self.float(t, path, "rho0", Some(1000.0), 1e-6, 1e6)?,
-            eos: self.choice(
-                t,
-                path,
-                "eos",
-                EosKind::Power,
-                &[
-                    ("power", EosKind::Power),
-                    ("tait", EosKind::Tait),
-                    ("linear", EosKind::Linear),
-                ],
-            )?,
-            k: self.float(t, path, "K", None, 1e-6, 1e13)?,
-            gamma: self.float(t, path, "gamma", Some(7.0), 1.0, 20.0)?,
-            viscosity: self.float(t, path, "viscosity", Some(0.0), 0.0, 1e6)?,
-            j_res: self.float(t, path, "j_res", Some(1.0), 0.5, 2.0)?,
-            pressure_floor: floor,
-        })
-    }
-
-    fn scene(
-        &self,
-        t: &Table,
-        names: &[String],
-        materials: Vec<Material>,
-    ) -> Result<Scene, StudyError> {
-        let p = "scene";
-        self.known(
-            t,
-            p,
-            &[
-                "box", "origin", "cell", "ppc", "t_end", "gravity", "initial", "periodic", "body",
-            ],
-        )?;
-        let size = self.floats::<2>(t, p, "box", Some([0.8, 0.6]))?;
-        let cell = self.float(t, p, "cell", Some(0.01), 1e-5, 10.0)?;
-        for (a, s) in size.iter().enumerate() {
-            let n = s / cell;
-            if !(*s > 0.0 && (n - n.round()).abs() < 1e-6 && (2.0..=1e5).contains(&n.round())) {
-                return Err(self.err(
-                    "scene.box",
-                    format!(
-                        "axis {a}: {s} m is not a whole number (2 ..= 100000) of {cell} m cells"
-                    ),
-                ));
-            }
-        }
-        let periodic = match t.get("periodic") {
-            None => [false, false],
-            Some(v) => {
-                let arr = v
-                    .as_array()
-                    .filter(|a| a.len() == 2 && a.iter().all(|x| x.is_bool()));
-                let arr = arr.ok_or_else(|| self.err("scene.periodic", "must be [bool, bool]"))?;
-                [
-                    arr[0].as_bool() == Some(true),
-                    arr[1].as_bool() == Some(true),
-                ]
-            }
-        };
-        let mut bodies = vec![];
-        let body_list = match t.get("body") {
-            None => return Err(self.err("scene.body", "at least one [[scene.body]] is required")),
-            Some(Value::Array(a)) => a,
-            Some(_) => {
-                return Err(self.err("scene.body", "must be an array of tables [[scene.body]]"))
-            }
-        };
-        for (i, b) in body_list.iter().enumerate() {
-            let path = format!("scene.body[{i}]");
-            let bt = b
-                .as_table()
-                .ok_or_else(|| self.err(&path, "must be a table"))?;
-            self.known(bt, &path, &["rect", "material", "velocity"])?;
-            let rect = self.floats::<4>(bt, &path, "rect", None)?;
-            let material = match bt.get("material") {
-                None if names.len() == 1 => 0,
-                None => return Err(self.err(&format!("{path}.material"), "is required")),
-                Some(Value::String(s)) => names.iter().position(|n| n == s).ok_or_else(|| {
-                    self.err(
-                        &format!("{path}.material"),
-                        format!("unknown material \"{s}\" (defined: {})", names.join(", ")),
-                    )
-                })?,
-                Some(_) => {
-                    return Err(self.err(&format!("{path}.material"), "must be a material name"))
-                }
-            };
-            let velocity = self.floats::<2>(bt, &path, "velocity", Some([0.0, 0.0]))?;
-            bodies.push(Body {
-                rect,
-                material,
-                velocity,
-            });
-        }
-        Ok(Scene {
-            origin: self.floats::<2>(t, p, "origin", Some([0.0, 0.0]))?,
-            size,
-            cell,
-            ppc: self.int(t, p, "ppc", 2, 1, 8)? as usize,
-            t_end: self.float(t, p, "t_end", Some(5.0), 1e-9, 1e4)?,
-            gravity: self.float(t, p, "gravity", Some(9.81), 0.0, 1e4)?,
-            initial: self.choice(
-                t,
-                p,
-                "initial",
-                InitialState::ZeroStress,
-                &[
-                    ("zero_stress", InitialState::ZeroStress),
-                    ("hydrostatic", InitialState::Hydrostatic),
-                ],
-            )?,
-            periodic,
-            bodies,
-            materials,
-        })
-    }
-
-    fn method(&self, t: &Table) -> Result<Method, StudyError> {
-        let p = "method";
-        self.known(
-            t,
-            p,
-            &[
-                "shape",
-                "transfer",
-                "flip_alpha",
-                "scheme",
-                "cfl",
-                "dt",
-                "j_update",
-                "dt_value",
-            ],
-        )?;
-        let dt_value = match t.get("dt_value") {
-            None => None,
-            Some(_) => Some(self.float(t, p, "dt_value", None, 1e-12, 1.0)?),
-        };
-        Ok(Method {
-            shape: self.choice(
-                t,
-                p,
-                "shape",
-                ShapeKind::Linear,
-                &[
-                    ("linear", ShapeKind::Linear),
-                    ("gimp", ShapeKind::Gimp),
-                    ("bspline2", ShapeKind::Bspline2),
-                    ("bspline3", ShapeKind::Bspline3),
-                ],
-            )?,
-            transfer: self.choice(
-                t,
-                p,
-                "transfer",
-                TransferKind::Flip,
-                &[
-                    ("pic", TransferKind::Pic),
-                    ("flip", TransferKind::Flip),
-                    ("apic", TransferKind::Apic),
-                ],
-            )?,
-            flip_alpha: self.float(t, p, "flip_alpha", Some(1.0), 0.0, 1.0)?,
-            scheme: self.choice(
-                t,
-                p,
-                "scheme",
-                SchemeKind::Usf,
-                &[
-                    ("usf", SchemeKind::Usf),
-                    ("usl", SchemeKind::Usl),
-                    ("musl", SchemeKind::Musl),
-                ],
-            )?,
-            cfl: self.float(t, p, "cfl", Some(0.2), 1e-4, 1.0)?,
-            dt: self.choice(
-                t,
-                p,
-                "dt",
-                DtMode::Fixed,
-                &[("fixed", DtMode::Fixed), ("dynamic", DtMode::Dynamic)],
-            )?,
-            dt_override: dt_value,
-            j_update: self.choice(
-                t,
-                p,
-                "j_update",
-                JUpdate::Det,
-                &[("det", JUpdate::Det), ("exp", JUpdate::Exp)],
-            )?,
-        })
-    }
-
-    fn output(&self, t: &Table, t_end: f64) -> Result<Output, StudyError> {
-        let p = "output";
-        self.known(t, p, &["timeseries_rows", "checkpoint_every", "vtk_times"])?;
-        let vtk_times = match t.get("vtk_times") {
-            None => vec![],
-            Some(Value::Array(a)) => {
-                let mut out = vec![];
-                for x in a {
-                    let v = match x {
-                        Value::Float(f) => *f,
-                        Value::Integer(i) => *i as f64,
-                        _ => {
-                            return Err(
-                                self.err("output.vtk_times", "must be an array of times (s)")
-                            )
-                        }
-                    };
-                    if !(v >= 0.0 && v.is_finite()) {
-                        return Err(self.err(
-                            "output.vtk_times",
-                            format!("{v} is out of range (allowed finite times >= 0 s)"),
-                        ));
-                    }
-                    // Times past t_end are kept in the file but never reached.
-                    if v <= t_end {
-                        out.push(v);
-                    }
-                }
-                out
-            }
-            Some(_) => return Err(self.err("output.vtk_times", "must be an array of times (s)")),
-        };
-        Ok(Output {
-            timeseries_rows: self.int(t, p, "timeseries_rows", 1000, 1, 10_000_000)? as u64,
-            checkpoint_every: self.int(t, p, "checkpoint_every", 20_000, 0, i64::MAX)? as u64,
-            vtk_times,
-        })
-    }
-
-    fn perturbations(&self, v: Option<&Value>) -> Result<Vec<Perturb>, StudyError> {
-        let Some(v) = v else { return Ok(vec![]) };
-        let arr = v
-            .as_array()
-            .ok_or_else(|| self.err("perturb", "must be an array of tables [[perturb]]"))?;
-        let mut out = vec![];
-        for (i, e) in arr.iter().enumerate() {
-            let path = format!("perturb[{i}]");
-            let t = e
-                .as_table()
-                .ok_or_else(|| self.err(&path, "must be a table"))?;
-            self.known(t, &path, &["step", "region", "dv"])?;
-            let region = self.floats::<4>(t, &path, "region", None)?;
-            if !(region[0] < region[2] && region[1] < region[3]) {
-                return Err(self.err(&format!("{path}.region"), "needs x0 < x1 and y0 < y1"));
-            }
-            out.push(Perturb {
-                step: match t.get("step") {
-                    None => return Err(self.err(&format!("{path}.step"), "is required")),
-                    Some(_) => self.int(t, &path, "step", 1, 1, i64::MAX)? as u64,
-                },
-                region,
-                dv: self.floats::<2>(t, &path, "dv", None)?,
-            });
-        }
-        Ok(out)
+        let good =
+            "[scene]\n[[scene.body]]\nrect = [0.0, 0.0, 0.2, 0.4]\n[materials.water]\nK = 1e5\n";
+        assert!(case("c".into(), good.parse().unwrap()).is_ok());
+        let (k, m) = bad(&good.replace("K = 1e5", "K = 1e5\nnu = 3"));
+        assert_eq!(k, "materials.water.nu");
+        assert!(m.contains("unknown key") && m.contains("viscosity"), "{m}");
+        let (k, m) = bad(&good.replace("K = 1e5", "eos = \"ideal\"\nK = 1e5"));
+        assert_eq!(k, "materials.water.eos");
+        assert!(
+            m.contains("\"ideal\"") && m.contains("power | tait | linear"),
+            "{m}"
+        );
+        let (k, m) = bad(&good.replace("K = 1e5", "rho0 = 1.0"));
+        assert_eq!(
+            (k.as_str(), m.as_str()),
+            ("materials.water.K", "is required")
+        );
+        let (k, m) = bad(&good.replace("rect = [0.0, 0.0, 0.2, 0.4]", "velocity = [1, 0]"));
+        assert_eq!(
+            (k.as_str(), m.as_str()),
+            ("scene.body[0].rect", "is required")
+        );
+        let (k, _) = bad(&format!("{good}[method]\ncfl = \"high\"\n"));
+        assert_eq!(k, "method.cfl");
+        let (k, m) = bad("[materials.water]\nK = 1e5\n");
+        assert_eq!((k.as_str(), m.as_str()), ("scene", "is required"));
     }
 }

@@ -3,9 +3,11 @@
 //! become nulls.
 
 use crate::output_files::write_atomic;
+use crate::summary::Summary;
 use crate::timeseries::{Timeseries, COLUMNS};
 use polars::prelude::*;
 use serde_json::Value;
+use std::collections::BTreeSet;
 use std::path::Path;
 
 fn io(e: PolarsError) -> std::io::Error {
@@ -69,52 +71,60 @@ fn json_column(name: &str, values: &[Option<&Value>]) -> Column {
     }
 }
 
+/// One matrix row: a case's summary and its folder relative to the matrix folder.
+#[derive(Clone, Debug)]
+pub struct SummaryRow {
+    pub case_dir: String,
+    pub summary: Summary,
+}
+
+/// Each row's metrics as a JSON object (one column per field of `Metrics`).
+fn metrics_objects(rows: &[SummaryRow]) -> Vec<serde_json::Map<String, Value>> {
+    rows.iter()
+        .map(|r| match serde_json::to_value(&r.summary.metrics) {
+            Ok(Value::Object(m)) => m,
+            _ => serde_json::Map::new(),
+        })
+        .collect()
+}
+
 /// One row per case: `case`, one column per parameter (dotted key), the run's
-/// figures and one column per metric, plus `case_dir`.
-pub fn summary_frame(rows: &[(String, Value)]) -> PolarsResult<DataFrame> {
-    let mut param_keys: Vec<String> = vec![];
-    let mut metric_keys: Vec<String> = vec![];
-    for (_, s) in rows {
-        for (set, field) in [(&mut param_keys, "params"), (&mut metric_keys, "metrics")] {
-            if let Some(m) = s[field].as_object() {
-                for k in m.keys() {
-                    if !set.contains(k) {
-                        set.push(k.clone());
-                    }
-                }
-            }
-        }
-    }
-    param_keys.sort();
-    let mut cols = vec![json_column(
-        "case",
-        &rows.iter().map(|(_, s)| s.get("case")).collect::<Vec<_>>(),
-    )];
+/// figures, `n_events`, one column per metric, and `case_dir`.
+pub fn summary_frame(rows: &[SummaryRow]) -> PolarsResult<DataFrame> {
+    let param_keys: BTreeSet<&String> = rows.iter().flat_map(|r| r.summary.params.keys()).collect();
+    let metrics = metrics_objects(rows);
+    let s = |f: fn(&Summary) -> f64| -> Vec<f64> { rows.iter().map(|r| f(&r.summary)).collect() };
+    let text = |f: fn(&SummaryRow) -> String| -> Vec<String> { rows.iter().map(f).collect() };
+    let mut cols = vec![Column::new("case".into(), text(|r| r.summary.case.clone()))];
     for k in &param_keys {
-        let v: Vec<Option<&Value>> = rows.iter().map(|(_, s)| s["params"].get(k)).collect();
+        let v: Vec<Option<&Value>> = rows.iter().map(|r| r.summary.params.get(*k)).collect();
         cols.push(json_column(k, &v));
     }
-    for k in [
-        "status",
-        "reason",
-        "steps",
-        "t_end",
-        "wall_s",
-        "particles",
-        "particle_steps_per_s",
-    ] {
-        let v: Vec<Option<&Value>> = rows.iter().map(|(_, s)| s.get(k)).collect();
-        cols.push(json_column(k, &v));
-    }
-    let n_events: Vec<Option<f64>> = rows
-        .iter()
-        .map(|(_, s)| s["events"].as_array().map(|a| a.len() as f64))
-        .collect();
-    cols.push(Column::new("n_events".into(), n_events));
-    for k in &metric_keys {
-        let v: Vec<Option<&Value>> = rows
+    cols.push(Column::new(
+        "status".into(),
+        text(|r| r.summary.status.as_str().to_string()),
+    ));
+    cols.push(Column::new(
+        "reason".into(),
+        text(|r| r.summary.reason.clone()),
+    ));
+    cols.push(Column::new("steps".into(), s(|x| x.steps as f64)));
+    cols.push(Column::new("t_end".into(), s(|x| x.t_end)));
+    cols.push(Column::new("wall_s".into(), s(|x| x.wall_s)));
+    cols.push(Column::new("particles".into(), s(|x| x.particles as f64)));
+    cols.push(Column::new(
+        "particle_steps_per_s".into(),
+        s(|x| x.particle_steps_per_s),
+    ));
+    cols.push(Column::new("n_events".into(), s(|x| x.events.len() as f64)));
+    let metric_keys: Vec<&String> = metrics
+        .first()
+        .map(|m| m.keys().collect())
+        .unwrap_or_default();
+    for k in metric_keys {
+        let v: Vec<Option<&Value>> = metrics
             .iter()
-            .map(|(_, s)| s["metrics"].get(k).filter(|v| !v.is_null()))
+            .map(|m| m.get(k).filter(|v| !v.is_null()))
             .collect();
         let name = if param_keys.contains(k) {
             format!("metric.{k}")
@@ -123,13 +133,12 @@ pub fn summary_frame(rows: &[(String, Value)]) -> PolarsResult<DataFrame> {
         };
         cols.push(json_column(&name, &v));
     }
-    let dirs: Vec<String> = rows.iter().map(|(d, _)| d.clone()).collect();
-    cols.push(Column::new("case_dir".into(), dirs));
+    cols.push(Column::new("case_dir".into(), text(|r| r.case_dir.clone())));
     DataFrame::new(cols)
 }
 
 /// OUT/summary.parquet and OUT/summary.csv (both always: the matrix table is small).
-pub fn write_summary(rows: &[(String, Value)], out: &Path) -> std::io::Result<()> {
+pub fn write_summary(rows: &[SummaryRow], out: &Path) -> std::io::Result<()> {
     let mut df = summary_frame(rows).map_err(io)?;
     write_frame(&mut df, out, "summary", true)
 }

@@ -9,7 +9,7 @@ pub fn method(shape: ShapeKind, transfer: TransferKind, scheme: SchemeKind) -> M
         scheme,
         cfl: 0.2,
         dt: DtMode::Fixed,
-        dt_override: None,
+        dt_value: None,
         j_update: JUpdate::Det,
     }
 }
@@ -26,7 +26,7 @@ pub fn box_scene(size: [f64; 2], rect: [f64; 4], material: Material, gravity: f6
         periodic: [false, false],
         bodies: vec![Body {
             rect,
-            material: 0,
+            material: String::new(),
             velocity: [0.0, 0.0],
         }],
         materials: vec![material],

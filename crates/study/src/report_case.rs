@@ -1,0 +1,350 @@
+//! The per-case report page: summary, metrics, events, time series, surge
+//! front, particle maps, pressure against depth, and each event before, at
+//! and after (with an animation).
+
+use crate::metrics::martin_moyce;
+use crate::output_files::write_atomic;
+use crate::plot_case::{
+    animate, FrontFigure, MapsFigure, Marker, Outline, PressureDepthFigure, Series,
+    TimeseriesFigure,
+};
+use crate::plot_common::{err, render, short, Res};
+use crate::report::{f64_column, read_parquet, vtk_files};
+use crate::report_html::{escape, Cell, Page};
+use crate::run_case::front_wall_z;
+use crate::snapshot::Snapshot;
+use crate::study_file;
+use crate::summary::Summary;
+use monitor::{Event, EventKind};
+use solver::Scene;
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+/// What the page shows, read from the case folder.
+struct CaseInputs {
+    dir: PathBuf,
+    out: PathBuf,
+    summary: Summary,
+    scene: Scene,
+    series: Series,
+}
+
+impl CaseInputs {
+    fn read(dir: &Path) -> Res<Self> {
+        let summary = Summary::read(dir)?;
+        let study = study_file::load(&dir.join("case.toml"), &[]).map_err(|e| e.to_string())?;
+        let scene = study.cases[0].solver.scene.clone();
+        let df = read_parquet(&dir.join("timeseries.parquet"))?;
+        let t = f64_column(&df, "t").ok_or("timeseries lacks t")?;
+        let columns = df
+            .get_column_names()
+            .iter()
+            .filter_map(|n| f64_column(&df, n).map(|v| (n.to_string(), v)))
+            .collect();
+        Ok(CaseInputs {
+            dir: dir.to_path_buf(),
+            out: dir.join("report"),
+            summary,
+            scene,
+            series: Series { t, columns },
+        })
+    }
+
+    fn name(&self) -> &str {
+        &self.summary.case
+    }
+
+    fn gravity(&self) -> f64 {
+        if self.scene.gravity > 0.0 {
+            self.scene.gravity
+        } else {
+            9.81
+        }
+    }
+
+    fn bbox(&self) -> [f64; 4] {
+        let s = &self.scene;
+        [
+            s.origin[0],
+            s.origin[1],
+            s.origin[0] + s.size[0],
+            s.origin[1] + s.size[1],
+        ]
+    }
+}
+
+fn load_snapshot(path: &Path) -> Res<Snapshot> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    Snapshot::from_vtk(&text).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// The per-case page; returns its path.
+pub fn case_report(dir: &Path) -> Res<PathBuf> {
+    let c = CaseInputs::read(dir)?;
+    let mut page = Page::default();
+    summary_section(&c, &mut page);
+    events_section(&c.summary.events, &mut page);
+    timeseries_section(&c, &mut page)?;
+    particles_section(&c, &mut page)?;
+    for e in &c.summary.events {
+        event_section(&c, e, &mut page)?;
+    }
+    let index = c.out.join("index.html");
+    write_atomic(
+        &index,
+        page.finish(&format!("kick report: {}", c.name()))
+            .as_bytes(),
+    )
+    .map_err(err)?;
+    Ok(index)
+}
+
+fn summary_section(c: &CaseInputs, page: &mut Page) {
+    let s = &c.summary;
+    let reason = if s.reason.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", escape(&s.reason))
+    };
+    page.p(&format!(
+        "Status <b>{}</b>{reason} after {} steps, t = {:.4} s; wall {:.1} s, {:.2} M particle-steps/s.",
+        s.status.as_str(),
+        s.steps,
+        s.t_end,
+        s.wall_s,
+        s.particle_steps_per_s / 1e6
+    ));
+    page.h2("Metrics");
+    let rows: Vec<(String, Vec<Cell>)> = match serde_json::to_value(&s.metrics) {
+        Ok(serde_json::Value::Object(m)) => m
+            .iter()
+            .map(|(k, v)| {
+                let shown = match v {
+                    serde_json::Value::Null => "-".into(),
+                    v => v.as_f64().map(short).unwrap_or_else(|| v.to_string()),
+                };
+                (String::new(), vec![Cell::Text(k.clone()), Cell::Num(shown)])
+            })
+            .collect(),
+        _ => vec![],
+    };
+    page.table("", &[], &rows);
+}
+
+fn events_section(events: &[Event], page: &mut Page) {
+    page.h2("Events");
+    if events.is_empty() {
+        page.p("No event.");
+        return;
+    }
+    let headers = [
+        "id",
+        "kind",
+        "first step",
+        "t (s)",
+        "region (m)",
+        "particles",
+        "peak a/g",
+        "peak z",
+        "Courant",
+        "quiescent before",
+        "previously deformed",
+        "rules",
+    ]
+    .map(String::from);
+    let rows: Vec<(String, Vec<Cell>)> = events
+        .iter()
+        .map(|e| {
+            let r = &e.region;
+            (
+                String::new(),
+                vec![
+                    Cell::Num(e.id.to_string()),
+                    Cell::Text(kind_name(e.kind)),
+                    Cell::Num(e.first_step.to_string()),
+                    Cell::Num(format!("{:.4}", e.t)),
+                    Cell::Text(format!(
+                        "x {:.3}-{:.3}, y {:.3}-{:.3}",
+                        r.x_min, r.x_max, r.y_min, r.y_max
+                    )),
+                    Cell::Num(e.n_particles.to_string()),
+                    Cell::Num(short(e.peak_accel_g)),
+                    Cell::Num(short(e.peak_z)),
+                    Cell::Num(format!("{:.2}", e.courant)),
+                    Cell::Num(e.quiescent_before.to_string()),
+                    Cell::Num(e.previously_deformed().to_string()),
+                    Cell::Text(e.rules.names().join(", ")),
+                ],
+            )
+        })
+        .collect();
+    page.table("", &headers, &rows);
+}
+
+/// The event kind as summary.json spells it.
+fn kind_name(kind: EventKind) -> String {
+    match serde_json::to_value(kind) {
+        Ok(serde_json::Value::String(s)) => s,
+        _ => format!("{kind:?}"),
+    }
+}
+
+fn timeseries_section(c: &CaseInputs, page: &mut Page) -> Res {
+    let markers: Vec<Marker> = c
+        .summary
+        .events
+        .iter()
+        .filter(|e| {
+            matches!(
+                e.kind,
+                EventKind::Kick | EventKind::BlowOut | EventKind::EnergyInjection
+            )
+        })
+        .map(|e| Marker { id: e.id, t: e.t })
+        .collect();
+    page.h2("Time series");
+    let fig = TimeseriesFigure {
+        series: &c.series,
+        markers: &markers,
+        title: format!(
+            "{}: energy, kicks, checkerboard, hydrostatic departure",
+            c.name()
+        ),
+    };
+    page.figure(&render(&fig, &c.out, "timeseries")?, "Energy budget, injected energy, max a/g and outlier score, checkerboard index and hydrostatic departure; red lines mark events");
+    if let (Some(z_wall), Some(ft), Some(fz)) = (
+        front_wall_z(&c.scene),
+        c.series.get("front_t"),
+        c.series.get("front_z"),
+    ) {
+        let data = martin_moyce();
+        let fig = FrontFigure {
+            t: ft,
+            z: fz,
+            data: &data,
+            z_wall,
+            title: format!("{}: surge front", c.name()),
+        };
+        page.figure(
+            &render(&fig, &c.out, "front")?,
+            "Surge front Z(T) against Martin & Moyce (1952)",
+        );
+    }
+    Ok(())
+}
+
+/// Particle maps at four of the study's times, and late pressure against depth.
+fn particles_section(c: &CaseInputs, page: &mut Page) -> Res {
+    let files = vtk_files(&c.dir.join("particles"));
+    let Some(last_file) = files.last() else {
+        return Ok(());
+    };
+    let pick: BTreeSet<usize> = (0..4).map(|k| k * (files.len() - 1) / 3).collect();
+    let snaps: Vec<Snapshot> = pick
+        .iter()
+        .map(|&k| load_snapshot(&files[k]))
+        .collect::<Res<_>>()?;
+    let fig = MapsFigure {
+        snaps: snaps
+            .iter()
+            .map(|s| (s, format!("t = {:.3} s", s.t)))
+            .collect(),
+        bbox: c.bbox(),
+        outline: None,
+        gravity: c.gravity(),
+        title: format!("{}: pressure (top) and a/g (bottom)", c.name()),
+    };
+    page.h2("Particles");
+    page.figure(
+        &render(&fig, &c.out, "maps")?,
+        "Particles coloured by pressure and by acceleration over g",
+    );
+    let last = load_snapshot(last_file)?;
+    let scene = &c.scene;
+    let area: f64 = scene
+        .bodies
+        .iter()
+        .map(|b| (b.rect[2] - b.rect[0]) * (b.rect[3] - b.rect[1]))
+        .sum();
+    let fig = PressureDepthFigure {
+        snap: &last,
+        level: scene.origin[1] + area / scene.size[0],
+        rho0: scene.materials.first().map_or(1000.0, |m| m.rho0),
+        gravity: c.gravity(),
+        title: format!(
+            "{}, t = {:.2} s: late hydrostatic rel. RMS {}",
+            c.name(),
+            last.t,
+            c.summary
+                .metrics
+                .hydro_rel_rms_late
+                .map(short)
+                .unwrap_or("-".into())
+        ),
+    };
+    page.figure(
+        &render(&fig, &c.out, "pressure_depth")?,
+        "Pressure against depth at the last snapshot, with the hydrostatic line",
+    );
+    Ok(())
+}
+
+/// One event: before, at and after with its region outlined, and an animation.
+fn event_section(c: &CaseInputs, e: &Event, page: &mut Page) -> Res {
+    let id = e.id;
+    let files = vtk_files(&c.dir.join("particles").join(format!("event_{id}")));
+    if files.is_empty() {
+        return Ok(());
+    }
+    let frames: Vec<Snapshot> = files.iter().map(|p| load_snapshot(p)).collect::<Res<_>>()?;
+    let r = &e.region;
+    let outline = Some(Outline {
+        x0: r.x_min,
+        y0: r.y_min,
+        x1: r.x_max,
+        y1: r.y_max,
+    });
+    let at = frames
+        .iter()
+        .position(|f| f.step == e.first_step)
+        .unwrap_or(0);
+    let mut chosen = vec![];
+    if at > 0 {
+        chosen.push((&frames[at - 1], "before"));
+    }
+    chosen.push((&frames[at], "at"));
+    if at + 1 < frames.len() {
+        chosen.push((frames.last().expect("non-empty"), "after"));
+    }
+    let kind = kind_name(e.kind);
+    let fig = MapsFigure {
+        snaps: chosen
+            .iter()
+            .map(|(s, w)| (*s, format!("{w}: step {}, t = {:.4} s", s.step, s.t)))
+            .collect(),
+        bbox: c.bbox(),
+        outline,
+        gravity: c.gravity(),
+        title: format!("{}: {kind} #{id} (region outlined)", c.name()),
+    };
+    page.h2(&format!("Event {id} ({kind}, step {})", e.first_step));
+    page.figure(
+        &render(&fig, &c.out, &format!("event_{id}_maps"))?,
+        "Before, at and after the event: pressure (top), a/g (bottom)",
+    );
+    let gif = format!("event_{id}.gif");
+    animate(
+        &frames,
+        c.bbox(),
+        outline,
+        &format!("{kind} #{id}"),
+        &c.out.join(&gif),
+        c.gravity(),
+    )?;
+    page.image(
+        &gif,
+        &format!("animation of event {id}"),
+        &format!("Animation around event {id} (every 5 steps)"),
+    );
+    Ok(())
+}

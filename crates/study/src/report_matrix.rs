@@ -1,0 +1,505 @@
+//! The matrix report page: a text summary with links, outcome and
+//! late-hydrostatic heatmaps, the stability map, speed against accuracy and
+//! the case table. Rows are gathered first (from each case's summary.json,
+//! found through summary.parquet's `case_dir`), then rendered.
+
+use crate::output_files::{relative_path, write_atomic};
+use crate::plot_common::{err, render, short, ColourScale, Res};
+use crate::plot_matrix::{HeatCell, HeatKey, HeatPanel, HeatmapFigure, LinesFigure, ParetoFigure};
+use crate::report::{read_parquet, text_column};
+use crate::report_case::case_report;
+use crate::report_html::{escape, Cell, Page};
+use crate::summary::{Status, Summary};
+use plotters::style::RGBColor;
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+/// One case of the matrix, with the values of the parameters that vary.
+struct Row {
+    summary: Summary,
+    dir: PathBuf,
+    /// Values of `Matrix::axes`, as text.
+    params: Vec<String>,
+    /// Relative link to the case's page, when it rendered.
+    link: Option<String>,
+}
+
+impl Row {
+    fn case(&self) -> &str {
+        &self.summary.case
+    }
+
+    fn t_end(&self) -> f64 {
+        self.summary.t_end
+    }
+
+    fn nan(v: Option<f64>) -> f64 {
+        v.unwrap_or(f64::NAN)
+    }
+
+    fn t_first_kick(&self) -> f64 {
+        Row::nan(self.summary.metrics.t_first_kick)
+    }
+
+    fn hydro_late(&self) -> f64 {
+        Row::nan(self.summary.metrics.hydro_rel_rms_late)
+    }
+
+    fn outcome(&self) -> &'static str {
+        match self.summary.status {
+            Status::BlewUp => "blew_up",
+            Status::Failed => "failed",
+            Status::Completed if self.summary.kicked() => "kicked",
+            Status::Completed => "completed",
+        }
+    }
+
+    /// The case name, linked to its page when there is one.
+    fn link_html(&self) -> String {
+        match &self.link {
+            Some(l) => format!("<a href=\"{l}\">{}</a>", escape(self.case())),
+            None => escape(self.case()),
+        }
+    }
+}
+
+const OUTCOMES: [(&str, &str, RGBColor); 4] = [
+    ("completed", "survived", RGBColor(90, 170, 90)),
+    ("kicked", "kicked", RGBColor(240, 160, 60)),
+    ("blew_up", "blew up", RGBColor(200, 50, 50)),
+    ("failed", "failed", RGBColor(150, 150, 150)),
+];
+
+/// Numbers compare as numbers, the rest as text.
+fn by_value(a: &String, b: &String) -> std::cmp::Ordering {
+    match (a.parse::<f64>(), b.parse::<f64>()) {
+        (Ok(x), Ok(y)) => x.total_cmp(&y),
+        _ => a.cmp(b),
+    }
+}
+
+fn param_text(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::String(s) => s.clone(),
+        serde_json::Value::Number(n) => n.as_f64().map(short).unwrap_or_else(|| n.to_string()),
+        other => other.to_string(),
+    }
+}
+
+/// The rows of a matrix, sorted by the varying parameters, and those parameters' keys.
+struct Matrix {
+    axes: Vec<String>,
+    rows: Vec<Row>,
+}
+
+impl Matrix {
+    fn read(dir: &Path) -> Res<Self> {
+        let df = read_parquet(&dir.join("summary.parquet"))?;
+        let dirs = text_column(&df, "case_dir").ok_or("summary.parquet lacks case_dir")?;
+        let summaries: Vec<(PathBuf, Summary)> = dirs
+            .iter()
+            .map(|d| {
+                let case_dir = dir.join(d);
+                Summary::read(&case_dir).map(|s| (case_dir, s))
+            })
+            .collect::<Res<_>>()?;
+        let keys: BTreeSet<&String> = summaries
+            .iter()
+            .flat_map(|(_, s)| s.params.keys())
+            .collect();
+        let text = |s: &Summary, k: &String| s.params.get(k).map(param_text).unwrap_or_default();
+        let axes: Vec<String> = keys
+            .into_iter()
+            .filter(|k| {
+                summaries
+                    .iter()
+                    .map(|(_, s)| text(s, k))
+                    .collect::<BTreeSet<_>>()
+                    .len()
+                    > 1
+            })
+            .cloned()
+            .collect();
+        let mut rows: Vec<Row> = summaries
+            .into_iter()
+            .map(|(dir, summary)| Row {
+                params: axes.iter().map(|k| text(&summary, k)).collect(),
+                summary,
+                dir,
+                link: None,
+            })
+            .collect();
+        rows.sort_by(|a, b| {
+            a.params
+                .iter()
+                .zip(&b.params)
+                .map(|(x, y)| by_value(x, y))
+                .find(|o| o.is_ne())
+                .unwrap_or(std::cmp::Ordering::Equal)
+        });
+        Ok(Matrix { axes, rows })
+    }
+
+    fn axis(&self, suffix: &str) -> Option<usize> {
+        self.axes.iter().position(|n| n.ends_with(suffix))
+    }
+}
+
+/// The matrix page (and every case's page); returns its path.
+pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
+    let out = dir.join("report");
+    let mut m = Matrix::read(dir)?;
+    // Case pages first, so the matrix page can link them.
+    for r in &mut m.rows {
+        match case_report(&r.dir) {
+            Ok(index) => r.link = Some(relative_path(&out, &index)),
+            Err(e) => eprintln!("kick report: {}: {e}", r.case()),
+        }
+    }
+    std::fs::create_dir_all(&out).map_err(err)?;
+    let mut page = Page::default();
+    text_summary(&m.rows, &mut page);
+    if !m.axes.is_empty() {
+        heatmaps(&m, &out, &mut page)?;
+        stability_map(&m, &out, &mut page)?;
+    }
+    speed_accuracy(&m.rows, &out, &mut page)?;
+    case_table(&m, &mut page);
+    let title = format!(
+        "kick matrix report: {}",
+        dir.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    );
+    let index = out.join("index.html");
+    write_atomic(&index, page.finish(&title).as_bytes()).map_err(err)?;
+    Ok(index)
+}
+
+fn text_summary(rows: &[Row], page: &mut Page) {
+    let count = |o: &str| rows.iter().filter(|r| r.outcome() == o).count();
+    let kicked = rows.iter().filter(|r| r.summary.kicked()).count();
+    page.p(&format!(
+        "{} cases ran: {} survived without a kick, {} kicked at least once ({} of them then completed), {} blew up, {} failed.",
+        rows.len(),
+        count("completed"),
+        kicked,
+        count("kicked"),
+        count("blew_up"),
+        count("failed")
+    ));
+    let mut ranked: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.summary.status == Status::Completed && r.hydro_late().is_finite())
+        .collect();
+    ranked.sort_by(|a, b| a.hydro_late().total_cmp(&b.hydro_late()));
+    if let (Some(best), Some(worst)) = (ranked.first(), ranked.last()) {
+        page.p(&format!(
+            "Closest to hydrostatic at the end: {} (late rel. RMS {}). Furthest among completed cases: {} ({}).",
+            best.link_html(), short(best.hydro_late()), worst.link_html(), short(worst.hydro_late())
+        ));
+    }
+    if let Some(r) = rows
+        .iter()
+        .filter(|r| r.summary.status == Status::BlewUp)
+        .min_by(|a, b| a.t_end().total_cmp(&b.t_end()))
+    {
+        page.p(&format!(
+            "Earliest blow-up: {} at t = {:.3} s.",
+            r.link_html(),
+            r.t_end()
+        ));
+    }
+}
+
+/// Heatmap layout: x = K (or the first axis), one panel per viscosity, y = the other axes.
+struct HeatLayout<'a> {
+    m: &'a Matrix,
+    x_axis: usize,
+    panel_axis: Option<usize>,
+    y_axes: Vec<usize>,
+    x_cats: Vec<String>,
+    y_cats: Vec<String>,
+    p_cats: Vec<String>,
+}
+
+impl<'a> HeatLayout<'a> {
+    fn new(m: &'a Matrix) -> Self {
+        let x_axis = m.axis(".K").unwrap_or(0);
+        let panel_axis = m.axis(".viscosity").filter(|&p| p != x_axis);
+        let y_axes: Vec<usize> = (0..m.axes.len())
+            .filter(|&k| k != x_axis && Some(k) != panel_axis)
+            .collect();
+        let mut layout = HeatLayout {
+            m,
+            x_axis,
+            panel_axis,
+            y_axes,
+            x_cats: vec![],
+            y_cats: vec![],
+            p_cats: vec![String::new()],
+        };
+        layout.x_cats = layout.cats(|r| r.params[x_axis].clone());
+        layout.y_cats = layout.cats(|r| layout.y_of(r));
+        if let Some(p) = panel_axis {
+            layout.p_cats = layout.cats(|r| r.params[p].clone());
+        }
+        layout
+    }
+
+    fn y_of(&self, r: &Row) -> String {
+        self.y_axes
+            .iter()
+            .map(|&k| r.params[k].clone())
+            .collect::<Vec<_>>()
+            .join(" ")
+    }
+
+    fn cats(&self, f: impl Fn(&Row) -> String) -> Vec<String> {
+        let mut v: Vec<String> = self
+            .m
+            .rows
+            .iter()
+            .map(f)
+            .collect::<BTreeSet<_>>()
+            .into_iter()
+            .collect();
+        v.sort_by(by_value);
+        v
+    }
+
+    fn y_label(&self) -> String {
+        self.y_axes
+            .iter()
+            .map(|&k| self.m.axes[k].as_str())
+            .collect::<Vec<_>>()
+            .join(" / ")
+    }
+
+    fn figure(
+        &self,
+        title: &str,
+        key: HeatKey,
+        cell: impl Fn(&Row) -> (RGBColor, String),
+    ) -> HeatmapFigure {
+        let panels = self
+            .p_cats
+            .iter()
+            .map(|p| HeatPanel {
+                title: match self.panel_axis {
+                    Some(a) => format!("{} = {p}", self.m.axes[a]),
+                    None => String::new(),
+                },
+                cells: self
+                    .m
+                    .rows
+                    .iter()
+                    .filter(|r| self.panel_axis.is_none_or(|a| &r.params[a] == p))
+                    .map(|r| {
+                        let (colour, text) = cell(r);
+                        HeatCell {
+                            x: self
+                                .x_cats
+                                .iter()
+                                .position(|c| *c == r.params[self.x_axis])
+                                .unwrap_or(0),
+                            y: self
+                                .y_cats
+                                .iter()
+                                .position(|c| *c == self.y_of(r))
+                                .unwrap_or(0),
+                            colour,
+                            text,
+                        }
+                    })
+                    .collect(),
+            })
+            .collect();
+        HeatmapFigure {
+            title: title.into(),
+            x_label: self.m.axes[self.x_axis].clone(),
+            y_label: self.y_label(),
+            x_cats: self.x_cats.clone(),
+            y_cats: self.y_cats.clone(),
+            panels,
+            key,
+        }
+    }
+}
+
+fn outcome_cell(r: &Row) -> (RGBColor, String) {
+    let colour = OUTCOMES
+        .iter()
+        .find(|o| o.0 == r.outcome())
+        .map_or(RGBColor(150, 150, 150), |o| o.2);
+    let (kick, end) = (r.t_first_kick(), r.t_end());
+    let text = match r.outcome() {
+        "blew_up" if kick.is_finite() => format!("k {kick:.2} x {end:.2}"),
+        "blew_up" => format!("x {end:.2}"),
+        "failed" => "failed".into(),
+        _ if kick.is_finite() => format!("k {kick:.2}"),
+        _ => "ok".into(),
+    };
+    (colour, text)
+}
+
+fn heatmaps(m: &Matrix, out: &Path, page: &mut Page) -> Res {
+    let layout = HeatLayout::new(m);
+    let outcome = layout.figure(
+        "Outcome and time of first kick (s)",
+        HeatKey::Legend(OUTCOMES.iter().map(|o| (o.1.to_string(), o.2)).collect()),
+        outcome_cell,
+    );
+    page.h2("Outcome");
+    page.figure(
+        &render(&outcome, out, "heatmap_outcome")?,
+        "Outcome per case: k t = first kick at t (s), x t = blew up at t (s)",
+    );
+    let hydro: Vec<f64> = m.rows.iter().map(|r| r.hydro_late()).collect();
+    let scale = ColourScale::robust(&hydro, true);
+    let hydro_map = layout.figure(
+        "Late hydrostatic departure (relative RMS, last second)",
+        HeatKey::Bar(scale, "log10 rel. RMS".into()),
+        |r| {
+            let h = r.hydro_late();
+            if h.is_finite() && h > 0.0 {
+                (scale.colour(h), short(h))
+            } else {
+                (RGBColor(220, 220, 220), "-".into())
+            }
+        },
+    );
+    page.figure(
+        &render(&hydro_map, out, "heatmap_hydro")?,
+        "Late hydrostatic departure (log colour scale)",
+    );
+    Ok(())
+}
+
+/// Survival time against K, one line per combination of the other axes.
+fn stability_map(m: &Matrix, out: &Path, page: &mut Page) -> Res {
+    let Some(kx) = m.axis(".K") else {
+        return Ok(());
+    };
+    let short_key = |k: usize| m.axes[k].rsplit('.').next().unwrap_or(&m.axes[k]);
+    let family = |r: &Row| {
+        (0..m.axes.len())
+            .filter(|&k| k != kx)
+            .map(|k| format!("{}={}", short_key(k), r.params[k]))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let families: BTreeSet<String> = m.rows.iter().map(family).collect();
+    let lines = families
+        .iter()
+        .map(|f| {
+            let mut pts: Vec<(f64, f64)> = m
+                .rows
+                .iter()
+                .filter(|r| &family(r) == f)
+                .filter_map(|r| Some((r.params[kx].parse::<f64>().ok()?, r.t_end())))
+                .collect();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let name = if f.is_empty() {
+                "all".into()
+            } else {
+                f.clone()
+            };
+            (name, pts)
+        })
+        .collect();
+    let fig = LinesFigure {
+        title: "Stability map: time survived".into(),
+        x_label: format!("{} (Pa, log)", m.axes[kx]),
+        y_label: "time survived (s)".into(),
+        lines,
+        x_log: true,
+        y_max: m.rows.iter().map(|r| r.t_end()).fold(0.1, f64::max),
+    };
+    page.figure(
+        &render(&fig, out, "stability")?,
+        "Time survived against K, one line per combination of the other axes",
+    );
+    Ok(())
+}
+
+/// Completed cases when at least two completed; otherwise every case that ran
+/// (its accuracy then measured over its last second before blowing up).
+fn speed_accuracy(rows: &[Row], out: &Path, page: &mut Page) -> Res {
+    let point = |r: &Row| {
+        (
+            r.case().to_string(),
+            r.summary.wall_s / r.t_end(),
+            r.hydro_late(),
+        )
+    };
+    let ran = |r: &&Row| r.summary.status != Status::Failed && r.t_end() > 0.0;
+    let completed: Vec<_> = rows
+        .iter()
+        .filter(ran)
+        .filter(|r| r.summary.status == Status::Completed)
+        .map(point)
+        .collect();
+    let (points, which) = if completed.len() >= 2 {
+        (completed, "completed cases")
+    } else {
+        (
+            rows.iter().filter(ran).map(point).collect(),
+            "all cases; fewer than two completed",
+        )
+    };
+    if points.len() < 2 {
+        return Ok(());
+    }
+    let fig = ParetoFigure {
+        title: format!("Speed against accuracy ({which})"),
+        x_label: "wall seconds per simulated second".into(),
+        y_label: "late hydrostatic rel. RMS".into(),
+        points,
+    };
+    page.h2("Speed against accuracy");
+    page.figure(
+        &render(&fig, out, "speed_accuracy")?,
+        "Cost against late hydrostatic departure, Pareto front in red",
+    );
+    Ok(())
+}
+
+fn case_table(m: &Matrix, page: &mut Page) {
+    page.h2("Cases");
+    let mut headers = vec!["case".to_string()];
+    headers.extend(m.axes.iter().cloned());
+    headers.extend(
+        [
+            "status",
+            "t end (s)",
+            "first kick (s)",
+            "hydro late",
+            "checkerboard late",
+            "front error (Z)",
+            "wall (s)",
+        ]
+        .map(String::from),
+    );
+    let cell = |v: Option<f64>| Cell::Num(v.filter(|v| v.is_finite()).map_or("-".into(), short));
+    let rows: Vec<(String, Vec<Cell>)> = m
+        .rows
+        .iter()
+        .map(|r| {
+            let s = &r.summary;
+            let mut cells = vec![Cell::Text(r.link_html())];
+            cells.extend(r.params.iter().map(|p| Cell::Num(escape(p))));
+            cells.extend([
+                Cell::Text(s.status.as_str().into()),
+                Cell::Num(format!("{:.3}", s.t_end)),
+                cell(s.metrics.t_first_kick),
+                cell(s.metrics.hydro_rel_rms_late),
+                cell(s.metrics.checkerboard_late),
+                cell(s.metrics.front_rms_error),
+                Cell::Num(format!("{:.1}", s.wall_s)),
+            ]);
+            (format!("case-row {}", r.outcome()), cells)
+        })
+        .collect();
+    page.table("cases", &headers, &rows);
+}

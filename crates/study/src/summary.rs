@@ -1,0 +1,119 @@
+//! `summary.json`: one case's outcome, written by `run_case` and read by the
+//! matrix, the report and `reproduce` through this one type.
+
+use crate::output_files::write_atomic;
+use monitor::Event;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Bumped whenever a field of `Summary` or `Metrics` changes meaning or name.
+pub const SCHEMA_VERSION: u32 = 2;
+
+/// How a case ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    /// Reached `scene.t_end`.
+    Completed,
+    /// Stopped by the monitor (blow-out, non-finite state) or the solver.
+    BlewUp,
+    /// Could not run (setup error or a panic inside the case).
+    Failed,
+}
+
+impl Status {
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Status::Completed => "completed",
+            Status::BlewUp => "blew_up",
+            Status::Failed => "failed",
+        }
+    }
+}
+
+/// The case's figures (docs/physics.md section 4); `None` where undefined
+/// (no rows in the window, no kick, not a dam-break scene).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Metrics {
+    /// Mean relative RMS hydrostatic departure over the last simulated second.
+    pub hydro_rel_rms_late: Option<f64>,
+    /// Mean largest hydrostatic departure over the last simulated second.
+    pub hydro_max_late: Option<f64>,
+    /// Mean checkerboard index over the last simulated second.
+    pub checkerboard_late: Option<f64>,
+    pub checkerboard_peak: Option<f64>,
+    /// Largest energy injected above the running minimum (J/m).
+    pub energy_injected_max: Option<f64>,
+    /// Time of the first kick event (s).
+    pub t_first_kick: Option<f64>,
+    pub n_kicks: usize,
+    pub n_energy_injections: usize,
+    pub courant_max: Option<f64>,
+    pub max_accel_g: Option<f64>,
+    /// RMS of Z against Martin & Moyce while the front is short of the far wall.
+    pub front_rms_error: Option<f64>,
+    /// Event openings past `monitor.max_events`, counted per step.
+    pub events_dropped: u64,
+}
+
+/// One case's `summary.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    pub schema_version: u32,
+    pub case: String,
+    /// Every study parameter by dotted key, method defaults included.
+    pub params: BTreeMap<String, serde_json::Value>,
+    pub status: Status,
+    /// Why the run stopped ("" when it completed).
+    pub reason: String,
+    pub steps: u64,
+    /// Simulated time reached (s).
+    pub t_end: f64,
+    pub wall_s: f64,
+    pub particles: usize,
+    pub particle_steps_per_s: f64,
+    /// 64-bit state hash (hex) of the particle arrays at the last step.
+    pub final_state_hash: String,
+    pub events: Vec<Event>,
+    pub metrics: Metrics,
+}
+
+impl Summary {
+    pub const FILE: &'static str = "summary.json";
+
+    /// Reads `dir/summary.json`; errors name the file.
+    pub fn read(dir: &Path) -> Result<Summary, String> {
+        let path = dir.join(Self::FILE);
+        let bytes =
+            std::fs::read(&path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+        #[derive(Deserialize)]
+        struct Version {
+            schema_version: Option<u32>,
+        }
+        let version = serde_json::from_slice::<Version>(&bytes)
+            .map_err(|e| format!("{}: not valid JSON: {e}", path.display()))?
+            .schema_version;
+        if version != Some(SCHEMA_VERSION) {
+            return Err(format!(
+                "{}: schema_version {} is not {SCHEMA_VERSION} (written by another kick version: run the case again)",
+                path.display(),
+                version.map_or("missing".into(), |v| v.to_string())
+            ));
+        }
+        serde_json::from_slice(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    /// Writes `dir/summary.json` atomically (the last file a case writes).
+    pub fn write(&self, dir: &Path) -> std::io::Result<()> {
+        write_atomic(
+            &dir.join(Self::FILE),
+            serde_json::to_string_pretty(self)?.as_bytes(),
+        )
+    }
+
+    /// The case logged at least one kick.
+    pub fn kicked(&self) -> bool {
+        self.metrics.t_first_kick.is_some()
+    }
+}

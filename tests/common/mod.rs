@@ -1,0 +1,36 @@
+//! Helpers shared by the end-to-end tests of the `kick` binary and the reports.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The repository root (tests run `kick` from there, so `studies/...` resolves).
+pub fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// Runs the `kick` binary from the repository root.
+pub fn kick(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_kick"))
+        .args(args)
+        .current_dir(repo())
+        .output()
+        .expect("kick runs")
+}
+
+/// A fresh, empty folder for one test: `kick-PREFIX-PID-NAME` in the temp dir.
+pub fn scratch(prefix: &str, name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("kick-{prefix}-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A case folder's summary.json as loose JSON (for asserting on the file format itself).
+pub fn summary_json(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
+}
