@@ -1,4 +1,4 @@
-//! Checkerboard index of the cell-averaged pressure (PHYSICS.md section 4):
+//! Checkerboard index of the cell-averaged pressure (docs/physics.md section 4):
 //! CB = sum (L p)_c^2 / (64 sum (p_c - mean)^2) over interior cells (filled
 //! cells whose 4 edge neighbours are filled), L the 5-point Laplacian.
 //! 0 for any linear field, 1 for a pure zero-mean checkerboard.

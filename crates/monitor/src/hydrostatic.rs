@@ -1,4 +1,4 @@
-//! Departure from hydrostatic pressure by PHYSICS.md's clamped mass-above
+//! Departure from hydrostatic pressure by docs/physics.md's clamped mass-above
 //! reference: in grid column strip s (width h),
 //! p_h(p) = (g / h) sum_{q in strip} m_q clamp((y_q - y_p) / l + 1/2, 0, 1),
 //! l = h / ppc. Exact to round-off on a hydrostatic lattice of any

@@ -3,7 +3,7 @@
 //! energy injection and blow-out, and logs each kick as an [`Event`] with its
 //! step, region and hallmark flags. Field metrics (checkerboard, hydrostatic
 //! departure, surge front) are computed on demand: at output rows and when an
-//! event opens. Definitions: PHYSICS.md section 4.
+//! event opens. Definitions: docs/physics.md section 4.
 
 pub mod accel_outliers;
 pub mod cells;

@@ -21,7 +21,7 @@ impl Energy {
 }
 
 /// Energy that explicit (symplectic Euler) stepping may add without any
-/// instability: about M g dt |dv_y| / 2 when fluid decelerates (PHYSICS.md),
+/// instability: about M g dt |dv_y| / 2 when fluid decelerates (docs/physics.md),
 /// with |dv_y| bounded by the free-fall speed sqrt(2 g H) over the box height H.
 pub fn injection_noise_floor(total_mass: f64, gravity: f64, height: f64, dt: f64) -> f64 {
     0.5 * total_mass * gravity * dt * (2.0 * gravity * height).sqrt()

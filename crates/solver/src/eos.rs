@@ -1,4 +1,4 @@
-//! Equations of state (PHYSICS.md section 2): pressure positive in compression,
+//! Equations of state (docs/physics.md section 2): pressure positive in compression,
 //! U' = -p, K_t = -J dp/dJ. The thermal option evaluates them at J / j_res.
 
 use crate::config::{EosKind, Material};

@@ -35,7 +35,7 @@ pub fn seed(scene: &Scene) -> Particles {
                 }
                 InitialState::Hydrostatic => {
                     // Row k from the top carries p = rho0 g l (k + 1/2): exactly the
-                    // clamped mass-above reference of PHYSICS.md on this lattice.
+                    // clamped mass-above reference of docs/physics.md on this lattice.
                     let mut y = scene.origin[1] + iy0 as f64 * l;
                     let mut prev_half = 0.0;
                     for row in 0..rows {

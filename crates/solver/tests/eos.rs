@@ -1,4 +1,4 @@
-//! EOS forms of PHYSICS.md section 2: U' = -p and K_t = -J dp/dJ by finite
+//! EOS forms of docs/physics.md section 2: U' = -p and K_t = -J dp/dJ by finite
 //! differences, signs (compression positive), the inverse, and J_res.
 
 use solver::{EosKind, Material};
@@ -73,7 +73,7 @@ fn signs_zero_point_and_inverse() {
 fn tangent_modulus_values_from_physics_md() {
     let mut m = Material::tait(1.0);
     m.eos = EosKind::Tait;
-    // PHYSICS.md: Tait at J = 0.81 is about 6.8 K.
+    // docs/physics.md: Tait at J = 0.81 is about 6.8 K.
     let kt = m.eos(0.81).tangent_modulus;
     assert!((kt - 0.81 * (0.19f64 / 0.0894).exp()).abs() < 1e-12);
     assert!((kt - 6.8).abs() < 0.1, "{kt}");

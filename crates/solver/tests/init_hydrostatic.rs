@@ -1,11 +1,11 @@
 //! A column initialised in discrete hydrostatic equilibrium stays at rest, with
-//! particle pressure close to PHYSICS.md's clamped mass-above reference.
+//! particle pressure close to docs/physics.md's clamped mass-above reference.
 
 use solver::*;
 
 mod common;
 
-/// PHYSICS.md section 4: p_h = (g / h) sum_{q in strip} m_q clamp((y_q - y_p) / l + 1/2, 0, 1).
+/// docs/physics.md section 4: p_h = (g / h) sum_{q in strip} m_q clamp((y_q - y_p) / l + 1/2, 0, 1).
 fn reference_pressure(v: &StateView) -> Vec<f64> {
     let h = v.scene.cell;
     let l = h / v.scene.ppc as f64;
