@@ -8,7 +8,9 @@ use study::plot_case::{
     animate, FrontFigure, MapsFigure, Marker, Outline, PressureDepthFigure, Series,
     TimeseriesFigure,
 };
-use study::plot_common::{render, ColourScale, Figure};
+use study::plot_common::{
+    decade_label, log_decades, log_minors, log_range, render, ColourScale, Figure, LogAxis,
+};
 use study::plot_matrix::{
     pareto_front, HeatCell, HeatKey, HeatPanel, HeatmapFigure, LinesFigure, ParetoFigure,
 };
@@ -21,8 +23,9 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-/// Renders, then checks both files: PNG size and ink, SVG labels.
-fn check(fig: &impl Figure, dir: &Path, stem: &str, labels: &[&str]) {
+/// Renders, then checks both files: PNG size and ink, SVG labels; returns
+/// the SVG's text elements.
+fn check(fig: &impl Figure, dir: &Path, stem: &str, labels: &[&str]) -> Vec<String> {
     let [png, svg] = render(fig, dir, stem).unwrap();
     let img = image::open(dir.join(&png)).unwrap().to_rgb8();
     assert_eq!(img.dimensions(), fig.size(), "{png}");
@@ -44,6 +47,32 @@ fn check(fig: &impl Figure, dir: &Path, stem: &str, labels: &[&str]) {
     for l in labels {
         assert!(texts.contains(l), "{svg} lacks the text element {l:?}");
     }
+    texts.into_iter().map(String::from).collect()
+}
+
+/// A log figure's SVG: its decades labelled "10ᵏ" in superscript digits and
+/// no tick label in the old "1e0.5" style (nor any other non-decade label).
+fn check_log_ticks(texts: &[String], stem: &str, decades: &[&str]) {
+    for d in decades {
+        assert!(
+            texts.iter().any(|t| t == d),
+            "{stem}.svg lacks the decade label {d:?}: {texts:?}"
+        );
+    }
+    let old_style = |t: &str| {
+        t.strip_prefix("1e")
+            .is_some_and(|r| r.starts_with(|c: char| c.is_ascii_digit() || c == '-'))
+    };
+    assert!(
+        !texts.iter().any(|t| old_style(t)),
+        "{stem}.svg has 1e-style tick labels: {texts:?}"
+    );
+    assert!(
+        !texts
+            .iter()
+            .any(|t| t.contains("1e0.5") || t.contains("1e2.5")),
+        "{stem}.svg: {texts:?}"
+    );
 }
 
 fn column_snapshot(step: u64, kick: bool) -> Snapshot {
@@ -107,7 +136,7 @@ fn case_plots_render_as_png_and_svg() {
         markers: &markers,
         title: "synthetic".into(),
     };
-    check(
+    let texts = check(
         &fig,
         &dir,
         "timeseries",
@@ -117,8 +146,12 @@ fn case_plots_render_as_png_and_svg() {
             "checkerboard CB",
             "#1",
             "#2",
+            "a/g, z (log)",
+            "departure (log)",
         ],
     );
+    // |sin| + 0.01 spans 0.01..1.01: the log panels run 10⁻²..10¹.
+    check_log_ticks(&texts, "timeseries", &["10⁻²", "10⁻¹", "10⁰", "10¹"]);
 
     let tt: Vec<f64> = (0..50).map(|k| k as f64 * 0.1).collect();
     let zz: Vec<f64> = tt.iter().map(|x| 1.0 + 0.6 * x).collect();
@@ -177,12 +210,15 @@ fn case_plots_render_as_png_and_svg() {
         gravity: 9.81,
         title: "maps".into(),
     };
-    check(
+    let texts = check(
         &fig,
         &dir,
         "maps",
-        &["x (m)", "y (m)", "pressure (kPa)", "log10 a/g"],
+        &["x (m)", "y (m)", "pressure (kPa)", "a/g (log)"],
     );
+    // a/g from about 1.1 to 7 (the kick is under 1 %) holds no whole
+    // decade: the bar widens to 10⁰..10¹.
+    check_log_ticks(&texts, "maps", &["10⁰", "10¹"]);
 
     let gif = dir.join("kick.gif");
     animate(
@@ -261,7 +297,8 @@ fn matrix_plots_render_as_png_and_svg() {
             "log10 rel. RMS".into(),
         ),
     };
-    check(&fig, &dir, "heatmap_hydro", &["log10 rel. RMS"]);
+    let texts = check(&fig, &dir, "heatmap_hydro", &["log10 rel. RMS"]);
+    check_log_ticks(&texts, "heatmap_hydro", &["10⁻³", "10⁻²", "10⁻¹", "10⁰"]);
     let fig = LinesFigure {
         title: "stability".into(),
         x_label: "K (Pa, log)".into(),
@@ -279,12 +316,13 @@ fn matrix_plots_render_as_png_and_svg() {
         x_log: true,
         y_max: 5.0,
     };
-    check(
+    let texts = check(
         &fig,
         &dir,
         "stability",
         &["K (Pa, log)", "time survived (s)", "power 7"],
     );
+    check_log_ticks(&texts, "stability", &["10⁴", "10⁵", "10⁶"]);
     let fig = ParetoFigure {
         title: "speed".into(),
         x_label: "wall seconds per simulated second".into(),
@@ -296,12 +334,14 @@ fn matrix_plots_render_as_png_and_svg() {
             ("d".into(), 3.0, 0.1),
         ],
     };
-    check(
+    let texts = check(
         &fig,
         &dir,
         "speed_accuracy",
         &["wall seconds per simulated second", "Pareto front"],
     );
+    // x 1..20, y 0.01..0.5, both with 0.3 of padding.
+    check_log_ticks(&texts, "speed_accuracy", &["10⁰", "10¹", "10⁻²", "10⁻¹"]);
 }
 
 #[test]
@@ -314,4 +354,66 @@ fn pareto_front_keeps_the_non_dominated_points() {
         (3.0, 0.3),
     ];
     assert_eq!(pareto_front(&pts), vec![0, 3, 1]);
+}
+
+#[test]
+fn decade_labels_are_powers_of_ten_in_superscript() {
+    assert_eq!(decade_label(&0.0), "10⁰");
+    assert_eq!(decade_label(&-0.0), "10⁰");
+    assert_eq!(decade_label(&1.0), "10¹");
+    assert_eq!(decade_label(&3.0), "10³");
+    assert_eq!(decade_label(&-2.0), "10⁻²");
+    assert_eq!(decade_label(&12.0), "10¹²");
+    assert_eq!(decade_label(&-10.0), "10⁻¹⁰");
+    // A whole decade computed in floating point still gets its label.
+    assert_eq!(decade_label(&(0.1f64 * 3.0 * 10.0 / 3.0)), "10¹");
+    for v in [0.5, 2.5, -0.3, 2f64.log10(), f64::NAN, f64::INFINITY] {
+        assert_eq!(decade_label(&v), "", "{v}");
+    }
+}
+
+#[test]
+fn log_axes_mark_decades_and_the_minors_between() {
+    let (lo, hi) = (-2.3, 1.7);
+    assert_eq!(log_decades(lo, hi), vec![-2.0, -1.0, 0.0, 1.0]);
+    let mut want = vec![];
+    for k in -3..=1 {
+        for m in 2..=9 {
+            let v = k as f64 + (m as f64).log10();
+            if (lo..=hi).contains(&v) {
+                want.push(v);
+            }
+        }
+    }
+    // 6..9 x 10⁻³, all of 10⁻², 10⁻¹, 10⁰, then 2..5 x 10¹.
+    assert_eq!(want.len(), 4 + 3 * 8 + 4);
+    let got = log_minors(lo, hi);
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (g, w) in got.iter().zip(&want) {
+        assert!((g - w).abs() < 1e-12, "{got:?}");
+    }
+    assert!(got.iter().all(|v| decade_label(v).is_empty()));
+
+    // The axis: decades are the key points (labelled), minors the light ones.
+    use plotters::prelude::Ranged;
+    let axis = LogAxis::new(lo, hi);
+    assert_eq!(axis.range(), lo..hi);
+    assert_eq!(axis.decades(), log_decades(lo, hi).as_slice());
+    assert_eq!(axis.minors(), got.as_slice());
+    for d in axis.decades() {
+        assert!(!decade_label(d).is_empty());
+    }
+
+    // A range inside one decade is widened to it, so there is a labelled
+    // tick; one holding a decade is kept; a lone decade gets one each side.
+    assert_eq!(log_range(0.2, 0.8), (0.0, 1.0));
+    assert_eq!(log_range(-1.7, -1.2), (-2.0, -1.0));
+    assert_eq!(log_range(-0.2, 0.3), (-0.2, 0.3));
+    assert_eq!(log_range(2.0, 2.0), (1.0, 3.0));
+    assert_eq!(log_range(0.5, 0.5), (0.0, 1.0));
+    assert_eq!(log_range(f64::NAN, 1.0), (0.0, 1.0));
+    let axis = LogAxis::new(0.2, 0.8);
+    assert_eq!(axis.decades(), &[0.0, 1.0]);
+    assert_eq!(axis.minors().len(), 8);
+    assert!(log_decades(0.2, 0.8).is_empty());
 }

@@ -3,9 +3,12 @@
 //! maps (pressure and a/g with colour bars) and the animation of a kick.
 
 use crate::plot_common::{
-    colour_bar, err, fonts, legend, series_colour, short, ColourScale, Figure, Res, SANS,
+    colour_bar, decade_label, err, fonts, legend, series_colour, short, ColourScale, Figure,
+    LogAxis, Res, SANS,
 };
 use crate::snapshot::Snapshot;
+use plotters::coord::ranged1d::ValueFormatter;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
@@ -52,9 +55,11 @@ fn finite_range(lines: &[(&str, Vec<f64>)], log: bool) -> (f64, f64) {
         (a.min(x), b.max(x))
     });
     if !lo.is_finite() {
-        return if log { (1e-3, 1.0) } else { (0.0, 1.0) };
+        // log: log10 of 1e-3..1
+        return if log { (-3.0, 0.0) } else { (0.0, 1.0) };
     }
     if log {
+        // Whole decades at both ends; LogAxis::new keeps this as it is.
         let lo = lo.max(hi * 1e-9);
         (
             lo.log10().floor(),
@@ -97,7 +102,7 @@ impl TimeseriesFigure<'_> {
                 log: false,
             },
             Panel {
-                ylabel: "log10 a/g, z",
+                ylabel: "a/g, z (log)",
                 lines: vec![
                     ("max a/g", col("max_accel_g")),
                     ("max outlier z", col("max_z")),
@@ -110,7 +115,7 @@ impl TimeseriesFigure<'_> {
                 log: false,
             },
             Panel {
-                ylabel: "log10 departure",
+                ylabel: "departure (log)",
                 lines: vec![
                     ("hydro rel. RMS", col("hydro_rel_rms")),
                     ("hydro max / rho0 g H", col("hydro_max")),
@@ -130,61 +135,98 @@ impl Figure for TimeseriesFigure<'_> {
         let root = root.titled(&self.title, (SANS, 22)).map_err(err)?;
         let panels = self.panels();
         let areas = root.split_evenly((panels.len(), 1));
-        let t = &self.series.t;
-        let t_max = t.iter().copied().fold(0.0, f64::max).max(1e-9);
+        let t_max = self.series.t.iter().copied().fold(0.0, f64::max).max(1e-9);
         for (k, (panel, area)) in panels.iter().zip(areas.iter()).enumerate() {
             let (lo, hi) = finite_range(&panel.lines, panel.log);
-            let last = k + 1 == panels.len();
-            let mut chart = ChartBuilder::on(area)
-                .margin(6)
-                .margin_right(20)
-                .x_label_area_size(if last { 44 } else { 22 })
-                .y_label_area_size(80)
-                .build_cartesian_2d(0.0..t_max, lo..hi)
-                .map_err(err)?;
-            let mut mesh = chart.configure_mesh();
-            mesh.y_desc(panel.ylabel)
-                .label_style((SANS, 13))
-                .axis_desc_style((SANS, 15))
-                .y_label_formatter(&|v| short(*v))
-                .x_label_formatter(&|v| short(*v));
-            if last {
-                mesh.x_desc("time t (s)");
+            let at = PanelAt {
+                first: k == 0,
+                last: k + 1 == panels.len(),
+                t_max,
+            };
+            if panel.log {
+                self.draw_panel(area, panel, at, LogAxis::new(lo, hi), &decade_label)?;
+            } else {
+                let y: RangedCoordf64 = (lo..hi).into();
+                self.draw_panel(area, panel, at, y, &|v| short(*v))?;
             }
-            mesh.draw().map_err(err)?;
-            for (i, (name, v)) in panel.lines.iter().enumerate() {
-                let colour = series_colour(i);
-                let pts: Vec<(f64, f64)> = t
-                    .iter()
-                    .zip(v)
-                    .filter(|(_, y)| y.is_finite() && (!panel.log || **y > 0.0))
-                    .map(|(x, y)| (*x, if panel.log { y.log10() } else { *y }))
-                    .collect();
-                chart
-                    .draw_series(LineSeries::new(pts, colour.stroke_width(2)))
-                    .map_err(err)?
-                    .label(*name)
-                    .legend(move |(x, y)| {
-                        PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(2))
-                    });
-            }
-            for m in self.markers {
-                chart
-                    .draw_series(LineSeries::new([(m.t, lo), (m.t, hi)], RED.mix(0.6)))
-                    .map_err(err)?;
-                if k == 0 {
-                    chart
-                        .draw_series([Text::new(
-                            format!("#{}", m.id),
-                            (m.t, hi - 0.02 * (hi - lo)),
-                            (SANS, 13).into_font().color(&RED),
-                        )])
-                        .map_err(err)?;
-                }
-            }
-            legend(&mut chart, SeriesLabelPosition::UpperRight, 13)?;
         }
         Ok(())
+    }
+}
+
+/// Where a panel sits in the stack and the shared time range.
+#[derive(Clone, Copy)]
+struct PanelAt {
+    first: bool,
+    last: bool,
+    t_max: f64,
+}
+
+impl TimeseriesFigure<'_> {
+    /// One panel on a y axis `y`: linear, or log10 ([`LogAxis`], the values
+    /// then drawn as log10 and only the positive ones).
+    fn draw_panel<DB, Y>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        panel: &Panel,
+        at: PanelAt,
+        y: Y,
+        y_fmt: &dyn Fn(&f64) -> String,
+    ) -> Res
+    where
+        DB: DrawingBackend,
+        Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    {
+        let t = &self.series.t;
+        let (lo, hi) = (y.range().start, y.range().end);
+        let mut chart = ChartBuilder::on(area)
+            .margin(6)
+            .margin_right(20)
+            .x_label_area_size(if at.last { 44 } else { 22 })
+            .y_label_area_size(80)
+            .build_cartesian_2d(0.0..at.t_max, y)
+            .map_err(err)?;
+        let mut mesh = chart.configure_mesh();
+        mesh.y_desc(panel.ylabel)
+            .label_style((SANS, 13))
+            .axis_desc_style((SANS, 15))
+            .y_label_formatter(y_fmt)
+            .x_label_formatter(&|v| short(*v));
+        if at.last {
+            mesh.x_desc("time t (s)");
+        }
+        mesh.draw().map_err(err)?;
+        for (i, (name, v)) in panel.lines.iter().enumerate() {
+            let colour = series_colour(i);
+            let pts: Vec<(f64, f64)> = t
+                .iter()
+                .zip(v)
+                .filter(|(_, y)| y.is_finite() && (!panel.log || **y > 0.0))
+                .map(|(x, y)| (*x, if panel.log { y.log10() } else { *y }))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(pts, colour.stroke_width(2)))
+                .map_err(err)?
+                .label(*name)
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(2))
+                });
+        }
+        for m in self.markers {
+            chart
+                .draw_series(LineSeries::new([(m.t, lo), (m.t, hi)], RED.mix(0.6)))
+                .map_err(err)?;
+            if at.first {
+                chart
+                    .draw_series([Text::new(
+                        format!("#{}", m.id),
+                        (m.t, hi - 0.02 * (hi - lo)),
+                        (SANS, 13).into_font().color(&RED),
+                    )])
+                    .map_err(err)?;
+            }
+        }
+        legend(&mut chart, SeriesLabelPosition::UpperRight, 13)
     }
 }
 
@@ -353,7 +395,7 @@ impl MapField {
     fn label(&self) -> &'static str {
         match self {
             MapField::PressureKpa => "pressure (kPa)",
-            MapField::AccelG => "log10 a/g",
+            MapField::AccelG => "a/g (log)",
         }
     }
 }

@@ -3,8 +3,11 @@
 //! its Pareto front.
 
 use crate::plot_common::{
-    colour_bar, err, legend, series_colour, short, ColourScale, Figure, Res, SANS,
+    colour_bar, decade_label, err, legend, series_colour, short, ColourScale, Figure, LogAxis, Res,
+    SANS,
 };
+use plotters::coord::ranged1d::ValueFormatter;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -132,7 +135,7 @@ impl Figure for HeatmapFigure {
     }
 }
 
-/// Lines of y against x (x on a log axis), e.g. survival time against K.
+/// Lines of y against x (x on a log axis when `x_log`), e.g. survival time against K.
 pub struct LinesFigure {
     pub title: String,
     pub x_label: String,
@@ -148,11 +151,10 @@ impl Figure for LinesFigure {
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Res {
-        let tx = |x: f64| if self.x_log { x.log10() } else { x };
         let xs = self
             .lines
             .iter()
-            .flat_map(|(_, p)| p.iter().map(|q| tx(q.0)));
+            .flat_map(|(_, p)| p.iter().map(|q| self.tx(q.0)));
         let (lo, hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
             (a.min(x), b.max(x))
         });
@@ -161,32 +163,55 @@ impl Figure for LinesFigure {
         } else {
             (0.0, 1.0)
         };
+        if self.x_log {
+            self.draw_on(root, LogAxis::new(lo, hi), &decade_label)
+        } else {
+            let x: RangedCoordf64 = (lo..hi).into();
+            self.draw_on(root, x, &|v| short(*v))
+        }
+    }
+}
+
+impl LinesFigure {
+    /// x as drawn: log10 of x on a log axis.
+    fn tx(&self, x: f64) -> f64 {
+        if self.x_log {
+            x.log10()
+        } else {
+            x
+        }
+    }
+
+    /// The figure on an x axis `x`: linear, or log10 ([`LogAxis`]).
+    fn draw_on<DB, X>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        x: X,
+        x_fmt: &dyn Fn(&f64) -> String,
+    ) -> Res
+    where
+        DB: DrawingBackend,
+        X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    {
         let mut chart = ChartBuilder::on(root)
             .caption(&self.title, (SANS, 20))
             .margin(12)
             .x_label_area_size(46)
             .y_label_area_size(60)
-            .build_cartesian_2d(lo..hi, 0.0..self.y_max * 1.08)
+            .build_cartesian_2d(x, 0.0..self.y_max * 1.08)
             .map_err(err)?;
-        let xf = |v: &f64| {
-            if self.x_log {
-                format!("1e{v:.1}")
-            } else {
-                short(*v)
-            }
-        };
         chart
             .configure_mesh()
             .x_desc(&self.x_label)
             .y_desc(&self.y_label)
-            .x_label_formatter(&xf)
+            .x_label_formatter(x_fmt)
             .label_style((SANS, 14))
             .axis_desc_style((SANS, 16))
             .draw()
             .map_err(err)?;
         for (k, (name, pts)) in self.lines.iter().enumerate() {
             let colour = series_colour(k);
-            let pts: Vec<(f64, f64)> = pts.iter().map(|(x, y)| (tx(*x), *y)).collect();
+            let pts: Vec<(f64, f64)> = pts.iter().map(|(x, y)| (self.tx(*x), *y)).collect();
             chart
                 .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
                 .map_err(err)?
@@ -264,20 +289,21 @@ impl Figure for ParetoFigure {
         };
         let (x0, x1) = range(|p| p.0);
         let (y0, y1) = range(|p| p.1);
+        let y_axis = LogAxis::new(y0, y1);
+        let (y0, y1) = (y_axis.range().start, y_axis.range().end);
         let mut chart = ChartBuilder::on(root)
             .caption(&self.title, (SANS, 20))
             .margin(12)
             .x_label_area_size(46)
             .y_label_area_size(70)
-            .build_cartesian_2d(x0..x1, y0..y1)
+            .build_cartesian_2d(LogAxis::new(x0, x1), y_axis)
             .map_err(err)?;
-        let f = |v: &f64| format!("1e{v:.1}");
         chart
             .configure_mesh()
             .x_desc(&self.x_label)
             .y_desc(&self.y_label)
-            .x_label_formatter(&f)
-            .y_label_formatter(&f)
+            .x_label_formatter(&decade_label)
+            .y_label_formatter(&decade_label)
             .label_style((SANS, 14))
             .axis_desc_style((SANS, 16))
             .draw()
