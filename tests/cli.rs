@@ -136,11 +136,11 @@ fn list_expands_the_bug_report_matrix() {
         .lines()
         .map(|l| l.split('\t').next().unwrap())
         .collect();
-    assert_eq!(names.len(), 32);
+    assert_eq!(names.len(), 64);
     let unique: std::collections::BTreeSet<_> = names.iter().collect();
-    assert_eq!(unique.len(), 32, "case names are unique");
-    assert!(names.contains(&"K1.5MPa_tait_mu0.5"), "{names:?}");
-    assert!(names.contains(&"K15kPa_power-g1_mu0"), "{names:?}");
+    assert_eq!(unique.len(), 64, "case names are unique");
+    assert!(names.contains(&"K1.5MPa_tait_mu0.5_fixed"), "{names:?}");
+    assert!(names.contains(&"K15kPa_power-g1_mu0_dyn"), "{names:?}");
 }
 
 fn bad(study_text: &str, extra: &[&str]) -> String {
@@ -514,6 +514,78 @@ fn matrix_resumes_after_sigkill_without_redoing_finished_cases() {
         rows(&std::fs::read_to_string(out.join("summary.csv")).unwrap()).len(),
         4
     );
+}
+
+#[test]
+fn ensemble_members_differ_by_their_seed_and_each_reproduces() {
+    let out = scratch("ensemble");
+    let study = out.join("ens.toml");
+    std::fs::write(
+        &study,
+        r#"
+[scene]
+t_end = 0.06
+[[scene.body]]
+rect = [0.0, 0.0, 0.2, 0.4]
+[materials.water]
+K = 1.5e5
+eos = "tait"
+[output]
+checkpoint_every = 100
+[[perturb]]
+step = 300
+region = [0.06, 0.1, 0.09, 0.13]
+dv = [1.0, 0.0]
+[matrix]
+ensemble = 2
+"#,
+    )
+    .unwrap();
+    let o = kick(&[
+        "matrix",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--jobs",
+        "2",
+        "--threads",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let members: Vec<Summary> = ["ens_e0", "ens_e1"]
+        .iter()
+        .map(|m| summary(&out.join(m)))
+        .collect();
+    assert_ne!(
+        members[0].final_state_hash, members[1].final_state_hash,
+        "the jitter seeds the members apart"
+    );
+    assert_eq!(members[1].params["scene.seed"], 1);
+    let o = kick(&["report", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let page = std::fs::read_to_string(out.join("report").join("index.html")).unwrap();
+    assert!(page.contains("<h2>Ensembles</h2>"), "an ensemble table");
+    for (m, s) in ["ens_e0", "ens_e1"].iter().zip(&members) {
+        let e = s
+            .events
+            .iter()
+            .find(|e| e.kind == EventKind::Kick && e.first_step >= 300)
+            .unwrap_or_else(|| panic!("{m}: the push is logged: {:?}", s.events));
+        let o = kick(&[
+            "reproduce",
+            out.join(m).to_str().unwrap(),
+            "--event",
+            &e.id.to_string(),
+            "--threads",
+            "2",
+        ]);
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success() && text.contains("hash match"),
+            "{m}: {text}{}",
+            stderr(&o)
+        );
+    }
 }
 
 #[test]

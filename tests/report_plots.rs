@@ -313,6 +313,7 @@ fn matrix_plots_render_as_png_and_svg() {
                 vec![(1.5e4, 0.4), (1.5e5, 5.0), (1.5e6, 5.0)],
             ),
         ],
+        spread: vec![vec![(1.5e4, 0.45, 0.55), (1.5e5, 0.5, 0.8)], vec![]],
         x_log: true,
         y_max: 5.0,
     };

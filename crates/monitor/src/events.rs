@@ -11,6 +11,8 @@ pub enum EventKind {
     BlowOut,
     EnergyInjection,
     NonFinite,
+    /// Some particle has J <= 0 or det F <= 0: the run stops there.
+    Inversion,
 }
 
 /// Inclusive cell range.
@@ -77,17 +79,19 @@ pub enum Rule {
     OutsideBox,
     EscapeSpeed,
     NonFinite,
+    Inversion,
 }
 
 impl Rule {
     /// Every rule, in the order events list them.
-    pub const ALL: [Rule; 6] = [
+    pub const ALL: [Rule; 7] = [
         Rule::AccelOutlier,
         Rule::KeSpike,
         Rule::InjectionWindow,
         Rule::OutsideBox,
         Rule::EscapeSpeed,
         Rule::NonFinite,
+        Rule::Inversion,
     ];
 
     /// The rule's name as events spell it (its serde name).
@@ -99,6 +103,7 @@ impl Rule {
             Rule::OutsideBox => "outside_box",
             Rule::EscapeSpeed => "escape_speed",
             Rule::NonFinite => "non_finite",
+            Rule::Inversion => "inversion",
         }
     }
 
@@ -323,7 +328,8 @@ mod tests {
                 "injection_window",
                 "outside_box",
                 "escape_speed",
-                "non_finite"
+                "non_finite",
+                "inversion"
             ]
         );
         for r in Rule::ALL {

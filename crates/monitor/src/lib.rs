@@ -58,6 +58,9 @@ pub struct StepReport {
     /// Smallest nodal mass over rho0 h^2 among active nodes.
     pub min_node_mass_ratio: f64,
     pub max_node_accel_g: f64,
+    /// Largest nodal advective number |v_i| dt / h over the active nodes (with
+    /// linear shapes a particle can cross a free-slip wall only above 1).
+    pub node_advection: f64,
     /// Particle minus grid kinetic energy after P2G (FLIP ringing).
     pub ringing_energy: f64,
     pub n_outside: usize,
@@ -179,6 +182,8 @@ struct Scan {
     max_dv2: f64,
     j_min: f64,
     j_max: f64,
+    /// Smallest det F (J <= 0 or det F <= 0 is an inversion; the exp J update keeps J > 0).
+    det_min: f64,
     /// Largest kinetic-energy gain 1/2 m (|v|^2 - |v_prev|^2), and its particle.
     gain_max: (f64, usize),
     /// Some candidate awaits its z score.
@@ -193,6 +198,7 @@ impl Scan {
             max_dv2: 0.0,
             j_min: f64::INFINITY,
             j_max: f64::NEG_INFINITY,
+            det_min: f64::INFINITY,
             gain_max: (f64::NEG_INFINITY, 0),
             need_z: false,
         }
@@ -373,9 +379,9 @@ impl Monitor {
         }
         self.check_energy_injection(v, g, injection.window, floor, scan.gain_max.1);
         let max_speed = scan.max_speed2.sqrt();
-        let blow_out = self.check_blow_out(v, g, max_speed);
+        let blow_out = self.check_blow_out(v, g, max_speed, &scan);
         self.track_injected_energy(v.step, injection.total);
-        let (min_node_mass_ratio, max_node_a) = self.grid_figures(v);
+        let (min_node_mass_ratio, max_node_a, max_node_speed) = self.grid_figures(v);
         self.report = StepReport {
             step: v.step,
             energy_injected: injection.total,
@@ -389,6 +395,7 @@ impl Monitor {
             j_max: scan.j_max,
             min_node_mass_ratio,
             max_node_accel_g: max_node_a / g,
+            node_advection: max_node_speed * v.dt / v.grid.h,
             ringing_energy: v.ke_particles_p2g - v.ke_grid_p2g,
             n_outside: v.n_outside,
             n_nonfinite: v.n_nonfinite,
@@ -410,12 +417,13 @@ impl Monitor {
         let mut s = Scan::new();
         self.flagged.clear();
         // Every slice cut to n up front: no bounds checks in the loop.
-        let (vel, vel_prev, mass, jac, dev_rate) = (
+        let (vel, vel_prev, mass, jac, dev_rate, def) = (
             &v.v[..n],
             &v.v_prev[..n],
             &v.mass[..n],
             &v.j[..n],
             &v.dev_rate[..n],
+            &v.deformation[..n],
         );
         let h = &mut self.history;
         let (ke_recent, last_fast, last_deformed) = (
@@ -435,6 +443,7 @@ impl Monitor {
             let ke_ref = ke_recent[p].max(0.5 * mass[p] * t.quiescent2);
             let ratio = s.ke_ratio(e, ke_ref, candidate);
             s.add(p, speed2, prev2, mass[p], jac[p]);
+            s.det_min = s.det_min.min(def[p].determinant());
             if candidate {
                 let history = (last_fast[p], last_deformed[p]);
                 if let Some(c) = t.candidate(p, dv2, ratio, speed2 > prev2, history) {
@@ -507,18 +516,44 @@ impl Monitor {
 
     /// Non-finite state, particles outside the box or one faster than the
     /// escape speed: the blow-out event and why the run must stop.
-    fn check_blow_out(&mut self, v: &StateView, g: f64, max_speed: f64) -> Option<String> {
+    fn check_blow_out(
+        &mut self,
+        v: &StateView,
+        g: f64,
+        max_speed: f64,
+        scan: &Scan,
+    ) -> Option<String> {
         if v.n_nonfinite > 0 {
             let reason = format!("non-finite state in {} particles", v.n_nonfinite);
-            self.blow_out_event(EventKind::NonFinite, Rule::NonFinite, v, g, |x, vel| {
+            self.blow_out_event(EventKind::NonFinite, Rule::NonFinite, v, g, |p| {
+                let (x, vel) = (v.x[p], v.v[p]);
                 !(x.x.is_finite() && x.y.is_finite() && vel.x.is_finite() && vel.y.is_finite())
+            });
+            return Some(reason);
+        }
+        // A non-finite total with finite particles (e.g. U(J) at J -> 0) is not dropped by a min.
+        if !v.energy.total().is_finite() {
+            let reason = format!("non-finite total energy {}", v.energy.total());
+            self.blow_out_event(EventKind::NonFinite, Rule::NonFinite, v, g, |p| {
+                !v.j[p].is_finite() || v.j[p] <= 0.0
+            });
+            return Some(reason);
+        }
+        if scan.j_min <= 0.0 || scan.det_min <= 0.0 {
+            let reason = format!(
+                "inversion: smallest J {:.3e}, smallest det F {:.3e}",
+                scan.j_min, scan.det_min
+            );
+            self.blow_out_event(EventKind::Inversion, Rule::Inversion, v, g, |p| {
+                v.j[p] <= 0.0 || v.deformation[p].determinant() <= 0.0
             });
             return Some(reason);
         }
         if v.n_outside > 0 {
             let reason = format!("{} particles left the box", v.n_outside);
             let (lo, hi) = (self.geom.origin, self.geom.origin + self.geom.size);
-            self.blow_out_event(EventKind::BlowOut, Rule::OutsideBox, v, g, |x, _| {
+            self.blow_out_event(EventKind::BlowOut, Rule::OutsideBox, v, g, |p| {
+                let x = v.x[p];
                 x.x < lo.x || x.y < lo.y || x.x > hi.x || x.y > hi.y
             });
             return Some(reason);
@@ -528,8 +563,8 @@ impl Monitor {
             let reason = format!(
                 "a particle reached {max_speed:.3} m/s, beyond the escape speed {escape:.3} m/s"
             );
-            self.blow_out_event(EventKind::BlowOut, Rule::EscapeSpeed, v, g, |_, vel| {
-                vel.norm() > escape
+            self.blow_out_event(EventKind::BlowOut, Rule::EscapeSpeed, v, g, |p| {
+                v.v[p].norm() > escape
             });
             return Some(reason);
         }
@@ -549,19 +584,20 @@ impl Monitor {
     }
 
     /// Over the active grid nodes: the smallest nodal mass over rho0 h^2 (0
-    /// without any) and the largest nodal acceleration.
-    fn grid_figures(&self, v: &StateView) -> (f64, f64) {
+    /// without any), the largest nodal acceleration and the largest nodal speed.
+    fn grid_figures(&self, v: &StateView) -> (f64, f64, f64) {
         let h2 = self.geom.rho0 * self.geom.cell * self.geom.cell;
-        let (mut min_mass, mut max_node_a) = (f64::INFINITY, 0.0f64);
+        let (mut min_mass, mut max_node_a, mut max_speed2) = (f64::INFINITY, 0.0f64, 0.0f64);
         for &node in v.grid.active {
             let m = v.grid.mass[node as usize];
             if m > 0.0 {
                 min_mass = min_mass.min(m / h2);
                 max_node_a = max_node_a.max(v.grid.acceleration[node as usize].norm());
+                max_speed2 = max_speed2.max(v.grid.velocity[node as usize].norm_squared());
             }
         }
         let min_mass = if min_mass.is_finite() { min_mass } else { 0.0 };
-        (min_mass, max_node_a)
+        (min_mass, max_node_a, max_speed2.sqrt())
     }
 
     /// Clusters this step's flagged particles by 8-adjacent cells and files them as kicks.
@@ -684,7 +720,10 @@ impl Monitor {
                     || v.time - e.last_t <= self.cfg.merge_seconds)
                 && e.extent.near(&c.cells, self.cfg.merge_cells)
         });
-        let blow_out = matches!(kind, EventKind::BlowOut | EventKind::NonFinite);
+        let blow_out = matches!(
+            kind,
+            EventKind::BlowOut | EventKind::NonFinite | EventKind::Inversion
+        );
         if open.is_none() && !blow_out && self.events.len() >= self.cfg.max_events {
             self.events_dropped += 1;
             return usize::MAX;
@@ -757,14 +796,14 @@ impl Monitor {
         rule: Rule,
         v: &StateView,
         g: f64,
-        bad: impl Fn(solver::Vec2, solver::Vec2) -> bool,
+        bad: impl Fn(usize) -> bool,
     ) {
         self.fill_accel(v);
         let mut cells: Option<CellRange> = None;
         let mut count = 0;
         let mut peak = 0.0f64;
         for p in 0..v.x.len() {
-            if bad(v.x[p], v.v[p]) {
+            if bad(p) {
                 let (i, j) = self.geom.cell_of(v.x[p]);
                 cells = Some(cells.map_or(CellRange::of(i, j), |c| c.union(&CellRange::of(i, j))));
                 count += 1;
@@ -782,7 +821,7 @@ impl Monitor {
             if e.particles.len() >= cap {
                 break;
             }
-            if bad(v.x[p], v.v[p]) && !e.particles.contains(&v.id[p]) {
+            if bad(p) && !e.particles.contains(&v.id[p]) {
                 e.particles.push(v.id[p]);
             }
         }

@@ -191,6 +191,11 @@ pub struct Scene {
     pub initial: InitialState,
     /// Periodic instead of symmetry-plane walls, per axis.
     pub periodic: [bool; 2],
+    /// Ensemble members: initial positions moved by a seeded uniform offset
+    /// of at most `jitter` h per axis (0 = none).
+    pub jitter: f64,
+    /// Seed of the jitter (one per ensemble member).
+    pub seed: u64,
     #[serde(rename = "body")]
     pub bodies: Vec<Body>,
     /// Filled from the study's `[materials]` tables, in file order.
@@ -210,6 +215,8 @@ impl Default for Scene {
             gravity: 9.81,
             initial: InitialState::ZeroStress,
             periodic: [false, false],
+            jitter: 0.0,
+            seed: 0,
             bodies: vec![],
             materials: vec![],
         }
@@ -264,6 +271,15 @@ pub struct Method {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dt_value: Option<f64>,
     pub j_update: JUpdate,
+    /// Minimum nodal mass for acceleration (Uintah's `minimum_mass_for_acc`),
+    /// dimensionless: a fraction of the mass rho0 h^2 of a full cell of the
+    /// first material, like the monitor's `min_node_mass_ratio` (0 ..= 1;
+    /// 0 = off, today's results bit for bit). "Mass" is the folded nodal mass
+    /// `grid.mass` (mirror images included: what the force is divided by),
+    /// not `grid.mass_raw`. A node with 0 < mass <= threshold ignores its
+    /// forces and gets a = g (wall conditions as usual); see
+    /// `stage_grid::MassGuard`.
+    pub min_node_mass: f64,
 }
 
 impl Default for Method {
@@ -277,6 +293,7 @@ impl Default for Method {
             dt: DtMode::Fixed,
             dt_value: None,
             j_update: JUpdate::Det,
+            min_node_mass: 0.0,
         }
     }
 }
@@ -373,6 +390,7 @@ impl SolverConfig {
         let m = &self.method;
         within(m.flip_alpha, 0.0, 1.0, "method.flip_alpha")?;
         within(m.cfl, 1e-4, 1.0, "method.cfl")?;
+        within(m.min_node_mass, 0.0, 1.0, "method.min_node_mass")?;
         if let Some(dt) = m.dt_value {
             within(dt, 1e-12, 1.0, "method.dt_value")?;
         }
@@ -410,6 +428,7 @@ impl SolverConfig {
         within(s.ppc as f64, 1.0, 8.0, "scene.ppc")?;
         within(s.t_end, 1e-9, 1e4, "scene.t_end")?;
         within(s.gravity, 0.0, 1e4, "scene.gravity")?;
+        within(s.jitter, 0.0, 1e-3, "scene.jitter")?;
         check(
             !s.bodies.is_empty(),
             "scene.body",

@@ -147,6 +147,20 @@ impl Grid {
             )
     }
 
+    /// `v` with its wall-normal components set to zero at `node`: the
+    /// symmetry-plane condition that folding imposes on a wall node's
+    /// momentum and force (periodic axes have no wall nodes).
+    #[inline]
+    pub fn project_walls(&self, node: usize, mut v: Vec2) -> Vec2 {
+        let (i, j) = self.coords(node);
+        for (axis, k) in [(0, i), (1, j)] {
+            if self.roles[axis][k] == NodeRole::Wall {
+                v[axis] = 0.0;
+            }
+        }
+        v
+    }
+
     /// Rebuilds the active set (ascending) from the occupied bins (a bin is
     /// the stencil origin node; `occupied(b)` says whether it holds particles)
     /// and the lists the grid stage walks: in-box active nodes and the

@@ -62,5 +62,28 @@ pub fn seed(scene: &Scene) -> Particles {
             }
         }
     }
+    jitter(&mut ps, scene);
     ps
+}
+
+/// Ensemble members: each position moved by a seeded uniform offset of at
+/// most `scene.jitter` h per axis (nothing when the jitter is 0).
+fn jitter(ps: &mut Particles, scene: &Scene) {
+    if scene.jitter == 0.0 {
+        return;
+    }
+    let amplitude = scene.jitter * scene.cell;
+    let mut state = scene.seed ^ 0x6a09_e667_f3bc_c909;
+    let mut uniform = || {
+        // splitmix64: a fixed, platform-independent sequence per seed.
+        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for x in ps.x.iter_mut() {
+        x.x += amplitude * (2.0 * uniform() - 1.0);
+        x.y += amplitude * (2.0 * uniform() - 1.0);
+    }
 }

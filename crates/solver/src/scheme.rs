@@ -80,7 +80,13 @@ fn grid_velocities(s: &mut Solver, clock: &mut Instant) {
 
 fn grid_update(s: &mut Solver, clock: &mut Instant) {
     let (grid, dt) = (&mut s.grid, s.dt);
-    par::keep_warm(|| stage_grid::update(grid, dt));
+    // method.min_node_mass is a fraction of a full cell's mass rho0 h^2.
+    let rho0 = s.cfg.scene.materials.first().map_or(0.0, |m| m.rho0);
+    let guard = stage_grid::MassGuard {
+        min_mass: s.cfg.method.min_node_mass * (rho0 * grid.h * grid.h),
+        gravity: s.gravity,
+    };
+    par::keep_warm(|| stage_grid::update(grid, dt, &guard));
     lap(&mut s.times.grid, clock);
 }
 

@@ -66,13 +66,14 @@ pub fn sort(
             let r = (x - origin) * inv_h;
             let (bx, fx) = shape.locate(r.x);
             let (by, fy) = shape.locate(r.y);
-            let (i, j) = (bx + pad, by + pad);
+            // Saturating: a non-finite position locates at i64::MAX (refused below, never a panic).
+            let (i, j) = (bx.saturating_add(pad), by.saturating_add(pad));
             let inside = r.x.is_finite()
                 && r.y.is_finite()
                 && i >= 0
                 && j >= 0
-                && i + width <= dims[0] as i64
-                && j + width <= dims[1] as i64;
+                && i.saturating_add(width) <= dims[0] as i64
+                && j.saturating_add(width) <= dims[1] as i64;
             st.node = if inside {
                 (i + j * dims[0] as i64) as u32
             } else {

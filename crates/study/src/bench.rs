@@ -47,6 +47,7 @@ pub fn mpm88() -> (SolverConfig, Particles) {
         periodic: [false, false],
         bodies: vec![],
         materials: vec![mat],
+        ..Scene::default()
     };
     let method = Method {
         shape: ShapeKind::Bspline2,
@@ -57,6 +58,7 @@ pub fn mpm88() -> (SolverConfig, Particles) {
         dt: DtMode::Fixed,
         dt_value: Some(2e-4),
         j_update: JUpdate::Det,
+        ..Method::default()
     };
     let mut ps = Particles::default();
     let mut state: u64 = 0x9e37_79b9_7f4a_7c15;

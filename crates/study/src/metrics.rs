@@ -1,5 +1,6 @@
 //! Case metrics for summary.json, computed from the timeseries and events
-//! (docs/physics.md section 4: "late" = the last simulated second).
+//! (docs/physics.md section 4: "late" = the last simulated second of a run
+//! that reached t_end, without event rows).
 
 use crate::summary::Metrics;
 use crate::timeseries::Timeseries;
@@ -60,18 +61,38 @@ pub fn front_rms_error(ts: &Timeseries, z_wall: f64) -> Option<f64> {
     (n > 0).then(|| (sum / n as f64).sqrt())
 }
 
-/// The summary.json metrics block (`events_dropped` is the monitor's to fill).
-pub fn summarise(ts: &Timeseries, events: &[Event], z_wall: Option<f64>) -> Metrics {
+/// Mean of column `name` over the rows of the last simulated second up to
+/// the last row, without event rows and the t = 0 row.
+fn last_second_mean(ts: &Timeseries, name: &str) -> Option<f64> {
     let t = ts.column("t");
     let t_last = t.last().copied().unwrap_or(0.0);
-    let late = |name: &str| {
-        let col = ts.column(name);
-        mean(
-            t.iter()
-                .zip(col)
-                .filter(|(ti, _)| **ti >= t_last - 1.0)
-                .map(|(_, v)| *v),
-        )
+    mean(
+        t.iter()
+            .zip(ts.column(name))
+            .zip(&ts.event_row)
+            .filter(|((ti, _), event)| **ti >= t_last - 1.0 && **ti > 0.0 && !**event)
+            .map(|((_, v), _)| *v),
+    )
+}
+
+/// The summary.json metrics block (`events_dropped` is the monitor's to
+/// fill). "Late" figures only for a run that reached t_end; a run that
+/// stopped gets the same figures over the second before it stopped, as
+/// `*_pre_failure`.
+pub fn summarise(
+    ts: &Timeseries,
+    events: &[Event],
+    z_wall: Option<f64>,
+    completed: bool,
+) -> Metrics {
+    // (late, pre-failure): the same window, named by how the run ended.
+    let split = |name: &str| {
+        let v = last_second_mean(ts, name);
+        if completed {
+            (v, None)
+        } else {
+            (None, v)
+        }
     };
     let peak = |name: &str| {
         ts.column(name)
@@ -86,16 +107,23 @@ pub fn summarise(ts: &Timeseries, events: &[Event], z_wall: Option<f64>) -> Metr
         .map(|e| e.t)
         .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.min(t))));
     let count = |k: EventKind| events.iter().filter(|e| e.kind == k).count();
+    let (hydro_rel_rms_late, hydro_rel_rms_pre_failure) = split("hydro_rel_rms");
+    let (hydro_max_late, hydro_max_pre_failure) = split("hydro_max");
+    let (checkerboard_late, checkerboard_pre_failure) = split("checkerboard");
     Metrics {
-        hydro_rel_rms_late: late("hydro_rel_rms"),
-        hydro_max_late: late("hydro_max"),
-        checkerboard_late: late("checkerboard"),
+        hydro_rel_rms_late,
+        hydro_max_late,
+        checkerboard_late,
+        hydro_rel_rms_pre_failure,
+        hydro_max_pre_failure,
+        checkerboard_pre_failure,
         checkerboard_peak: peak("checkerboard"),
         energy_injected_max: peak("energy_injected"),
         t_first_kick: first_kick,
         n_kicks: count(EventKind::Kick),
         n_energy_injections: count(EventKind::EnergyInjection),
         courant_max: peak("courant"),
+        node_advection_max: peak("node_advection"),
         max_accel_g: peak("max_accel_g"),
         front_rms_error: z_wall.and_then(|z| front_rms_error(ts, z)),
         events_dropped: 0,
@@ -121,7 +149,7 @@ mod tests {
                 step: k as u64,
                 ..Default::default()
             };
-            ts.push(&report, &Peaks::default(), &fields);
+            ts.push(&report, &Peaks::default(), &fields, false);
         }
         ts
     }
@@ -152,6 +180,58 @@ mod tests {
         assert_eq!(
             front_rms_error(&front(&[(0.0, 1.0), (0.5, 1.1)]), 100.0),
             None
+        );
+    }
+
+    #[test]
+    fn late_figures_leave_out_event_rows_and_exist_only_for_completed_runs() {
+        // Regular rows every 0.25 s hold 1.0; an event row at 1.6 s and the
+        // t = 0 row hold outliers that must not count.
+        let mut ts = Timeseries::new();
+        let mut row = |t: f64, value: f64, event: bool| {
+            let fields = FieldMetrics {
+                hydro_rel_rms: value,
+                checkerboard: Some(value),
+                ..Default::default()
+            };
+            let report = StepReport {
+                t,
+                ..Default::default()
+            };
+            ts.push(&report, &Peaks::default(), &fields, event);
+        };
+        row(0.0, 100.0, false);
+        for k in 1..=8 {
+            row(0.25 * k as f64, 1.0, false);
+            if k == 6 {
+                row(1.6, 50.0, true);
+            }
+        }
+        let done = summarise(&ts, &[], None, true);
+        assert_eq!(done.hydro_rel_rms_late, Some(1.0));
+        assert_eq!(done.checkerboard_late, Some(1.0));
+        assert_eq!(done.hydro_rel_rms_pre_failure, None);
+        assert_eq!(done.checkerboard_peak, Some(100.0), "peaks see every row");
+        let failed = summarise(&ts, &[], None, false);
+        assert_eq!(failed.hydro_rel_rms_late, None);
+        assert_eq!(failed.hydro_rel_rms_pre_failure, Some(1.0));
+        assert_eq!(failed.checkerboard_pre_failure, Some(1.0));
+        // A run shorter than a second: the t = 0 row still never counts.
+        let mut short = Timeseries::new();
+        for (t, v) in [(0.0, 100.0), (0.1, 2.0), (0.2, 4.0)] {
+            let fields = FieldMetrics {
+                hydro_rel_rms: v,
+                ..Default::default()
+            };
+            let report = StepReport {
+                t,
+                ..Default::default()
+            };
+            short.push(&report, &Peaks::default(), &fields, false);
+        }
+        assert_eq!(
+            summarise(&short, &[], None, true).hydro_rel_rms_late,
+            Some(3.0)
         );
     }
 }

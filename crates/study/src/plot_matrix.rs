@@ -141,6 +141,9 @@ pub struct LinesFigure {
     pub x_label: String,
     pub y_label: String,
     pub lines: Vec<(String, Vec<(f64, f64)>)>,
+    /// Per line, (x, y_min, y_max) bars drawn around its points (e.g. the
+    /// spread of an ensemble around its median); empty for none.
+    pub spread: Vec<Vec<(f64, f64, f64)>>,
     pub x_log: bool,
     pub y_max: f64,
 }
@@ -222,6 +225,12 @@ impl LinesFigure {
             chart
                 .draw_series(pts.iter().map(|p| Circle::new(*p, 4, colour.filled())))
                 .map_err(err)?;
+            for &(x, y0, y1) in self.spread.get(k).map_or(&[][..], |v| v.as_slice()) {
+                let x = self.tx(x);
+                chart
+                    .draw_series(LineSeries::new([(x, y0), (x, y1)], colour.stroke_width(1)))
+                    .map_err(err)?;
+            }
         }
         legend(&mut chart, SeriesLabelPosition::LowerRight, 12)?;
         Ok(())

@@ -45,6 +45,12 @@ impl Row {
         Row::nan(self.summary.metrics.hydro_rel_rms_late)
     }
 
+    /// Late departure of a completed run, or over the second before a blow-up.
+    fn hydro_late_or_pre_failure(&self) -> f64 {
+        let m = &self.summary.metrics;
+        Row::nan(m.hydro_rel_rms_late.or(m.hydro_rel_rms_pre_failure))
+    }
+
     fn outcome(&self) -> &'static str {
         match self.summary.status {
             Status::BlewUp => "blew_up",
@@ -69,6 +75,47 @@ const OUTCOMES: [(&str, &str, RGBColor); 4] = [
     ("blew_up", "blew up", RGBColor(200, 50, 50)),
     ("failed", "failed", RGBColor(150, 150, 150)),
 ];
+
+/// Keys that tell ensemble members apart (not axes of the matrix).
+const ENSEMBLE_KEYS: [&str; 2] = ["scene.seed", "scene.jitter"];
+
+/// Median, smallest and largest of the finite values (None when there are none).
+fn spread(values: impl Iterator<Item = f64>) -> Option<(f64, f64, f64)> {
+    let mut v: Vec<f64> = values.filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    let median = if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    };
+    Some((median, v[0], v[n - 1]))
+}
+
+/// "m" for one run, "m [lo, hi]" for several.
+fn with_spread(s: (f64, f64, f64), runs: usize, digits: usize) -> String {
+    if runs <= 1 {
+        format!("{:.*}", digits, s.0)
+    } else {
+        format!(
+            "{:.*} [{:.*}, {:.*}]",
+            digits, s.0, digits, s.1, digits, s.2
+        )
+    }
+}
+
+/// Heatmap form: the median, with ± half the range when the runs differ.
+fn compact(s: (f64, f64, f64)) -> String {
+    let half = 0.5 * (s.2 - s.1);
+    if half < 0.005 {
+        format!("{:.2}", s.0)
+    } else {
+        format!("{:.2}±{:.2}", s.0, half)
+    }
+}
 
 /// Numbers compare as numbers, the rest as text.
 fn by_value(a: &String, b: &String) -> std::cmp::Ordering {
@@ -103,9 +150,11 @@ impl Matrix {
                 Summary::read(&case_dir).map(|s| (case_dir, s))
             })
             .collect::<Res<_>>()?;
+        // Ensemble members differ only in their seed: one case, several runs.
         let keys: BTreeSet<&String> = summaries
             .iter()
             .flat_map(|(_, s)| s.params.keys())
+            .filter(|k| !ENSEMBLE_KEYS.contains(&k.as_str()))
             .collect();
         let text = |s: &Summary, k: &String| s.params.get(k).map(param_text).unwrap_or_default();
         let axes: Vec<String> = keys
@@ -164,6 +213,7 @@ pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
         stability_map(&m, &out, &mut page)?;
     }
     speed_accuracy(&m.rows, &out, &mut page)?;
+    ensemble_table(&m, &mut page);
     case_table(&m, &mut page);
     let title = format!(
         "kick matrix report: {}",
@@ -276,43 +326,57 @@ impl<'a> HeatLayout<'a> {
             .join(" / ")
     }
 
+    /// One cell per case; `cell` sees every run of the case (one, or an ensemble).
     fn figure(
         &self,
         title: &str,
         key: HeatKey,
-        cell: impl Fn(&Row) -> (RGBColor, String),
+        cell: impl Fn(&[&Row]) -> (RGBColor, String),
     ) -> HeatmapFigure {
         let panels = self
             .p_cats
             .iter()
-            .map(|p| HeatPanel {
-                title: match self.panel_axis {
-                    Some(a) => format!("{} = {p}", self.m.axes[a]),
-                    None => String::new(),
-                },
-                cells: self
+            .map(|p| {
+                let mut groups: Vec<((usize, usize), Vec<&Row>)> = vec![];
+                for r in self
                     .m
                     .rows
                     .iter()
                     .filter(|r| self.panel_axis.is_none_or(|a| &r.params[a] == p))
-                    .map(|r| {
-                        let (colour, text) = cell(r);
-                        HeatCell {
-                            x: self
-                                .x_cats
-                                .iter()
-                                .position(|c| *c == r.params[self.x_axis])
-                                .unwrap_or(0),
-                            y: self
-                                .y_cats
-                                .iter()
-                                .position(|c| *c == self.y_of(r))
-                                .unwrap_or(0),
-                            colour,
-                            text,
-                        }
-                    })
-                    .collect(),
+                {
+                    let at = (
+                        self.x_cats
+                            .iter()
+                            .position(|c| *c == r.params[self.x_axis])
+                            .unwrap_or(0),
+                        self.y_cats
+                            .iter()
+                            .position(|c| *c == self.y_of(r))
+                            .unwrap_or(0),
+                    );
+                    match groups.iter_mut().find(|(g, _)| *g == at) {
+                        Some((_, rows)) => rows.push(r),
+                        None => groups.push((at, vec![r])),
+                    }
+                }
+                HeatPanel {
+                    title: match self.panel_axis {
+                        Some(a) => format!("{} = {p}", self.m.axes[a]),
+                        None => String::new(),
+                    },
+                    cells: groups
+                        .iter()
+                        .map(|((x, y), rows)| {
+                            let (colour, text) = cell(rows);
+                            HeatCell {
+                                x: *x,
+                                y: *y,
+                                colour,
+                                text,
+                            }
+                        })
+                        .collect(),
+                }
             })
             .collect();
         HeatmapFigure {
@@ -327,20 +391,35 @@ impl<'a> HeatLayout<'a> {
     }
 }
 
-fn outcome_cell(r: &Row) -> (RGBColor, String) {
-    let colour = OUTCOMES
+/// The case's outcome: the most frequent among its runs (ties: the worse),
+/// with the median first-kick and survival times, and their range over an ensemble.
+fn outcome_cell(runs: &[&Row]) -> (RGBColor, String) {
+    let count = |o: &str| runs.iter().filter(|r| r.outcome() == o).count();
+    let outcome = OUTCOMES
         .iter()
-        .find(|o| o.0 == r.outcome())
-        .map_or(RGBColor(150, 150, 150), |o| o.2);
-    let (kick, end) = (r.t_first_kick(), r.t_end());
-    let text = match r.outcome() {
-        "blew_up" if kick.is_finite() => format!("k {kick:.2} x {end:.2}"),
-        "blew_up" => format!("x {end:.2}"),
-        "failed" => "failed".into(),
-        _ if kick.is_finite() => format!("k {kick:.2}"),
-        _ => "ok".into(),
+        .rev()
+        .max_by_key(|o| count(o.0))
+        .expect("four outcomes");
+    let kick = spread(runs.iter().map(|r| r.t_first_kick()));
+    let blew = runs.iter().any(|r| r.outcome() == "blew_up");
+    let end = spread(runs.iter().map(|r| r.t_end())).filter(|_| blew);
+    let n = runs.len();
+    let mut parts = vec![];
+    // Median ± half range over an ensemble (the Ensembles table has min and max).
+    if let Some(k) = kick {
+        parts.push(format!("k {}", compact(k)));
+    }
+    if let Some(e) = end {
+        parts.push(format!("x {}", compact(e)));
+    }
+    let text = if !parts.is_empty() {
+        parts.join(" ")
+    } else if count("failed") == n {
+        "failed".into()
+    } else {
+        "ok".into()
     };
-    (colour, text)
+    (outcome.2, text)
 }
 
 fn heatmaps(m: &Matrix, out: &Path, page: &mut Page) -> Res {
@@ -353,20 +432,16 @@ fn heatmaps(m: &Matrix, out: &Path, page: &mut Page) -> Res {
     page.h2("Outcome");
     page.figure(
         &render(&outcome, out, "heatmap_outcome")?,
-        "Outcome per case: k t = first kick at t (s), x t = blew up at t (s)",
+        "Outcome per case: k t = first kick at t (s), x t = blew up at t (s); over an ensemble the median ± half its range and the most frequent outcome",
     );
     let hydro: Vec<f64> = m.rows.iter().map(|r| r.hydro_late()).collect();
     let scale = ColourScale::robust(&hydro, true);
     let hydro_map = layout.figure(
-        "Late hydrostatic departure (relative RMS, last second)",
-        HeatKey::Bar(scale, "log10 rel. RMS".into()),
-        |r| {
-            let h = r.hydro_late();
-            if h.is_finite() && h > 0.0 {
-                (scale.colour(h), short(h))
-            } else {
-                (RGBColor(220, 220, 220), "-".into())
-            }
+        "Late hydrostatic departure (relative RMS, last second of completed runs)",
+        HeatKey::Bar(scale, "rel. RMS (log)".into()),
+        |runs| match spread(runs.iter().map(|r| r.hydro_late()).filter(|h| *h > 0.0)) {
+            Some((h, _, _)) => (scale.colour(h), short(h)),
+            None => (RGBColor(220, 220, 220), "-".into()),
         },
     );
     page.figure(
@@ -390,26 +465,42 @@ fn stability_map(m: &Matrix, out: &Path, page: &mut Page) -> Res {
             .join(" ")
     };
     let families: BTreeSet<String> = m.rows.iter().map(family).collect();
-    let lines = families
-        .iter()
-        .map(|f| {
-            let mut pts: Vec<(f64, f64)> = m
-                .rows
-                .iter()
-                .filter(|r| &family(r) == f)
-                .filter_map(|r| Some((r.params[kx].parse::<f64>().ok()?, r.t_end())))
-                .collect();
-            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let name = if f.is_empty() {
-                "all".into()
-            } else {
-                f.clone()
+    // Per family and K: the median survival, and its range over an ensemble.
+    let mut lines = vec![];
+    let mut spreads = vec![];
+    for f in &families {
+        let mut by_k: Vec<(f64, Vec<f64>)> = vec![];
+        for r in m.rows.iter().filter(|r| &family(r) == f) {
+            let Ok(k) = r.params[kx].parse::<f64>() else {
+                continue;
             };
-            (name, pts)
-        })
-        .collect();
+            match by_k.iter_mut().find(|(x, _)| *x == k) {
+                Some((_, v)) => v.push(r.t_end()),
+                None => by_k.push((k, vec![r.t_end()])),
+            }
+        }
+        by_k.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let stats: Vec<(f64, (f64, f64, f64), usize)> = by_k
+            .iter()
+            .filter_map(|(k, v)| Some((*k, spread(v.iter().copied())?, v.len())))
+            .collect();
+        let name = if f.is_empty() {
+            "all".into()
+        } else {
+            f.clone()
+        };
+        lines.push((name, stats.iter().map(|(k, s, _)| (*k, s.0)).collect()));
+        spreads.push(
+            stats
+                .iter()
+                .filter(|(_, _, n)| *n > 1)
+                .map(|(k, s, _)| (*k, s.1, s.2))
+                .collect(),
+        );
+    }
     let fig = LinesFigure {
-        title: "Stability map: time survived".into(),
+        spread: spreads,
+        title: "Stability map: time survived (median; bars: ensemble range)".into(),
         x_label: format!("{} (Pa, log)", m.axes[kx]),
         y_label: "time survived (s)".into(),
         lines,
@@ -424,13 +515,13 @@ fn stability_map(m: &Matrix, out: &Path, page: &mut Page) -> Res {
 }
 
 /// Completed cases when at least two completed; otherwise every case that ran
-/// (its accuracy then measured over its last second before blowing up).
+/// (its accuracy then measured over the second before it blew up).
 fn speed_accuracy(rows: &[Row], out: &Path, page: &mut Page) -> Res {
     let point = |r: &Row| {
         (
             r.case().to_string(),
             r.summary.wall_s / r.t_end(),
-            r.hydro_late(),
+            r.hydro_late_or_pre_failure(),
         )
     };
     let ran = |r: &&Row| r.summary.status != Status::Failed && r.t_end() > 0.0;
@@ -445,7 +536,7 @@ fn speed_accuracy(rows: &[Row], out: &Path, page: &mut Page) -> Res {
     } else {
         (
             rows.iter().filter(ran).map(point).collect(),
-            "all cases; fewer than two completed",
+            "all cases, blown-up ones over the second before failure; fewer than two completed",
         )
     };
     if points.len() < 2 {
@@ -463,6 +554,61 @@ fn speed_accuracy(rows: &[Row], out: &Path, page: &mut Page) -> Res {
         "Cost against late hydrostatic departure, Pareto front in red",
     );
     Ok(())
+}
+
+/// Per case of an ensemble: survival and first kick as median [min, max] over its runs.
+fn ensemble_table(m: &Matrix, page: &mut Page) {
+    let mut groups: Vec<(&Vec<String>, Vec<&Row>)> = vec![];
+    for r in &m.rows {
+        match groups.iter_mut().find(|(p, _)| **p == r.params) {
+            Some((_, rows)) => rows.push(r),
+            None => groups.push((&r.params, vec![r])),
+        }
+    }
+    if groups.iter().all(|(_, rows)| rows.len() < 2) {
+        return;
+    }
+    page.h2("Ensembles");
+    page.p("Each case ran as several members whose initial positions differ by a seeded jitter of order 1e-9 h (scene.jitter): survival and first-kick time as median [min, max] over the members.");
+    let mut headers = m.axes.clone();
+    headers.extend(
+        [
+            "runs",
+            "blew up",
+            "kicked",
+            "survived (s)",
+            "first kick (s)",
+        ]
+        .map(String::from),
+    );
+    let text =
+        |v: Option<(f64, f64, f64)>, n: usize| v.map_or("-".into(), |s| with_spread(s, n, 3));
+    let rows: Vec<(String, Vec<Cell>)> = groups
+        .iter()
+        .map(|(params, runs)| {
+            let n = runs.len();
+            let kicked: Vec<f64> = runs
+                .iter()
+                .map(|r| r.t_first_kick())
+                .filter(|t| t.is_finite())
+                .collect();
+            let mut cells: Vec<Cell> = params.iter().map(|p| Cell::Num(escape(p))).collect();
+            cells.extend([
+                Cell::Num(n.to_string()),
+                Cell::Num(
+                    runs.iter()
+                        .filter(|r| r.outcome() == "blew_up")
+                        .count()
+                        .to_string(),
+                ),
+                Cell::Num(kicked.len().to_string()),
+                Cell::Num(text(spread(runs.iter().map(|r| r.t_end())), n)),
+                Cell::Num(text(spread(kicked.iter().copied()), kicked.len())),
+            ]);
+            (String::new(), cells)
+        })
+        .collect();
+    page.table("ensembles", &headers, &rows);
 }
 
 fn case_table(m: &Matrix, page: &mut Page) {

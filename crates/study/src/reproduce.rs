@@ -87,11 +87,11 @@ pub fn reproduce(
         let end = logged.last_step + opts.after;
         let mut hash_at_first = None;
         let mut replayed: Option<Event> = None;
-        d.push_row();
+        d.push_row(false);
         while !d.solver.finished() && d.solver.step_count() < end {
             let stepped = d.step();
             let step = d.solver.step_count();
-            d.push_row();
+            d.push_row(false);
             if step >= vtk_from {
                 let v = d.solver.view();
                 write_atomic(

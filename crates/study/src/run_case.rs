@@ -80,8 +80,9 @@ impl Driver {
         }
     }
 
-    /// A timeseries row at the current step (field metrics computed now).
-    pub fn push_row(&mut self) {
+    /// A timeseries row at the current step (field metrics computed now);
+    /// `event_row` when it is written only because of an event.
+    pub fn push_row(&mut self, event_row: bool) {
         if self.series.last_step() == Some(self.solver.step_count()) {
             return;
         }
@@ -92,7 +93,7 @@ impl Driver {
             // Before the first observed step: energies from the state itself.
             report = monitor::StepReport::of_state(&v);
         }
-        self.series.push(&report, &self.peaks, &fields);
+        self.series.push(&report, &self.peaks, &fields, event_row);
         self.peaks = Peaks::default();
     }
 }
@@ -407,7 +408,7 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
     let mut vtk = VtkSchedule::new(particles_dir.clone(), case.output.vtk_times.clone());
     let mut frames = EventFrames::new(particles_dir, d.solver.particle_count());
     vtk.catch_up(&d.solver)?;
-    d.push_row();
+    d.push_row(false);
     let mut ring = CheckpointRing::start(dir, case.output.checkpoint_every, &d)?;
     let (status, reason) = loop {
         if d.solver.finished() {
@@ -421,8 +422,10 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
             frames.opened(&ids, &d.solver.view(), step)?;
         }
         frames.after_step(&d.solver.view(), step)?;
-        if step % row_every == 0 || opened > 0 || matches!(stepped, Stepped::Stop(_)) {
-            d.push_row();
+        let regular = step % row_every == 0;
+        let stopped = matches!(stepped, Stepped::Stop(_));
+        if regular || opened > 0 || stopped {
+            d.push_row(!regular);
             let t = d.solver.time();
             bar.set_position((1000.0 * t / t_end) as u64);
             bar.set_message(format!("t = {t:.3} s, {} events", d.monitor.events().len()));
@@ -433,11 +436,16 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
         vtk.catch_up(&d.solver)?;
         ring.after_step(step, &d)?;
     };
-    d.push_row();
+    d.push_row(status != Status::Completed);
     vtk.write(&d.solver)?;
     tables::write_timeseries(&d.series, dir, opts.csv)?;
     let events = d.monitor.events().to_vec();
-    let mut metrics = metrics::summarise(&d.series, &events, front_wall_z(&case.solver.scene));
+    let mut metrics = metrics::summarise(
+        &d.series,
+        &events,
+        front_wall_z(&case.solver.scene),
+        status == Status::Completed,
+    );
     metrics.events_dropped = d.monitor.events_dropped();
     Ok(Simulated {
         status,

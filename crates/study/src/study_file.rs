@@ -135,7 +135,9 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Study, StudyError> {
         let (key, value) = parse_override(o).map_err(|m| err(o, m))?;
         set_path(&mut root, &key, value).map_err(|m| err(&key, m))?;
     }
-    let axes = matrix_axes(root.remove("matrix")).map_err(|(k, m)| err(&k, m))?;
+    let mut matrix = root.remove("matrix");
+    let ensemble = ensemble_size(&mut matrix).map_err(|(k, m)| err(&k, m))?;
+    let axes = matrix_axes(matrix).map_err(|(k, m)| err(&k, m))?;
     let base = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -158,12 +160,49 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Study, StudyError> {
         } else {
             name_parts.join("_")
         };
-        cases.push(case(name, table).map_err(|(k, m)| err(&k, m))?);
+        match ensemble {
+            None => cases.push(case(name, table).map_err(|(k, m)| err(&k, m))?),
+            Some(n) => {
+                for member in 0..n {
+                    let mut table = table.clone();
+                    let scene = table
+                        .entry("scene")
+                        .or_insert_with(|| Value::Table(Table::new()));
+                    if let Value::Table(scene) = scene {
+                        scene
+                            .entry("jitter")
+                            .or_insert(Value::Float(ENSEMBLE_JITTER));
+                        scene.insert("seed".into(), Value::Integer(member as i64));
+                    }
+                    let name = format!("{name}_e{member}");
+                    cases.push(case(name, table).map_err(|(k, m)| err(&k, m))?);
+                }
+            }
+        }
     }
     Ok(Study {
         file: path.to_path_buf(),
         cases,
     })
+}
+
+/// Relative position jitter (in h) of ensemble members unless `scene.jitter` is set.
+pub const ENSEMBLE_JITTER: f64 = 1e-9;
+
+/// `[matrix] ensemble = N`: every case runs as N members `CASE_e0 .. CASE_e{N-1}`,
+/// each with its own `scene.seed` (and `scene.jitter`, default `ENSEMBLE_JITTER`).
+fn ensemble_size(matrix: &mut Option<Value>) -> Result<Option<u64>, KeyError> {
+    let Some(Value::Table(t)) = matrix else {
+        return Ok(None);
+    };
+    match t.remove("ensemble") {
+        None => Ok(None),
+        Some(Value::Integer(n)) if (1..=1000).contains(&n) => Ok(Some(n as u64)),
+        Some(other) => Err((
+            "matrix.ensemble".into(),
+            format!("{other} is out of range (allowed whole numbers 1 ..= 1000)"),
+        )),
+    }
 }
 
 /// A bad key of a case: (dotted key, message).
@@ -432,6 +471,39 @@ mod tests {
             "power-g7"
         );
         assert_eq!(name_part("method.cfl", &toml("0.1")), "cfl0.1");
+    }
+
+    #[test]
+    fn an_ensemble_runs_each_case_as_seeded_members() {
+        let dir = std::env::temp_dir().join(format!("kick-ensemble-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("e.toml");
+        let text =
+            "[scene]\n[[scene.body]]\nrect = [0.0, 0.0, 0.2, 0.4]\n[materials.water]\nK = 1e5\n\
+                    [matrix]\nensemble = 3\n\"materials.water.K\" = [1e5, 1e6]\n";
+        std::fs::write(&path, text).unwrap();
+        let study = load(&path, &[]).unwrap();
+        let names: Vec<&str> = study.cases.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "K100kPa_e0",
+                "K100kPa_e1",
+                "K100kPa_e2",
+                "K1MPa_e0",
+                "K1MPa_e1",
+                "K1MPa_e2"
+            ]
+        );
+        for (k, c) in study.cases.iter().enumerate() {
+            assert_eq!(c.solver.scene.seed, (k % 3) as u64);
+            assert_eq!(c.solver.scene.jitter, ENSEMBLE_JITTER);
+            assert_eq!(c.params["scene.seed"], Value::Integer((k % 3) as i64));
+        }
+        std::fs::write(&path, text.replace("ensemble = 3", "ensemble = 0")).unwrap();
+        let e = load(&path, &[]).unwrap_err();
+        assert_eq!(e.key, "matrix.ensemble", "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Bumped whenever a field of `Summary` or `Metrics` changes meaning or name.
-pub const SCHEMA_VERSION: u32 = 2;
+pub const SCHEMA_VERSION: u32 = 3;
 
 /// How a case ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -36,12 +36,17 @@ impl Status {
 /// (no rows in the window, no kick, not a dam-break scene).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Metrics {
-    /// Mean relative RMS hydrostatic departure over the last simulated second.
+    /// Mean relative RMS hydrostatic departure over the last simulated
+    /// second, for a run that reached t_end (event rows and the t = 0 row left out).
     pub hydro_rel_rms_late: Option<f64>,
-    /// Mean largest hydrostatic departure over the last simulated second.
+    /// Mean largest hydrostatic departure over the same window.
     pub hydro_max_late: Option<f64>,
-    /// Mean checkerboard index over the last simulated second.
+    /// Mean checkerboard index over the same window.
     pub checkerboard_late: Option<f64>,
+    /// The three figures above over the second before a run stopped (blew up).
+    pub hydro_rel_rms_pre_failure: Option<f64>,
+    pub hydro_max_pre_failure: Option<f64>,
+    pub checkerboard_pre_failure: Option<f64>,
     pub checkerboard_peak: Option<f64>,
     /// Largest energy injected above the running minimum (J/m).
     pub energy_injected_max: Option<f64>,
@@ -50,6 +55,8 @@ pub struct Metrics {
     pub n_kicks: usize,
     pub n_energy_injections: usize,
     pub courant_max: Option<f64>,
+    /// Largest nodal advective number |v_i| dt / h.
+    pub node_advection_max: Option<f64>,
     pub max_accel_g: Option<f64>,
     /// RMS of Z against Martin & Moyce while the front is short of the far wall.
     pub front_rms_error: Option<f64>,

@@ -19,7 +19,10 @@ fn nullable(v: &[f64]) -> Vec<Option<f64>> {
 }
 
 pub fn timeseries_frame(ts: &Timeseries) -> PolarsResult<DataFrame> {
-    let mut cols = vec![Column::new("step".into(), &ts.step)];
+    let mut cols = vec![
+        Column::new("step".into(), &ts.step),
+        Column::new("event_row".into(), &ts.event_row),
+    ];
     for (name, values) in COLUMNS.iter().zip(&ts.columns) {
         cols.push(Column::new((*name).into(), nullable(values)));
     }

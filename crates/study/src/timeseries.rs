@@ -1,5 +1,5 @@
 //! The per-case timeseries: one row per k steps plus a row at each event's
-//! first step. Peak columns (max_*, courant, j range, smallest nodal mass)
+//! first step. Peak columns (max_*, node_advection, courant, j range, smallest nodal mass)
 //! hold the extreme since the previous row so that no spike between rows is
 //! lost; the others are the value at the row's step. Missing values are NaN
 //! in memory, empty in CSV and null in Parquet.
@@ -26,6 +26,7 @@ pub const COLUMNS: &[&str] = &[
     "j_max",
     "min_node_mass_ratio",
     "max_node_accel_g",
+    "node_advection",
     "ringing_energy",
     "n_outside",
     "n_flagged",
@@ -51,6 +52,7 @@ pub struct Peaks {
     j_max: f64,
     node_mass: f64,
     node_accel_g: f64,
+    node_advection: f64,
     flagged: usize,
     opened: usize,
 }
@@ -67,6 +69,7 @@ impl Default for Peaks {
             j_max: f64::NEG_INFINITY,
             node_mass: f64::INFINITY,
             node_accel_g: 0.0,
+            node_advection: 0.0,
             flagged: 0,
             opened: 0,
         }
@@ -84,6 +87,7 @@ impl Peaks {
         self.j_max = self.j_max.max(r.j_max);
         self.node_mass = self.node_mass.min(r.min_node_mass_ratio);
         self.node_accel_g = self.node_accel_g.max(r.max_node_accel_g);
+        self.node_advection = self.node_advection.max(r.node_advection);
         self.flagged += r.n_flagged;
         self.opened += r.events_opened;
     }
@@ -92,6 +96,9 @@ impl Peaks {
 #[derive(Clone, Debug, Default)]
 pub struct Timeseries {
     pub step: Vec<u64>,
+    /// Rows written only because an event opened (or the run stopped) at
+    /// their step: never part of a "late" window.
+    pub event_row: Vec<bool>,
     /// One vector per entry of COLUMNS.
     pub columns: Vec<Vec<f64>>,
 }
@@ -104,6 +111,7 @@ impl Timeseries {
     pub fn new() -> Self {
         Timeseries {
             step: vec![],
+            event_row: vec![],
             columns: vec![vec![]; COLUMNS.len()],
         }
     }
@@ -120,8 +128,9 @@ impl Timeseries {
         &self.columns[k]
     }
 
-    /// Appends a row from the step report, the peaks since the last row and the field metrics.
-    pub fn push(&mut self, r: &StepReport, p: &Peaks, f: &FieldMetrics) {
+    /// Appends a row from the step report, the peaks since the last row and
+    /// the field metrics; `event_row` when it is written only for an event.
+    pub fn push(&mut self, r: &StepReport, p: &Peaks, f: &FieldMetrics, event_row: bool) {
         let finite_or_nan = |v: f64| if v.is_finite() { v } else { f64::NAN };
         let row = [
             r.t,
@@ -143,6 +152,7 @@ impl Timeseries {
             finite_or_nan(p.j_max),
             finite_or_nan(p.node_mass),
             p.node_accel_g,
+            p.node_advection,
             r.ringing_energy,
             r.n_outside as f64,
             p.flagged as f64,
@@ -157,6 +167,7 @@ impl Timeseries {
         ];
         debug_assert_eq!(row.len(), COLUMNS.len());
         self.step.push(r.step);
+        self.event_row.push(event_row);
         for (col, v) in self.columns.iter_mut().zip(row) {
             col.push(v);
         }

@@ -11,6 +11,7 @@ pub fn method(shape: ShapeKind, transfer: TransferKind, scheme: SchemeKind) -> M
         dt: DtMode::Fixed,
         dt_value: None,
         j_update: JUpdate::Det,
+        min_node_mass: 0.0,
     }
 }
 
@@ -24,6 +25,8 @@ pub fn box_scene(size: [f64; 2], rect: [f64; 4], material: Material, gravity: f6
         gravity,
         initial: InitialState::ZeroStress,
         periodic: [false, false],
+        jitter: 0.0,
+        seed: 0,
         bodies: vec![Body {
             rect,
             material: String::new(),
