@@ -130,7 +130,20 @@ fn case_plots_render_as_png_and_svg() {
             })
             .collect(),
     };
-    let markers = [Marker { id: 1, t: 0.3 }, Marker { id: 2, t: 0.7 }];
+    let markers = [
+        Marker {
+            id: 1,
+            t: 0.3,
+            colour: RGBColor(200, 30, 30),
+            note: "*".into(),
+        },
+        Marker {
+            id: 2,
+            t: 0.7,
+            colour: RGBColor(120, 120, 120),
+            note: String::new(),
+        },
+    ];
     let fig = TimeseriesFigure {
         series: &series,
         markers: &markers,
@@ -144,7 +157,7 @@ fn case_plots_render_as_png_and_svg() {
             "time t (s)",
             "energy change (J)",
             "checkerboard CB",
-            "#1",
+            "#1*",
             "#2",
             "a/g, z (log)",
             "departure (log)",

@@ -226,6 +226,16 @@ pub struct Event {
     /// was not previously deformed (see [`Event::previously_deformed`]).
     pub deformed_by: Vec<DeformedBy>,
     pub rules: Rules,
+    /// Why it happened, by the tests of docs/physics.md section 4b (the first
+    /// that holds); re-judged while the event grows.
+    #[serde(default)]
+    pub cause: Cause,
+    /// The evidence for `cause`.
+    #[serde(default)]
+    pub evidence: Evidence,
+    /// How the run went on: recovered, or stopped while the event was open.
+    #[serde(default)]
+    pub outcome: Outcome,
     /// Filled in by the study runner.
     pub state_hash: Option<String>,
     pub checkpoint: Option<String>,
@@ -240,6 +250,108 @@ impl Event {
     pub fn previously_deformed(&self) -> bool {
         !self.deformed_by.is_empty()
     }
+
+    /// The seed's trait: quiet before, and highly deformed earlier.
+    pub fn hallmark(&self) -> bool {
+        self.quiescent_before && self.previously_deformed()
+    }
+
+    /// A kick: a burst that is a numerical failure (`inversion`) or adds
+    /// energy (`injection`), as opposed to time-step instability or physics.
+    pub fn is_kick(&self) -> bool {
+        matches!(self.cause, Cause::Inversion | Cause::Injection)
+    }
+
+    /// The kinematic anomaly proper: a kick with the hallmark.
+    pub fn is_anomaly(&self) -> bool {
+        self.is_kick() && self.hallmark()
+    }
+
+    /// Sets `cause` from the kind and the evidence: inversion, then cfl, then
+    /// injection, else impact.
+    pub fn classify(&mut self) {
+        let e = &self.evidence;
+        self.cause = if self.kind == EventKind::Inversion {
+            Cause::Inversion
+        } else if e.courant_before >= e.critical_courant || e.advection_before >= ADVECTION_LIMIT {
+            Cause::Cfl
+        } else if e.energy_rise > e.energy_floor {
+            Cause::Injection
+        } else {
+            Cause::Impact
+        };
+    }
+}
+
+/// Nodal advective number |v_i| dt / h above which a burst counts as time-step instability.
+pub const ADVECTION_LIMIT: f64 = 0.5;
+
+/// Why an event happened (docs/physics.md section 4b).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Cause {
+    /// Some particle in the region has J <= 0 (a kick: numerical failure).
+    Inversion,
+    /// The Courant or nodal advective number before onset reached its limit
+    /// (time-step instability, reported apart).
+    Cfl,
+    /// The total energy rose above its noise floor while the event was open (a kick).
+    Injection,
+    /// None of these: a burst that moves energy without adding any (physics).
+    #[default]
+    Impact,
+}
+
+impl Cause {
+    pub const ALL: [Cause; 4] = [
+        Cause::Inversion,
+        Cause::Cfl,
+        Cause::Injection,
+        Cause::Impact,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Cause::Inversion => "inversion",
+            Cause::Cfl => "cfl",
+            Cause::Injection => "injection",
+            Cause::Impact => "impact",
+        }
+    }
+}
+
+/// The figures `Event::classify` judges by.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Evidence {
+    /// Largest effective Courant number max_p (c_p + |v_p|) dt / h over the
+    /// merge window (`merge_seconds`) before onset, onset included.
+    pub courant_before: f64,
+    /// Largest nodal advective number |v_i| dt / h over the same window.
+    pub advection_before: f64,
+    /// The shape's critical Courant number (1 linear and uGIMP, 1.7
+    /// quadratic, 1.9 cubic B-spline).
+    pub critical_courant: f64,
+    /// Energy injected (total above its running minimum) while the event was open.
+    pub energy_rise: f64,
+    /// Its floor: `injection_floor_factor` x the dt-scaled noise floor
+    /// m g dt sqrt(2 g H) / 2 of the event's own mass m (its particle count
+    /// times the mean particle mass) at its last step: symplectic Euler adds
+    /// about that much where fluid of mass m decelerates.
+    pub energy_floor: f64,
+}
+
+/// How the run went on after an event.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    #[default]
+    Recovered,
+    /// The run stopped while it was open: particles left the box or passed the escape speed.
+    BlowOut,
+    /// ... a particle inverted.
+    Inverted,
+    /// ... the state went non-finite.
+    NonFinite,
 }
 
 #[cfg(test)]
@@ -272,6 +384,15 @@ mod tests {
             quiescent_before: true,
             deformed_by: vec![DeformedBy::StrainRate, DeformedBy::Distortion],
             rules: [Rule::KeSpike, Rule::AccelOutlier].into_iter().collect(),
+            cause: Cause::Injection,
+            evidence: Evidence {
+                courant_before: 0.3,
+                advection_before: 0.1,
+                critical_courant: 1.7,
+                energy_rise: 1e-3,
+                energy_floor: 1e-4,
+            },
+            outcome: Outcome::Recovered,
             state_hash: Some("00ff".into()),
             checkpoint: None,
             injected_at_open: 0.0,
@@ -357,5 +478,38 @@ mod tests {
     fn unknown_rule_names_are_refused() {
         let r: Result<Rules, _> = serde_json::from_str(r#"["ke_spike", "gut_feeling"]"#);
         assert!(r.is_err());
+    }
+
+    #[test]
+    fn causes_are_judged_in_order_inversion_cfl_injection_impact() {
+        let mut e = event();
+        let judge = |e: &mut Event| {
+            e.classify();
+            e.cause
+        };
+        assert_eq!(judge(&mut e), Cause::Injection, "energy above its floor");
+        e.evidence.energy_rise = e.evidence.energy_floor;
+        assert_eq!(judge(&mut e), Cause::Impact, "not above the floor");
+        e.evidence.advection_before = ADVECTION_LIMIT;
+        assert_eq!(judge(&mut e), Cause::Cfl, "nodal advection at its limit");
+        e.evidence.advection_before = 0.0;
+        e.evidence.courant_before = e.evidence.critical_courant;
+        e.evidence.energy_rise = 1.0;
+        assert_eq!(judge(&mut e), Cause::Cfl, "cfl before injection");
+        e.kind = EventKind::Inversion;
+        assert_eq!(judge(&mut e), Cause::Inversion, "inversion first");
+        assert!(e.is_kick());
+        e.kind = EventKind::Kick;
+        e.evidence.courant_before = 0.0;
+        assert!(judge(&mut e) == Cause::Injection && e.is_kick() && e.is_anomaly());
+        e.quiescent_before = false;
+        assert!(
+            e.is_kick() && !e.is_anomaly(),
+            "no hallmark without quiescence"
+        );
+        let json = serde_json::to_value(&e).unwrap();
+        assert_eq!(json["cause"], "injection");
+        assert_eq!(json["outcome"], "recovered");
+        assert_eq!(json["evidence"]["critical_courant"], 1.7);
     }
 }

@@ -16,9 +16,12 @@ pub mod geometry;
 pub mod hydrostatic;
 pub mod particle_history;
 mod state;
+pub mod step_history;
 
 pub use config::MonitorConfig;
-pub use events::{CellRange, DeformedBy, Event, EventKind, Region, Rule, Rules};
+pub use events::{
+    Cause, CellRange, DeformedBy, Event, EventKind, Evidence, Outcome, Region, Rule, Rules,
+};
 pub use geometry::Geometry;
 
 use accel_outliers::WindowStats;
@@ -30,6 +33,7 @@ use hydrostatic::Hydrostatic;
 use particle_history::{ParticleHistory, NEVER};
 use serde::Serialize;
 use solver::{Mat2, StateView};
+use step_history::StepHistory;
 
 /// The cheap per-step figures.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -285,6 +289,26 @@ pub struct Monitor {
     prev_injected: f64,
     total_mass: f64,
     events_dropped: u64,
+    /// Courant and nodal advective numbers of the last steps (cause evidence).
+    steps: StepHistory,
+    /// The shape's critical Courant number.
+    critical_courant: f64,
+    /// `injection_floor_factor` x the noise floor per kilogram (per metre of
+    /// depth) at the current step: g dt sqrt(2 g H) / 2.
+    energy_floor_per_kg: f64,
+}
+
+/// Nodes lighter than this fraction of a full cell's mass rho0 h^2 are left
+/// out of the nodal advective number.
+pub const ADVECTION_MIN_MASS: f64 = 1e-3;
+
+/// The critical effective Courant number of a shape family (docs/physics.md section 4b).
+pub fn critical_courant(shape: solver::ShapeKind) -> f64 {
+    match shape {
+        solver::ShapeKind::Linear | solver::ShapeKind::Gimp => 1.0,
+        solver::ShapeKind::Bspline2 => 1.7,
+        solver::ShapeKind::Bspline3 => 1.9,
+    }
 }
 
 const UNLABELLED: u32 = u32::MAX;
@@ -316,6 +340,9 @@ impl Monitor {
             prev_injected: 0.0,
             events_dropped: 0,
             total_mass: v.mass.iter().sum(),
+            steps: StepHistory::default(),
+            critical_courant: critical_courant(v.shape),
+            energy_floor_per_kg: 0.0,
             geom,
             cfg,
         }
@@ -373,6 +400,11 @@ impl Monitor {
         self.flagged.retain(|c| !c.rules.is_empty());
         let injection = self.energy.observe(v.energy.total());
         let floor = solver::energy::injection_noise_floor(self.total_mass, g, self.geom.size.y, dt);
+        self.energy_floor_per_kg = self.cfg.injection_floor_factor * floor / self.total_mass;
+        let (min_node_mass_ratio, max_node_a, max_node_speed) = self.grid_figures(v);
+        let node_advection = max_node_speed * v.dt / v.grid.h;
+        // Before any event opens: its window before onset includes this step.
+        self.steps.push(v.time, v.courant, node_advection);
         let opened_before = self.events.len();
         if !self.flagged.is_empty() {
             self.cluster_flagged(v, g);
@@ -380,8 +412,10 @@ impl Monitor {
         self.check_energy_injection(v, g, injection.window, floor, scan.gain_max.1);
         let max_speed = scan.max_speed2.sqrt();
         let blow_out = self.check_blow_out(v, g, max_speed, &scan);
+        if blow_out.is_some() {
+            self.stopped(v);
+        }
         self.track_injected_energy(v.step, injection.total);
-        let (min_node_mass_ratio, max_node_a, max_node_speed) = self.grid_figures(v);
         self.report = StepReport {
             step: v.step,
             energy_injected: injection.total,
@@ -395,7 +429,7 @@ impl Monitor {
             j_max: scan.j_max,
             min_node_mass_ratio,
             max_node_accel_g: max_node_a / g,
-            node_advection: max_node_speed * v.dt / v.grid.h,
+            node_advection,
             ringing_energy: v.ke_particles_p2g - v.ke_grid_p2g,
             n_outside: v.n_outside,
             n_nonfinite: v.n_nonfinite,
@@ -571,20 +605,54 @@ impl Monitor {
         None
     }
 
+    /// The run stops at this step: every event still open (within the merge
+    /// window of its last step) gets the stop's outcome.
+    fn stopped(&mut self, v: &StateView) {
+        let outcome = self
+            .events
+            .iter()
+            .rev()
+            .find(|e| e.last_step == v.step)
+            .map_or(Outcome::BlowOut, |e| match e.kind {
+                EventKind::Inversion => Outcome::Inverted,
+                EventKind::NonFinite => Outcome::NonFinite,
+                _ => Outcome::BlowOut,
+            });
+        let (merge_steps, merge_seconds) = (self.cfg.merge_steps, self.cfg.merge_seconds);
+        for e in self
+            .events
+            .iter_mut()
+            .filter(|e| e.last_step + merge_steps >= v.step || e.last_t + merge_seconds >= v.time)
+        {
+            e.outcome = outcome;
+        }
+    }
+
     /// Energy injected while each event touched at this step is open (`total`
     /// is the injection so far).
     fn track_injected_energy(&mut self, step: u64, total: f64) {
+        let mean_mass = self.total_mass / self.event_mark.len().max(1) as f64;
         for e in self.events.iter_mut().filter(|e| e.last_step == step) {
             if e.first_step == step {
                 e.injected_at_open = self.prev_injected;
             }
             e.energy_injected = e.energy_injected.max(total - e.injected_at_open);
+            e.evidence.energy_rise = e.energy_injected;
+            // An energy-injection event is the whole budget's: the whole mass's floor.
+            let mass = if e.kind == EventKind::EnergyInjection {
+                self.total_mass
+            } else {
+                e.n_particles as f64 * mean_mass
+            };
+            e.evidence.energy_floor = self.energy_floor_per_kg * mass;
+            e.classify();
         }
         self.prev_injected = total;
     }
 
     /// Over the active grid nodes: the smallest nodal mass over rho0 h^2 (0
-    /// without any), the largest nodal acceleration and the largest nodal speed.
+    /// without any), the largest nodal acceleration, and the largest speed of
+    /// the nodes with at least `ADVECTION_MIN_MASS` rho0 h^2.
     fn grid_figures(&self, v: &StateView) -> (f64, f64, f64) {
         let h2 = self.geom.rho0 * self.geom.cell * self.geom.cell;
         let (mut min_mass, mut max_node_a, mut max_speed2) = (f64::INFINITY, 0.0f64, 0.0f64);
@@ -593,7 +661,11 @@ impl Monitor {
             if m > 0.0 {
                 min_mass = min_mass.min(m / h2);
                 max_node_a = max_node_a.max(v.grid.acceleration[node as usize].norm());
-                max_speed2 = max_speed2.max(v.grid.velocity[node as usize].norm_squared());
+                // A node in a shape's far tail (1e-13 of a cell under B-splines)
+                // can take any speed and moves no particle: not advection.
+                if m >= ADVECTION_MIN_MASS * h2 {
+                    max_speed2 = max_speed2.max(v.grid.velocity[node as usize].norm_squared());
+                }
             }
         }
         let min_mass = if min_mass.is_finite() { min_mass } else { 0.0 };
@@ -765,7 +837,9 @@ impl Monitor {
         if half(c.distorted) {
             deformed_by.push(DeformedBy::Distortion);
         }
-        self.events.push(Event {
+        let (courant_before, advection_before) =
+            self.steps.max_since(v.time - self.cfg.merge_seconds);
+        let mut event = Event {
             id: self.events.len() as u32 + 1,
             kind,
             first_step: v.step,
@@ -784,10 +858,21 @@ impl Monitor {
             quiescent_before: half(c.quiescent),
             deformed_by,
             rules: c.rules,
+            cause: Cause::Impact,
+            evidence: Evidence {
+                courant_before,
+                advection_before,
+                critical_courant: self.critical_courant,
+                energy_rise: 0.0,
+                energy_floor: 0.0,
+            },
+            outcome: Outcome::Recovered,
             state_hash: None,
             checkpoint: None,
             injected_at_open: self.prev_injected,
-        });
+        };
+        event.classify();
+        self.events.push(event);
     }
 
     fn blow_out_event(

@@ -8,7 +8,7 @@ use crate::Monitor;
 use bincode::Options;
 use solver::checkpoint::{unseal, CheckpointError, Reader, Writer};
 
-const MAGIC: &[u8; 8] = b"KICKMON2";
+const MAGIC: &[u8; 8] = b"KICKMON3";
 
 /// The events' encoding: bincode (little-endian, varint integers, f64 bits as
 /// they are) through `Event`'s serde derive, so the checkpoint and the summary
@@ -86,6 +86,11 @@ impl Monitor {
         w.f64(self.prev_injected);
         w.u64(self.events_dropped);
         w.bytes(&encode_events(&self.events));
+        w.bytes(
+            &codec()
+                .serialize(&self.steps)
+                .expect("step history serialises"),
+        );
         // Beside the events: monitor bookkeeping kept out of their serde form.
         for e in &self.events {
             w.f64(e.injected_at_open);
@@ -124,6 +129,13 @@ impl Monitor {
         self.prev_injected = r.f64()?;
         self.events_dropped = r.u64()?;
         let mut events = decode_events(r.bytes()?)?;
+        let steps: crate::step_history::StepHistory = codec()
+            .deserialize(r.bytes()?)
+            .map_err(|e| decode_error(&e))?;
+        if !steps.is_whole() {
+            return Err(CheckpointError::Truncated);
+        }
+        self.steps = steps;
         for e in &mut events {
             e.injected_at_open = r.f64()?;
         }
@@ -164,6 +176,15 @@ mod tests {
             quiescent_before: false,
             deformed_by: vec![DeformedBy::Distortion],
             rules: Rule::InjectionWindow.into(),
+            cause: crate::events::Cause::Cfl,
+            evidence: crate::events::Evidence {
+                courant_before: f64::from_bits(0x7ff8_0000_0000_0002),
+                advection_before: -0.0,
+                critical_courant: 1.7,
+                energy_rise: f64::INFINITY,
+                energy_floor: 5e-324,
+            },
+            outcome: crate::events::Outcome::NonFinite,
             state_hash: None,
             checkpoint: Some("ckpt_000004.bin".into()),
             injected_at_open: 0.0,

@@ -43,13 +43,15 @@ fn baseline_small_k_kicks_then_blows_out() {
         assert!(e.courant > 0.0 && e.peak_accel_g >= 50.0 && e.n_particles >= 4);
         assert!(e.region.x_max > e.region.x_min && e.region.y_max > e.region.y_min);
         eprintln!(
-            "kick {} step {} t {:.4} s region [{:.2}, {:.2}] x [{:.2}, {:.2}] a/g {:.0} z {:.0} Courant {:.2} quiescent {} deformed {}",
+            "kick {} step {} t {:.4} s region [{:.2}, {:.2}] x [{:.2}, {:.2}] a/g {:.0} z {:.0} Courant {:.2} quiescent {} deformed {} cause {:?} {:?} outcome {:?}",
             e.id, e.first_step, e.t, e.region.x_min, e.region.x_max, e.region.y_min, e.region.y_max,
-            e.peak_accel_g, e.peak_z, e.courant, e.quiescent_before, e.previously_deformed()
+            e.peak_accel_g, e.peak_z, e.courant, e.quiescent_before, e.previously_deformed(),
+            e.cause, e.evidence, e.outcome
         );
     }
     eprintln!(
-        "blow-out at step {} t {:.4}: {reason} (Courant {:.2})",
-        blow.first_step, blow.t, blow.courant
+        "blow-out at step {} t {:.4}: {reason} (Courant {:.2}, cause {:?} {:?})",
+        blow.first_step, blow.t, blow.courant, blow.cause, blow.evidence
     );
+    assert_eq!(blow.outcome, monitor::Outcome::BlowOut);
 }

@@ -59,6 +59,9 @@ fn an_inversion_stops_the_run_at_its_first_step() {
         let e = m.events().last().unwrap();
         assert_eq!(e.kind, EventKind::Inversion, "{e:?}");
         assert!(e.rules.contains(Rule::Inversion));
+        assert_eq!(e.cause, monitor::Cause::Inversion);
+        assert_eq!(e.outcome, monitor::Outcome::Inverted);
+        assert!(e.is_kick());
         assert!(e.n_particles >= 1);
         if j_update == JUpdate::Exp {
             assert!(

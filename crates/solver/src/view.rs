@@ -1,6 +1,6 @@
 //! The narrow read-only view of the state that the monitor observes.
 
-use crate::config::{Material, Scene};
+use crate::config::{Material, Scene, ShapeKind};
 use crate::energy::Energy;
 use crate::particles::{Mat2, Vec2};
 use crate::Solver;
@@ -32,6 +32,8 @@ pub struct StateView<'a> {
     pub dt: f64,
     pub scene: &'a Scene,
     pub materials: &'a [Material],
+    /// The shape family (its critical Courant number judges time-step instability).
+    pub shape: ShapeKind,
     pub x: &'a [Vec2],
     pub v: &'a [Vec2],
     /// Velocities at the start of the last step.
@@ -74,6 +76,7 @@ pub fn make(s: &Solver) -> StateView<'_> {
         dt: s.dt,
         scene: &s.cfg.scene,
         materials: &s.cfg.scene.materials,
+        shape: s.cfg.method.shape,
         x: &ps.x,
         v: &ps.v,
         v_prev: &ps.v_prev,

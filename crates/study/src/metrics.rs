@@ -2,7 +2,7 @@
 //! (docs/physics.md section 4: "late" = the last simulated second of a run
 //! that reached t_end, without event rows).
 
-use crate::summary::Metrics;
+use crate::summary::{CauseCount, Metrics};
 use crate::timeseries::Timeseries;
 use monitor::{Event, EventKind};
 
@@ -101,11 +101,27 @@ pub fn summarise(
             .filter(|v| v.is_finite())
             .fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v))))
     };
-    let first_kick = events
+    let first = |keep: &dyn Fn(&Event) -> bool| {
+        events
+            .iter()
+            .filter(|e| keep(e))
+            .map(|e| e.t)
+            .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.min(t))))
+    };
+    let causes = monitor::Cause::ALL
         .iter()
-        .filter(|e| e.kind == EventKind::Kick)
-        .map(|e| e.t)
-        .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.min(t))));
+        .map(|&c| {
+            let of = |e: &Event| e.cause == c;
+            let count = events.iter().filter(|e| of(e)).count();
+            (
+                c.name().to_string(),
+                CauseCount {
+                    count,
+                    t_first: first(&of),
+                },
+            )
+        })
+        .collect();
     let count = |k: EventKind| events.iter().filter(|e| e.kind == k).count();
     let (hydro_rel_rms_late, hydro_rel_rms_pre_failure) = split("hydro_rel_rms");
     let (hydro_max_late, hydro_max_pre_failure) = split("hydro_max");
@@ -119,8 +135,11 @@ pub fn summarise(
         checkerboard_pre_failure,
         checkerboard_peak: peak("checkerboard"),
         energy_injected_max: peak("energy_injected"),
-        t_first_kick: first_kick,
-        n_kicks: count(EventKind::Kick),
+        t_first_kick: first(&|e| e.is_kick()),
+        n_kicks: events.iter().filter(|e| e.is_kick()).count(),
+        n_anomalies: events.iter().filter(|e| e.is_anomaly()).count(),
+        t_first_anomaly: first(&|e| e.is_anomaly()),
+        causes,
         n_energy_injections: count(EventKind::EnergyInjection),
         courant_max: peak("courant"),
         node_advection_max: peak("node_advection"),

@@ -32,6 +32,10 @@ impl Series {
 pub struct Marker {
     pub id: u32,
     pub t: f64,
+    /// Line colour (the report colours events by cause).
+    pub colour: RGBColor,
+    /// Text after the id, e.g. "*" for the hallmark.
+    pub note: String,
 }
 
 pub struct TimeseriesFigure<'a> {
@@ -214,14 +218,14 @@ impl TimeseriesFigure<'_> {
         }
         for m in self.markers {
             chart
-                .draw_series(LineSeries::new([(m.t, lo), (m.t, hi)], RED.mix(0.6)))
+                .draw_series(LineSeries::new([(m.t, lo), (m.t, hi)], m.colour.mix(0.7)))
                 .map_err(err)?;
             if at.first {
                 chart
                     .draw_series([Text::new(
-                        format!("#{}", m.id),
+                        format!("#{}{}", m.id, m.note),
                         (m.t, hi - 0.02 * (hi - lo)),
-                        (SANS, 13).into_font().color(&RED),
+                        (SANS, 13).into_font().color(&m.colour),
                     )])
                     .map_err(err)?;
             }

@@ -15,7 +15,8 @@ use crate::run_case::front_wall_z;
 use crate::snapshot::Snapshot;
 use crate::study_file;
 use crate::summary::Summary;
-use monitor::{Event, EventKind};
+use monitor::{Cause, Event, EventKind};
+use plotters::style::RGBColor;
 use solver::Scene;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -149,6 +150,12 @@ fn events_section(events: &[Event], page: &mut Page) {
         "Courant",
         "quiescent before",
         "previously deformed",
+        "cause",
+        "hallmark",
+        "outcome",
+        "Courant before / critical",
+        "advection before",
+        "energy rise / floor (J/m)",
         "rules",
     ]
     .map(String::from);
@@ -173,6 +180,23 @@ fn events_section(events: &[Event], page: &mut Page) {
                     Cell::Num(format!("{:.2}", e.courant)),
                     Cell::Num(e.quiescent_before.to_string()),
                     Cell::Num(e.previously_deformed().to_string()),
+                    Cell::Text(format!(
+                        "<span style=\"color:{}\">{}</span>",
+                        cause_css(e),
+                        e.cause.name()
+                    )),
+                    Cell::Num(if e.hallmark() { "yes" } else { "" }.into()),
+                    Cell::Text(serde_name(&e.outcome)),
+                    Cell::Num(format!(
+                        "{:.2} / {:.1}",
+                        e.evidence.courant_before, e.evidence.critical_courant
+                    )),
+                    Cell::Num(format!("{:.3}", e.evidence.advection_before)),
+                    Cell::Num(format!(
+                        "{} / {}",
+                        short(e.evidence.energy_rise),
+                        short(e.evidence.energy_floor)
+                    )),
                     Cell::Text(e.rules.names().join(", ")),
                 ],
             )
@@ -181,12 +205,31 @@ fn events_section(events: &[Event], page: &mut Page) {
     page.table("", &headers, &rows);
 }
 
-/// The event kind as summary.json spells it.
-fn kind_name(kind: EventKind) -> String {
-    match serde_json::to_value(kind) {
+/// A unit enum as summary.json spells it.
+fn serde_name<T: serde::Serialize + std::fmt::Debug>(v: &T) -> String {
+    match serde_json::to_value(v) {
         Ok(serde_json::Value::String(s)) => s,
-        _ => format!("{kind:?}"),
+        _ => format!("{v:?}"),
     }
+}
+
+fn kind_name(kind: EventKind) -> String {
+    serde_name(&kind)
+}
+
+/// Events by cause: kicks (injection, inversion) red, time-step instability
+/// (cfl) orange, impacts (physics) grey.
+fn cause_colour(e: &Event) -> RGBColor {
+    match e.cause {
+        Cause::Injection | Cause::Inversion => RGBColor(200, 30, 30),
+        Cause::Cfl => RGBColor(230, 140, 20),
+        Cause::Impact => RGBColor(120, 120, 120),
+    }
+}
+
+fn cause_css(e: &Event) -> String {
+    let RGBColor(r, g, b) = cause_colour(e);
+    format!("#{r:02x}{g:02x}{b:02x}")
 }
 
 fn timeseries_section(c: &CaseInputs, page: &mut Page) -> Res {
@@ -194,13 +237,16 @@ fn timeseries_section(c: &CaseInputs, page: &mut Page) -> Res {
         .summary
         .events
         .iter()
-        .filter(|e| {
-            matches!(
-                e.kind,
-                EventKind::Kick | EventKind::BlowOut | EventKind::EnergyInjection
-            )
+        .map(|e| Marker {
+            id: e.id,
+            t: e.t,
+            colour: cause_colour(e),
+            note: if e.hallmark() {
+                "*".into()
+            } else {
+                String::new()
+            },
         })
-        .map(|e| Marker { id: e.id, t: e.t })
         .collect();
     page.h2("Time series");
     let fig = TimeseriesFigure {
@@ -211,7 +257,7 @@ fn timeseries_section(c: &CaseInputs, page: &mut Page) -> Res {
             c.name()
         ),
     };
-    page.figure(&render(&fig, &c.out, "timeseries")?, "Energy budget, injected energy, max a/g and outlier score, checkerboard index and hydrostatic departure; red lines mark events");
+    page.figure(&render(&fig, &c.out, "timeseries")?, "Energy budget, injected energy, max a/g and outlier score, checkerboard index and hydrostatic departure; event lines by cause: kicks (injection, inversion) red, time-step instability (cfl) orange, impacts grey; * marks the hallmark");
     if let (Some(z_wall), Some(ft), Some(fz)) = (
         front_wall_z(&c.scene),
         c.series.get("front_t"),

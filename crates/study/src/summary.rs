@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Bumped whenever a field of `Summary` or `Metrics` changes meaning or name.
-pub const SCHEMA_VERSION: u32 = 3;
+pub const SCHEMA_VERSION: u32 = 4;
 
 /// How a case ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -50,9 +50,18 @@ pub struct Metrics {
     pub checkerboard_peak: Option<f64>,
     /// Largest energy injected above the running minimum (J/m).
     pub energy_injected_max: Option<f64>,
-    /// Time of the first kick event (s).
+    /// Time of the first kick (an event whose cause is `injection` or `inversion`), s.
     pub t_first_kick: Option<f64>,
+    /// Events whose cause is `injection` or `inversion`.
     pub n_kicks: usize,
+    /// Kicks with the hallmark (quiescent before, highly deformed earlier):
+    /// the kinematic anomaly proper.
+    pub n_anomalies: usize,
+    /// Time of the first anomaly (s).
+    pub t_first_anomaly: Option<f64>,
+    /// Every event counted by cause, with the time of the first.
+    pub causes: BTreeMap<String, CauseCount>,
+    /// Events opened by the energy-budget rule (kind `energy_injection`).
     pub n_energy_injections: usize,
     pub courant_max: Option<f64>,
     /// Largest nodal advective number |v_i| dt / h.
@@ -62,6 +71,14 @@ pub struct Metrics {
     pub front_rms_error: Option<f64>,
     /// Event openings past `monitor.max_events`, counted per step.
     pub events_dropped: u64,
+}
+
+/// Events of one cause.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct CauseCount {
+    pub count: usize,
+    /// Time of the first (s).
+    pub t_first: Option<f64>,
 }
 
 /// One case's `summary.json`.

@@ -70,6 +70,9 @@ pub fn assert_detected(events: &[Event], s: u64, window: u64, cells: [usize; 4],
         "{tag}: first-step cells {c:?} outside perturbed {cells:?} + 2"
     );
     assert!(kick.peak_accel_g > 10.0, "{tag}: {kick:?}");
+    // The push adds energy: a kick by cause, whatever the rule that found it.
+    assert_eq!(kick.cause, monitor::Cause::Injection, "{tag}: {kick:?}");
+    assert!(kick.is_kick());
     for e in events {
         assert!(
             e.first_step >= s && e.first_step <= s + window,
