@@ -105,12 +105,30 @@ impl MonitorConfig {
             injection_floor_factor,
             escape_speed_factor
         );
-        if self.window_tile_cells == 0 {
-            return Err((
-                "window_tile_cells".into(),
-                "0 is out of range (allowed >= 1)".into(),
-            ));
+        // Counts size buffers (a window of steps, cells, events): bounded so a
+        // typo is an error, not an allocation that aborts the run.
+        macro_rules! count_within {
+            ($($field:ident: $lo:expr, $hi:expr);* $(;)?) => {$(
+                let v = self.$field as u64;
+                if !($lo..=$hi).contains(&v) {
+                    return Err((
+                        stringify!($field).to_string(),
+                        format!("{v} is out of range (allowed {} ..= {})", $lo, $hi),
+                    ));
+                }
+            )*};
         }
+        count_within!(
+            window_half_cells: 0, 1_000;
+            window_tile_cells: 1, 1_000;
+            recent_steps: 0, 1_000_000_000;
+            min_cluster_particles: 0, 1_000_000_000;
+            merge_cells: 0, 1_000_000;
+            merge_steps: 0, 1_000_000_000;
+            max_events: 0, 10_000_000;
+            max_event_ids: 0, 1_000_000;
+            injection_window: 1, 1_000_000;
+        );
         Ok(())
     }
 }

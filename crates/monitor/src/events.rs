@@ -275,7 +275,7 @@ impl Event {
             Cause::Inversion
         } else if e.courant_before >= e.critical_courant || e.advection_before >= ADVECTION_LIMIT {
             Cause::Cfl
-        } else if e.energy_rise > e.energy_floor {
+        } else if self.energy_injected > e.energy_floor {
             Cause::Injection
         } else {
             Cause::Impact
@@ -331,9 +331,7 @@ pub struct Evidence {
     /// The shape's critical Courant number (1 linear and uGIMP, 1.7
     /// quadratic, 1.9 cubic B-spline).
     pub critical_courant: f64,
-    /// Energy injected (total above its running minimum) while the event was open.
-    pub energy_rise: f64,
-    /// Its floor: `injection_floor_factor` x the dt-scaled noise floor
+    /// The floor of `Event::energy_injected`: `injection_floor_factor` x the dt-scaled noise floor
     /// m g dt sqrt(2 g H) / 2 of the event's own mass m (its particle count
     /// times the mean particle mass) at its last step: symplectic Euler adds
     /// about that much where fluid of mass m decelerates.
@@ -389,7 +387,6 @@ mod tests {
                 courant_before: 0.3,
                 advection_before: 0.1,
                 critical_courant: 1.7,
-                energy_rise: 1e-3,
                 energy_floor: 1e-4,
             },
             outcome: Outcome::Recovered,
@@ -488,13 +485,13 @@ mod tests {
             e.cause
         };
         assert_eq!(judge(&mut e), Cause::Injection, "energy above its floor");
-        e.evidence.energy_rise = e.evidence.energy_floor;
+        e.energy_injected = e.evidence.energy_floor;
         assert_eq!(judge(&mut e), Cause::Impact, "not above the floor");
         e.evidence.advection_before = ADVECTION_LIMIT;
         assert_eq!(judge(&mut e), Cause::Cfl, "nodal advection at its limit");
         e.evidence.advection_before = 0.0;
         e.evidence.courant_before = e.evidence.critical_courant;
-        e.evidence.energy_rise = 1.0;
+        e.energy_injected = 1.0;
         assert_eq!(judge(&mut e), Cause::Cfl, "cfl before injection");
         e.kind = EventKind::Inversion;
         assert_eq!(judge(&mut e), Cause::Inversion, "inversion first");

@@ -130,6 +130,8 @@ struct ScanThresholds {
     inv_dt: f64,
     /// Squared velocity jump of a candidate: (accel_candidate_g g dt)^2.
     candidate_dv2: f64,
+    /// det F differs from J (the exp J update): check it apart for inversion.
+    det_apart: bool,
     ke_spike_ratio: f64,
     /// kick_accel_g g.
     kick_a: f64,
@@ -137,13 +139,14 @@ struct ScanThresholds {
 }
 
 impl ScanThresholds {
-    fn new(cfg: &MonitorConfig, g: f64, dt: f64) -> Self {
+    fn new(cfg: &MonitorConfig, g: f64, dt: f64, det_apart: bool) -> Self {
         let candidate_a = cfg.accel_candidate_g * g;
         ScanThresholds {
             decay: (-1.0 / cfg.ke_history_steps.max(1.0)).exp(),
             quiescent2: cfg.quiescent_speed * cfg.quiescent_speed,
             inv_dt: 1.0 / dt,
             candidate_dv2: (candidate_a * dt).powi(2),
+            det_apart,
             ke_spike_ratio: cfg.ke_spike_ratio,
             kick_a: cfg.kick_accel_g * g,
             deformed_rate: cfg.deformed_rate,
@@ -445,7 +448,7 @@ impl Monitor {
     /// (with their history as it was before this step) into `flagged`, then
     /// the history update.
     fn scan_particles(&mut self, v: &StateView, g: f64, dt: f64) -> Scan {
-        let t = ScanThresholds::new(&self.cfg, g, dt);
+        let t = ScanThresholds::new(&self.cfg, g, dt, v.j_update == solver::JUpdate::Exp);
         let step = v.step as i64;
         let n = v.x.len();
         let mut s = Scan::new();
@@ -477,7 +480,9 @@ impl Monitor {
             let ke_ref = ke_recent[p].max(0.5 * mass[p] * t.quiescent2);
             let ratio = s.ke_ratio(e, ke_ref, candidate);
             s.add(p, speed2, prev2, mass[p], jac[p]);
-            s.det_min = s.det_min.min(def[p].determinant());
+            if t.det_apart {
+                s.det_min = s.det_min.min(def[p].determinant());
+            }
             if candidate {
                 let history = (last_fast[p], last_deformed[p]);
                 if let Some(c) = t.candidate(p, dv2, ratio, speed2 > prev2, history) {
@@ -557,6 +562,17 @@ impl Monitor {
         max_speed: f64,
         scan: &Scan,
     ) -> Option<String> {
+        // Inversion first: J <= 0 also makes pressures and energies non-finite.
+        if scan.j_min <= 0.0 || scan.det_min <= 0.0 {
+            let reason = format!(
+                "inversion: smallest J {:.3e}, smallest det F {:.3e}",
+                scan.j_min, scan.det_min
+            );
+            self.blow_out_event(EventKind::Inversion, Rule::Inversion, v, g, |p| {
+                v.j[p] <= 0.0 || v.deformation[p].determinant() <= 0.0
+            });
+            return Some(reason);
+        }
         if v.n_nonfinite > 0 {
             let reason = format!("non-finite state in {} particles", v.n_nonfinite);
             self.blow_out_event(EventKind::NonFinite, Rule::NonFinite, v, g, |p| {
@@ -570,16 +586,6 @@ impl Monitor {
             let reason = format!("non-finite total energy {}", v.energy.total());
             self.blow_out_event(EventKind::NonFinite, Rule::NonFinite, v, g, |p| {
                 !v.j[p].is_finite() || v.j[p] <= 0.0
-            });
-            return Some(reason);
-        }
-        if scan.j_min <= 0.0 || scan.det_min <= 0.0 {
-            let reason = format!(
-                "inversion: smallest J {:.3e}, smallest det F {:.3e}",
-                scan.j_min, scan.det_min
-            );
-            self.blow_out_event(EventKind::Inversion, Rule::Inversion, v, g, |p| {
-                v.j[p] <= 0.0 || v.deformation[p].determinant() <= 0.0
             });
             return Some(reason);
         }
@@ -637,7 +643,6 @@ impl Monitor {
                 e.injected_at_open = self.prev_injected;
             }
             e.energy_injected = e.energy_injected.max(total - e.injected_at_open);
-            e.evidence.energy_rise = e.energy_injected;
             // An energy-injection event is the whole budget's: the whole mass's floor.
             let mass = if e.kind == EventKind::EnergyInjection {
                 self.total_mass
@@ -863,7 +868,6 @@ impl Monitor {
                 courant_before,
                 advection_before,
                 critical_courant: self.critical_courant,
-                energy_rise: 0.0,
                 energy_floor: 0.0,
             },
             outcome: Outcome::Recovered,

@@ -181,7 +181,6 @@ mod tests {
                 courant_before: f64::from_bits(0x7ff8_0000_0000_0002),
                 advection_before: -0.0,
                 critical_courant: 1.7,
-                energy_rise: f64::INFINITY,
                 energy_floor: 5e-324,
             },
             outcome: crate::events::Outcome::NonFinite,

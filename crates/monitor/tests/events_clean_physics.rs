@@ -42,7 +42,7 @@ fn summary(events: &[Event]) -> Vec<(u64, Cause, f64, f64, f64)> {
                 e.first_step,
                 e.cause,
                 v.courant_before,
-                v.energy_rise,
+                e.energy_injected,
                 v.energy_floor,
             )
         })

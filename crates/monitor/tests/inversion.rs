@@ -9,8 +9,10 @@ use solver::*;
 
 /// A block slammed into the floor at 30 m/s with a time step 10x the
 /// advective limit: some particle inverts within a few steps.
-fn slam(j_update: JUpdate) -> Solver {
-    let mut scene = Scene::dam_break(Material::new(1e3));
+fn slam(j_update: JUpdate, gamma: f64) -> Solver {
+    let mut material = Material::new(1e3);
+    material.gamma = gamma;
+    let mut scene = Scene::dam_break(material);
     scene.bodies[0].rect = [0.2, 0.0, 0.4, 0.2];
     scene.bodies[0].velocity = [0.0, -30.0];
     let method = Method {
@@ -28,8 +30,15 @@ fn slam(j_update: JUpdate) -> Solver {
 
 #[test]
 fn an_inversion_stops_the_run_at_its_first_step() {
-    for j_update in [JUpdate::Det, JUpdate::Exp] {
-        let mut s = slam(j_update);
+    // gamma 1 and 7.5 make the pressure or the stored energy non-finite at
+    // J <= 0: still an inversion, not a non-finite state.
+    for (j_update, gamma) in [
+        (JUpdate::Det, 7.0),
+        (JUpdate::Exp, 7.0),
+        (JUpdate::Det, 1.0),
+        (JUpdate::Det, 7.5),
+    ] {
+        let mut s = slam(j_update, gamma);
         let mut m = common::fresh_monitor(&s);
         let mut first_inverted = None;
         let mut stopped = None;
@@ -49,13 +58,18 @@ fn an_inversion_stops_the_run_at_its_first_step() {
                 break;
             }
         }
-        let first = first_inverted.unwrap_or_else(|| panic!("{j_update:?}: no particle inverted"));
-        let (step, reason) = stopped.unwrap_or_else(|| panic!("{j_update:?}: not stopped"));
+        let first = first_inverted
+            .unwrap_or_else(|| panic!("{j_update:?} gamma {gamma}: no particle inverted"));
+        let (step, reason) =
+            stopped.unwrap_or_else(|| panic!("{j_update:?} gamma {gamma}: not stopped"));
         assert_eq!(
             step, first,
-            "{j_update:?}: stopped at the first inverted step"
+            "{j_update:?} gamma {gamma}: stopped at the first inverted step"
         );
-        assert!(reason.contains("inversion"), "{j_update:?}: {reason}");
+        assert!(
+            reason.contains("inversion"),
+            "{j_update:?} gamma {gamma}: {reason}"
+        );
         let e = m.events().last().unwrap();
         assert_eq!(e.kind, EventKind::Inversion, "{e:?}");
         assert!(e.rules.contains(Rule::Inversion));

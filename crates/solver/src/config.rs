@@ -385,8 +385,8 @@ impl SolverConfig {
 
     /// Every range check, named by study key: the one validation pass.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        self.validate_scene()?;
         self.validate_materials()?;
+        self.validate_scene()?;
         let m = &self.method;
         within(m.flip_alpha, 0.0, 1.0, "method.flip_alpha")?;
         within(m.cfl, 1e-4, 1.0, "method.cfl")?;

@@ -1,6 +1,6 @@
 //! The narrow read-only view of the state that the monitor observes.
 
-use crate::config::{Material, Scene, ShapeKind};
+use crate::config::{JUpdate, Material, Scene, ShapeKind};
 use crate::energy::Energy;
 use crate::particles::{Mat2, Vec2};
 use crate::Solver;
@@ -34,6 +34,8 @@ pub struct StateView<'a> {
     pub materials: &'a [Material],
     /// The shape family (its critical Courant number judges time-step instability).
     pub shape: ShapeKind,
+    /// How J follows F: under `Det`, J is det F bit for bit; under `Exp` they differ.
+    pub j_update: JUpdate,
     pub x: &'a [Vec2],
     pub v: &'a [Vec2],
     /// Velocities at the start of the last step.
@@ -77,6 +79,7 @@ pub fn make(s: &Solver) -> StateView<'_> {
         scene: &s.cfg.scene,
         materials: &s.cfg.scene.materials,
         shape: s.cfg.method.shape,
+        j_update: s.cfg.method.j_update,
         x: &ps.x,
         v: &ps.v,
         v_prev: &ps.v_prev,

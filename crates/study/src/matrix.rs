@@ -186,6 +186,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> std::io::Result<Vec<SummaryRow>> {
             .collect();
         entries.sort();
         for case_dir in entries {
+            if case_dir.join(Summary::FILE).exists() {
+                if let Err(e) = Summary::read(&case_dir) {
+                    eprintln!("kick matrix --merge: left out: {e}");
+                }
+            }
             if let Some(summary) = finished_summary(&case_dir) {
                 rows.retain(|r| r.summary.case != summary.case);
                 rows.push(SummaryRow {

@@ -23,7 +23,12 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 
 /// The relative path from folder `from` to `to` (both made absolute), with `/`.
 pub fn relative_path(from: &Path, to: &Path) -> String {
-    let abs = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+    // Both the same kind of absolute path, whether or not they exist yet.
+    let abs = |p: &Path| {
+        std::fs::canonicalize(p)
+            .or_else(|_| std::path::absolute(p))
+            .unwrap_or_else(|_| p.to_path_buf())
+    };
     let (from, to) = (abs(from), abs(to));
     let a: Vec<_> = from.components().collect();
     let b: Vec<_> = to.components().collect();

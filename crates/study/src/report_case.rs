@@ -194,7 +194,7 @@ fn events_section(events: &[Event], page: &mut Page) {
                     Cell::Num(format!("{:.3}", e.evidence.advection_before)),
                     Cell::Num(format!(
                         "{} / {}",
-                        short(e.evidence.energy_rise),
+                        short(e.energy_injected),
                         short(e.evidence.energy_floor)
                     )),
                     Cell::Text(e.rules.names().join(", ")),

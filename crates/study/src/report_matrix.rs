@@ -198,6 +198,7 @@ impl Matrix {
 pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
     let out = dir.join("report");
     let mut m = Matrix::read(dir)?;
+    std::fs::create_dir_all(&out).map_err(err)?;
     // Case pages first, so the matrix page can link them.
     for r in &mut m.rows {
         match case_report(&r.dir) {
@@ -395,9 +396,9 @@ impl<'a> HeatLayout<'a> {
 /// with the median first-kick and survival times, and their range over an ensemble.
 fn outcome_cell(runs: &[&Row]) -> (RGBColor, String) {
     let count = |o: &str| runs.iter().filter(|r| r.outcome() == o).count();
+    // OUTCOMES runs from best to worst and max_by_key keeps the last maximum.
     let outcome = OUTCOMES
         .iter()
-        .rev()
         .max_by_key(|o| count(o.0))
         .expect("four outcomes");
     let kick = spread(runs.iter().map(|r| r.t_first_kick()));
@@ -569,7 +570,7 @@ fn ensemble_table(m: &Matrix, page: &mut Page) {
         return;
     }
     page.h2("Ensembles");
-    page.p("Each case ran as several members whose initial positions differ by a seeded jitter of order 1e-9 h (scene.jitter): survival and first-kick time as median [min, max] over the members.");
+    page.p("Each case ran as several members whose initial positions differ by a seeded jitter of at most scene.jitter h (scene.seed per member): survival and first-kick time as median [min, max] over the members.");
     let mut headers = m.axes.clone();
     headers.extend(
         [

@@ -425,7 +425,7 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
         let regular = step % row_every == 0;
         let stopped = matches!(stepped, Stepped::Stop(_));
         if regular || opened > 0 || stopped {
-            d.push_row(!regular);
+            d.push_row(!regular || stopped);
             let t = d.solver.time();
             bar.set_position((1000.0 * t / t_end) as u64);
             bar.set_message(format!("t = {t:.3} s, {} events", d.monitor.events().len()));

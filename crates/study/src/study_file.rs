@@ -172,7 +172,9 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Study, StudyError> {
                         scene
                             .entry("jitter")
                             .or_insert(Value::Float(ENSEMBLE_JITTER));
-                        scene.insert("seed".into(), Value::Integer(member as i64));
+                        // Members K of a base seed s: seeds s + K.
+                        let base = scene.get("seed").and_then(Value::as_integer).unwrap_or(0);
+                        scene.insert("seed".into(), Value::Integer(base + member as i64));
                     }
                     let name = format!("{name}_e{member}");
                     cases.push(case(name, table).map_err(|(k, m)| err(&k, m))?);
@@ -285,7 +287,12 @@ fn schema_error(e: serde_path_to_error::Error<toml::de::Error>) -> KeyError {
     // "unknown variant `x`, expected one of `a`, `b`".
     let quoted: Vec<&str> = message.split('`').skip(1).step_by(2).collect();
     if message.starts_with("missing field") {
-        (join(quoted[0]), "is required".into())
+        let key = if path.is_empty() {
+            quoted[0].to_string()
+        } else {
+            format!("{path}.{}", quoted[0])
+        };
+        (key, "is required".into())
     } else if message.starts_with("unknown field") {
         let allowed = quoted[1..].join(", ");
         (join(quoted[0]), format!("unknown key (allowed: {allowed})"))

@@ -11,7 +11,6 @@ pub fn method(shape: ShapeKind, transfer: TransferKind) -> Method {
 
 pub fn tait(k: f64, viscosity: f64) -> Material {
     let mut m = Material::tait(k);
-    m.eos = EosKind::Tait;
     m.viscosity = viscosity;
     m
 }
