@@ -74,16 +74,19 @@ fn jitter(ps: &mut Particles, scene: &Scene) {
     }
     let amplitude = scene.jitter * scene.cell;
     let mut state = scene.seed ^ 0x6a09_e667_f3bc_c909;
-    let mut uniform = || {
-        // splitmix64: a fixed, platform-independent sequence per seed.
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut uniform = || uniform01(&mut state);
     for x in ps.x.iter_mut() {
         x.x += amplitude * (2.0 * uniform() - 1.0);
         x.y += amplitude * (2.0 * uniform() - 1.0);
     }
+}
+
+/// The next number of a splitmix64 stream, uniform in [0, 1): a fixed,
+/// platform-independent sequence per starting state.
+pub fn uniform01(state: &mut u64) -> f64 {
+    *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
 }

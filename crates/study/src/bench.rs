@@ -62,14 +62,7 @@ pub fn mpm88() -> (SolverConfig, Particles) {
     };
     let mut ps = Particles::default();
     let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
-    let mut uniform = || {
-        // splitmix64
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut uniform = || solver::scene::uniform01(&mut state);
     let vol = (0.5 * h) * (0.5 * h);
     for _ in 0..8192 {
         let x = Vec2::new(0.2 + 0.4 * uniform(), 0.2 + 0.4 * uniform());
