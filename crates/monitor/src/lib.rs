@@ -296,9 +296,6 @@ pub struct Monitor {
     steps: StepHistory,
     /// The shape's critical Courant number.
     critical_courant: f64,
-    /// `injection_floor_factor` x the noise floor per kilogram (per metre of
-    /// depth) at the current step: g dt sqrt(2 g H) / 2.
-    energy_floor_per_kg: f64,
 }
 
 /// Nodes lighter than this fraction of a full cell's mass rho0 h^2 are left
@@ -345,7 +342,6 @@ impl Monitor {
             total_mass: v.mass.iter().sum(),
             steps: StepHistory::default(),
             critical_courant: critical_courant(v.shape),
-            energy_floor_per_kg: 0.0,
             geom,
             cfg,
         }
@@ -403,7 +399,6 @@ impl Monitor {
         self.flagged.retain(|c| !c.rules.is_empty());
         let injection = self.energy.observe(v.energy.total());
         let floor = solver::energy::injection_noise_floor(self.total_mass, g, self.geom.size.y, dt);
-        self.energy_floor_per_kg = self.cfg.injection_floor_factor * floor / self.total_mass;
         let (min_node_mass_ratio, max_node_a, max_node_speed) = self.grid_figures(v);
         let node_advection = max_node_speed * v.dt / v.grid.h;
         // Before any event opens: its window before onset includes this step.
@@ -418,7 +413,9 @@ impl Monitor {
         if blow_out.is_some() {
             self.stopped(v);
         }
-        self.track_injected_energy(v.step, injection.total);
+        // The floor per kilogram (per metre of depth): injection_floor_factor g dt sqrt(2 g H) / 2.
+        let floor_per_kg = self.cfg.injection_floor_factor * floor / self.total_mass;
+        self.track_injected_energy(v.step, injection.total, floor_per_kg);
         self.report = StepReport {
             step: v.step,
             energy_injected: injection.total,
@@ -635,8 +632,9 @@ impl Monitor {
     }
 
     /// Energy injected while each event touched at this step is open (`total`
-    /// is the injection so far).
-    fn track_injected_energy(&mut self, step: u64, total: f64) {
+    /// is the injection so far), and the cause judged against the floor of
+    /// the event's mass.
+    fn track_injected_energy(&mut self, step: u64, total: f64, floor_per_kg: f64) {
         let mean_mass = self.total_mass / self.event_mark.len().max(1) as f64;
         for e in self.events.iter_mut().filter(|e| e.last_step == step) {
             if e.first_step == step {
@@ -649,7 +647,7 @@ impl Monitor {
             } else {
                 e.n_particles as f64 * mean_mass
             };
-            e.evidence.energy_floor = self.energy_floor_per_kg * mass;
+            e.evidence.energy_floor = floor_per_kg * mass;
             e.classify();
         }
         self.prev_injected = total;

@@ -9,6 +9,7 @@ use crate::plot_matrix::{HeatCell, HeatKey, HeatPanel, HeatmapFigure, LinesFigur
 use crate::report::{read_parquet, text_column};
 use crate::report_case::case_report;
 use crate::report_html::{escape, Cell, Page};
+use crate::study_file::ENSEMBLE_KEYS;
 use crate::summary::{Status, Summary};
 use plotters::style::RGBColor;
 use std::collections::BTreeSet;
@@ -75,9 +76,6 @@ const OUTCOMES: [(&str, &str, RGBColor); 4] = [
     ("blew_up", "blew up", RGBColor(200, 50, 50)),
     ("failed", "failed", RGBColor(150, 150, 150)),
 ];
-
-/// Keys that tell ensemble members apart (not axes of the matrix).
-const ENSEMBLE_KEYS: [&str; 2] = ["scene.seed", "scene.jitter"];
 
 /// Median, smallest and largest of the finite values (None when there are none).
 fn spread(values: impl Iterator<Item = f64>) -> Option<(f64, f64, f64)> {

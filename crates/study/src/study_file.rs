@@ -191,6 +191,9 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Study, StudyError> {
 /// Relative position jitter (in h) of ensemble members unless `scene.jitter` is set.
 pub const ENSEMBLE_JITTER: f64 = 1e-9;
 
+/// The keys that tell ensemble members apart (not axes of a matrix).
+pub const ENSEMBLE_KEYS: [&str; 2] = ["scene.seed", "scene.jitter"];
+
 /// `[matrix] ensemble = N`: every case runs as N members `CASE_e0 .. CASE_e{N-1}`,
 /// each with its own `scene.seed` (and `scene.jitter`, default `ENSEMBLE_JITTER`).
 fn ensemble_size(matrix: &mut Option<Value>) -> Result<Option<u64>, KeyError> {
