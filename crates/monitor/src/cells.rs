@@ -21,14 +21,16 @@ impl CellBins {
 
     pub fn rebuild(&mut self, geom: &Geometry, x: &[Vec2]) {
         self.start.fill(0);
-        for (k, xp) in self.key.iter_mut().zip(x) {
+        // Fewer particles than at t = 0 once some were deleted.
+        let keys = &mut self.key[..x.len()];
+        for (k, xp) in keys.iter_mut().zip(x) {
             *k = geom.cell_index(*xp) as u32;
             self.start[*k as usize + 1] += 1;
         }
         for c in 1..self.start.len() {
             self.start[c] += self.start[c - 1];
         }
-        for (p, &k) in self.key.iter().enumerate() {
+        for (p, &k) in keys.iter().enumerate() {
             let slot = &mut self.start[k as usize];
             self.order[*slot as usize] = p as u32;
             *slot += 1;

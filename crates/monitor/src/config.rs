@@ -19,13 +19,19 @@ pub struct MonitorConfig {
     pub window_tile_cells: usize,
     /// Kinetic-energy spike: e_p over its recent maximum (floored) >= this ...
     pub ke_spike_ratio: f64,
-    /// ... with the recent maximum floored by 1/2 m v_q^2 at this quiescent speed (m/s).
+    /// ... with the recent maximum floored by 1/2 m v_q^2 at this speed (m/s).
     pub quiescent_speed: f64,
-    /// Steps over which a particle's kinetic-energy history decays (1/e).
+    /// Steps over which a particle's kinetic-energy history decays (1/e): a
+    /// spike is a jump within a few steps, whatever their size.
     pub ke_history_steps: f64,
-    /// Steps before an event looked at for `quiescent_before` and `previously_deformed`.
-    pub recent_steps: u64,
-    /// |dev D| (1/s) above which a particle counts as highly deformed.
+    /// Hallmark, quiescent before: over `quiet_seconds` before onset the
+    /// particle was never faster than `quiet_speed` (m/s; 0.05 sqrt(g H) at
+    /// H = 0.4 m) nor deformed faster than `quiet_rate` (in-plane |dev D|, 1/s).
+    pub quiet_seconds: f64,
+    pub quiet_speed: f64,
+    pub quiet_rate: f64,
+    /// Hallmark, highly deformed earlier: the particle's running maximum of
+    /// the in-plane |dev D| (1/s) reached this before the quiet window.
     pub deformed_rate: f64,
     /// Isochoric stretch ratio of F (largest / smallest principal stretch) above
     /// which a particle counts as highly distorted.
@@ -62,8 +68,10 @@ impl Default for MonitorConfig {
             ke_spike_ratio: 25.0,
             quiescent_speed: 0.05,
             ke_history_steps: 50.0,
-            recent_steps: 200,
-            deformed_rate: 20.0,
+            quiet_seconds: 0.05,
+            quiet_speed: 0.1,
+            quiet_rate: 2.0,
+            deformed_rate: 50.0,
             distortion_ratio: 4.0,
             min_cluster_particles: 4,
             merge_cells: 3,
@@ -99,6 +107,9 @@ impl MonitorConfig {
             ke_spike_ratio,
             quiescent_speed,
             ke_history_steps,
+            quiet_seconds,
+            quiet_speed,
+            quiet_rate,
             deformed_rate,
             distortion_ratio,
             merge_seconds,
@@ -121,7 +132,6 @@ impl MonitorConfig {
         count_within!(
             window_half_cells: 0, 1_000;
             window_tile_cells: 1, 1_000;
-            recent_steps: 0, 1_000_000_000;
             min_cluster_particles: 0, 1_000_000_000;
             merge_cells: 0, 1_000_000;
             merge_steps: 0, 1_000_000_000;

@@ -251,9 +251,11 @@ impl Event {
         !self.deformed_by.is_empty()
     }
 
-    /// The seed's trait: quiet before, and highly deformed earlier.
+    /// The seed's trait: quiet before, and highly deformed earlier (by the
+    /// strain-rate peak; a large distortion of F only grows in a sloshing
+    /// fluid, so it is logged but not part of the hallmark).
     pub fn hallmark(&self) -> bool {
-        self.quiescent_before && self.previously_deformed()
+        self.quiescent_before && self.deformed_by.contains(&DeformedBy::StrainRate)
     }
 
     /// A kick: a burst that is a numerical failure (`inversion`) or adds
@@ -336,6 +338,24 @@ pub struct Evidence {
     /// times the mean particle mass) at its last step: symplectic Euler adds
     /// about that much where fluid of mass m decelerates.
     pub energy_floor: f64,
+    /// Hallmark evidence over the particles flagged at onset (docs/physics.md
+    /// section 4b): the fraction quiet over `quiet_seconds` before their
+    /// burst, and the fraction whose in-plane |dev D| peaked above
+    /// `deformed_rate` before that window.
+    #[serde(default)]
+    pub quiescent_fraction: f64,
+    #[serde(default)]
+    pub deformed_fraction: f64,
+    /// Their largest earlier peak in-plane |dev D| (1/s) and its time.
+    #[serde(default)]
+    pub peak_dev_rate: f64,
+    #[serde(default)]
+    pub t_peak_dev_rate: Option<f64>,
+    /// Their smallest J and largest speed at the start of the onset step.
+    #[serde(default)]
+    pub j_min: Option<f64>,
+    #[serde(default)]
+    pub speed_before: f64,
 }
 
 /// How the run went on after an event.
@@ -388,6 +408,12 @@ mod tests {
                 advection_before: 0.1,
                 critical_courant: 1.7,
                 energy_floor: 1e-4,
+                quiescent_fraction: 0.75,
+                deformed_fraction: 0.5,
+                peak_dev_rate: 80.0,
+                t_peak_dev_rate: Some(0.1),
+                j_min: Some(0.97),
+                speed_before: 0.02,
             },
             outcome: Outcome::Recovered,
             state_hash: Some("00ff".into()),

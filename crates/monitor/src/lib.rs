@@ -30,7 +30,7 @@ use checkerboard::CellField;
 use energy_budget::EnergyBudget;
 use front::Front;
 use hydrostatic::Hydrostatic;
-use particle_history::{ParticleHistory, NEVER};
+use particle_history::{Calm, ParticleHistory};
 use serde::Serialize;
 use solver::{Mat2, StateView};
 use step_history::StepHistory;
@@ -69,6 +69,10 @@ pub struct StepReport {
     pub ringing_energy: f64,
     pub n_outside: usize,
     pub n_nonfinite: usize,
+    /// Particles deleted so far (`on_escape` / `on_inversion = "delete"`), and
+    /// their share of the initial mass.
+    pub particles_lost: u64,
+    pub mass_lost_fraction: f64,
     pub n_flagged: usize,
     /// Events opened at this step.
     pub events_opened: usize,
@@ -116,8 +120,8 @@ struct Candidate {
     /// NaN until scored (a gaining candidate above `kick_accel_g`), 0 when not scored.
     z: f64,
     rules: Rules,
-    last_fast: i64,
-    last_deformed: i64,
+    /// Its quiet spell and earlier peak |dev D| (hallmark evidence).
+    calm: Calm,
 }
 
 /// The thresholds of the per-particle pass, from the config, g and dt.
@@ -125,8 +129,11 @@ struct Candidate {
 struct ScanThresholds {
     /// Per-step decay of the kinetic-energy history.
     decay: f64,
-    /// Quiescent speed squared (also floors the kinetic-energy history as 1/2 m v_q^2).
+    /// Quiescent speed squared (floors the kinetic-energy history as 1/2 m v_q^2).
     quiescent2: f64,
+    /// Hallmark activity thresholds: quiet_speed squared, and quiet_rate.
+    quiet_speed2: f64,
+    quiet_rate: f64,
     inv_dt: f64,
     /// Squared velocity jump of a candidate: (accel_candidate_g g dt)^2.
     candidate_dv2: f64,
@@ -135,7 +142,6 @@ struct ScanThresholds {
     ke_spike_ratio: f64,
     /// kick_accel_g g.
     kick_a: f64,
-    deformed_rate: f64,
 }
 
 impl ScanThresholds {
@@ -144,12 +150,13 @@ impl ScanThresholds {
         ScanThresholds {
             decay: (-1.0 / cfg.ke_history_steps.max(1.0)).exp(),
             quiescent2: cfg.quiescent_speed * cfg.quiescent_speed,
+            quiet_speed2: cfg.quiet_speed * cfg.quiet_speed,
+            quiet_rate: cfg.quiet_rate,
             inv_dt: 1.0 / dt,
             candidate_dv2: (candidate_a * dt).powi(2),
             det_apart,
             ke_spike_ratio: cfg.ke_spike_ratio,
             kick_a: cfg.kick_accel_g * g,
-            deformed_rate: cfg.deformed_rate,
         }
     }
 
@@ -161,7 +168,7 @@ impl ScanThresholds {
         dv2: f64,
         ke_ratio: f64,
         gaining: bool,
-        (last_fast, last_deformed): (i64, i64),
+        calm: Calm,
     ) -> Option<Candidate> {
         let a = dv2.sqrt() * self.inv_dt;
         let mut rules = Rules::NONE;
@@ -175,8 +182,7 @@ impl ScanThresholds {
             a,
             z: if wants_z { f64::NAN } else { 0.0 },
             rules,
-            last_fast,
-            last_deformed,
+            calm,
         })
     }
 }
@@ -248,6 +254,12 @@ struct Cluster {
     distorted: usize,
     count: usize,
     event: usize,
+    /// Largest earlier peak |dev D| of its particles, and when.
+    peak_rate: f64,
+    peak_rate_t: f64,
+    j_min: f64,
+    /// Largest speed of its particles at the start of the step.
+    speed_before: f64,
 }
 
 impl Cluster {
@@ -263,6 +275,10 @@ impl Cluster {
             distorted: 0,
             count: 0,
             event: 0,
+            peak_rate: 0.0,
+            peak_rate_t: particle_history::NEVER,
+            j_min: f64::INFINITY,
+            speed_before: 0.0,
         }
     }
 }
@@ -290,12 +306,17 @@ pub struct Monitor {
     front: Front,
     report: StepReport,
     prev_injected: f64,
-    total_mass: f64,
     events_dropped: u64,
     /// Courant and nodal advective numbers of the last steps (cause evidence).
     steps: StepHistory,
     /// The shape's critical Courant number.
     critical_courant: f64,
+    /// Time of the previous observation (particle activity is judged against it).
+    prev_time: f64,
+    /// Particle ids per slot as of the last observation (deletions compact the history).
+    ids: Vec<u32>,
+    /// Mass at t = 0, deleted particles included.
+    initial_mass: f64,
 }
 
 /// Nodes lighter than this fraction of a full cell's mass rho0 h^2 are left
@@ -331,7 +352,7 @@ impl Monitor {
             touched: Vec::with_capacity(cells),
             stack: Vec::with_capacity(cells),
             clusters: Vec::with_capacity(64),
-            event_mark: vec![0; n],
+            event_mark: vec![0; v.n_initial],
             events: Vec::new(),
             field: CellField::new(&geom),
             hydro: Hydrostatic::new(&geom, n),
@@ -339,9 +360,11 @@ impl Monitor {
             report: StepReport::default(),
             prev_injected: 0.0,
             events_dropped: 0,
-            total_mass: v.mass.iter().sum(),
             steps: StepHistory::default(),
             critical_courant: critical_courant(v.shape),
+            prev_time: v.time,
+            ids: v.id.to_vec(),
+            initial_mass: v.mass.iter().sum::<f64>() + v.losses.mass(),
             geom,
             cfg,
         }
@@ -359,6 +382,11 @@ impl Monitor {
     /// flagged on several steps counts once per step).
     pub fn events_dropped(&self) -> u64 {
         self.events_dropped
+    }
+
+    /// Mass at t = 0, deleted particles included.
+    pub fn initial_mass(&self) -> f64 {
+        self.initial_mass
     }
 
     pub fn report(&self) -> &StepReport {
@@ -390,7 +418,14 @@ impl Monitor {
     pub fn observe(&mut self, v: &StateView) -> &StepReport {
         let g = self.g_ref();
         let dt = v.dt.max(1e-300);
+        if v.id.len() != self.ids.len() {
+            // The solver deleted particles: keep the history of the others.
+            self.history.compact(&self.ids, v.id);
+            self.ids.clear();
+            self.ids.extend_from_slice(v.id);
+        }
         let scan = self.scan_particles(v, g, dt);
+        self.prev_time = v.time;
         let max_z = if scan.need_z {
             self.score_candidates(v)
         } else {
@@ -398,7 +433,8 @@ impl Monitor {
         };
         self.flagged.retain(|c| !c.rules.is_empty());
         let injection = self.energy.observe(v.energy.total());
-        let floor = solver::energy::injection_noise_floor(self.total_mass, g, self.geom.size.y, dt);
+        let floor =
+            solver::energy::injection_noise_floor(self.initial_mass, g, self.geom.size.y, dt);
         let (min_node_mass_ratio, max_node_a, max_node_speed) = self.grid_figures(v);
         let node_advection = max_node_speed * v.dt / v.grid.h;
         // Before any event opens: its window before onset includes this step.
@@ -408,13 +444,16 @@ impl Monitor {
             self.cluster_flagged(v, g);
         }
         self.check_energy_injection(v, g, injection.window, floor, scan.gain_max.1);
+        if !v.culled.is_empty() {
+            self.culled_events(v, g);
+        }
         let max_speed = scan.max_speed2.sqrt();
         let blow_out = self.check_blow_out(v, g, max_speed, &scan);
         if blow_out.is_some() {
             self.stopped(v);
         }
         // The floor per kilogram (per metre of depth): injection_floor_factor g dt sqrt(2 g H) / 2.
-        let floor_per_kg = self.cfg.injection_floor_factor * floor / self.total_mass;
+        let floor_per_kg = self.cfg.injection_floor_factor * floor / self.initial_mass;
         self.track_injected_energy(v.step, injection.total, floor_per_kg);
         self.report = StepReport {
             step: v.step,
@@ -433,6 +472,8 @@ impl Monitor {
             ringing_energy: v.ke_particles_p2g - v.ke_grid_p2g,
             n_outside: v.n_outside,
             n_nonfinite: v.n_nonfinite,
+            particles_lost: v.losses.count(),
+            mass_lost_fraction: v.losses.mass() / self.initial_mass,
             n_flagged: self.flagged.len(),
             events_opened: self.events.len() - opened_before,
             blow_out,
@@ -441,12 +482,11 @@ impl Monitor {
         &self.report
     }
 
-    /// One pass over the particles: the cheap figures, this step's candidates
-    /// (with their history as it was before this step) into `flagged`, then
-    /// the history update.
+    /// One pass over the particles: the cheap figures, the history update,
+    /// then this step's candidates (with their calm before this burst) into `flagged`.
     fn scan_particles(&mut self, v: &StateView, g: f64, dt: f64) -> Scan {
         let t = ScanThresholds::new(&self.cfg, g, dt, v.j_update == solver::JUpdate::Exp);
-        let step = v.step as i64;
+        let (time, prev_time, grace) = (v.time, self.prev_time, self.cfg.merge_seconds);
         let n = v.x.len();
         let mut s = Scan::new();
         self.flagged.clear();
@@ -460,12 +500,6 @@ impl Monitor {
             &v.deformation[..n],
         );
         let h = &mut self.history;
-        let (ke_recent, last_fast, last_deformed) = (
-            &mut h.ke_recent[..n],
-            &mut h.last_fast_step[..n],
-            &mut h.last_deformed_step[..n],
-        );
-        let (max_rate, max_rate_step) = (&mut h.max_dev_rate[..n], &mut h.max_dev_rate_step[..n]);
         for p in 0..n {
             // Squared velocity jumps compared against (a dt)^2: no root per particle.
             let dv2 = (vel[p] - vel_prev[p]).norm_squared();
@@ -474,30 +508,22 @@ impl Monitor {
             let speed2 = vel[p].norm_squared();
             let prev2 = vel_prev[p].norm_squared();
             let e = 0.5 * mass[p] * speed2;
-            let ke_ref = ke_recent[p].max(0.5 * mass[p] * t.quiescent2);
+            let ke_ref = h.ke_recent[p].max(0.5 * mass[p] * t.quiescent2);
             let ratio = s.ke_ratio(e, ke_ref, candidate);
             s.add(p, speed2, prev2, mass[p], jac[p]);
             if t.det_apart {
                 s.det_min = s.det_min.min(def[p].determinant());
             }
+            h.ke_recent[p] = e.max(h.ke_recent[p] * t.decay);
+            let rate = dev_rate[p];
+            let active = speed2 > t.quiet_speed2 || rate > t.quiet_rate;
+            h.record(p, time, prev_time, active, rate);
             if candidate {
-                let history = (last_fast[p], last_deformed[p]);
-                if let Some(c) = t.candidate(p, dv2, ratio, speed2 > prev2, history) {
+                let calm = h.calm(p, time, grace);
+                if let Some(c) = t.candidate(p, dv2, ratio, speed2 > prev2, calm) {
                     s.need_z |= c.z.is_nan();
                     self.flagged.push(c);
                 }
-            }
-            ke_recent[p] = e.max(ke_recent[p] * t.decay);
-            if speed2 > t.quiescent2 {
-                last_fast[p] = step;
-            }
-            let rate = dev_rate[p];
-            if rate >= t.deformed_rate {
-                last_deformed[p] = step;
-            }
-            if rate > max_rate[p] {
-                max_rate[p] = rate;
-                max_rate_step[p] = step;
             }
         }
         s
@@ -546,7 +572,7 @@ impl Monitor {
                 Rule::InjectionWindow.into(),
                 self.accel[gainer],
             );
-            self.attach(EventKind::EnergyInjection, cluster, v, g);
+            self.attach(EventKind::EnergyInjection, cluster, v, g, false);
         }
     }
 
@@ -595,8 +621,19 @@ impl Monitor {
             });
             return Some(reason);
         }
+        let lost = v.losses.mass() / self.initial_mass;
+        if lost > v.scene.lost_mass_limit {
+            return Some(format!(
+                "{:.1} % of the mass deleted ({} escaped, {} inverted), beyond lost_mass_limit {}",
+                100.0 * lost,
+                v.losses.escaped,
+                v.losses.inverted,
+                v.scene.lost_mass_limit
+            ));
+        }
+        // Under on_escape = "delete" a fast particle is left to leave the box.
         let escape = self.cfg.escape_speed_factor * (2.0 * g * self.geom.size.y).sqrt();
-        if max_speed > escape {
+        if v.scene.on_escape == solver::OnLoss::Stop && max_speed > escape {
             let reason = format!(
                 "a particle reached {max_speed:.3} m/s, beyond the escape speed {escape:.3} m/s"
             );
@@ -635,7 +672,7 @@ impl Monitor {
     /// is the injection so far), and the cause judged against the floor of
     /// the event's mass.
     fn track_injected_energy(&mut self, step: u64, total: f64, floor_per_kg: f64) {
-        let mean_mass = self.total_mass / self.event_mark.len().max(1) as f64;
+        let mean_mass = self.initial_mass / self.event_mark.len().max(1) as f64;
         for e in self.events.iter_mut().filter(|e| e.last_step == step) {
             if e.first_step == step {
                 e.injected_at_open = self.prev_injected;
@@ -643,7 +680,7 @@ impl Monitor {
             e.energy_injected = e.energy_injected.max(total - e.injected_at_open);
             // An energy-injection event is the whole budget's: the whole mass's floor.
             let mass = if e.kind == EventKind::EnergyInjection {
-                self.total_mass
+                self.initial_mass
             } else {
                 e.n_particles as f64 * mean_mass
             };
@@ -682,7 +719,7 @@ impl Monitor {
         for k in 0..self.clusters.len() {
             let cluster = self.clusters[k].clone();
             self.clusters[k].event = if cluster.count >= self.cfg.min_cluster_particles {
-                self.attach(EventKind::Kick, cluster, v, g)
+                self.attach(EventKind::Kick, cluster, v, g, false)
             } else {
                 usize::MAX
             };
@@ -740,8 +777,7 @@ impl Monitor {
     /// Tallies each flagged particle into its cluster: rules, peaks, count and
     /// the hallmark counts (quiet, deformed, distorted before this step).
     fn tally_clusters(&mut self, v: &StateView) {
-        let step = v.step as i64;
-        let recent = self.cfg.recent_steps as i64;
+        let (quiet, quiet_start) = (self.cfg.quiet_seconds, v.time - self.cfg.quiet_seconds);
         for f in &self.flagged {
             let p = f.p as usize;
             let label = self.cell_label[self.geom.cell_index(v.x[p])] as usize;
@@ -750,12 +786,17 @@ impl Monitor {
             c.peak_accel = c.peak_accel.max(f.a);
             c.peak_z = c.peak_z.max(f.z);
             c.count += 1;
-            if f.last_fast < step - recent {
+            c.j_min = c.j_min.min(v.j[p]);
+            c.speed_before = c.speed_before.max(v.v_prev[p].norm());
+            if f.calm.quiet_for >= quiet {
                 c.quiescent += 1;
             }
-            let last = f.last_deformed;
-            if last != NEVER && last < step - recent {
+            if f.calm.peak_rate >= self.cfg.deformed_rate && f.calm.peak_rate_t < quiet_start {
                 c.deformed_rate += 1;
+            }
+            if f.calm.peak_rate > c.peak_rate {
+                c.peak_rate = f.calm.peak_rate;
+                c.peak_rate_t = f.calm.peak_rate_t;
             }
             if isochoric_stretch_ratio(&v.deformation[p]) >= self.cfg.distortion_ratio {
                 c.distorted += 1;
@@ -775,8 +816,9 @@ impl Monitor {
                 continue;
             }
             let e = &mut self.events[event];
-            if self.event_mark[p] != e.id {
-                self.event_mark[p] = e.id;
+            let id = v.id[p] as usize;
+            if self.event_mark[id] != e.id {
+                self.event_mark[id] = e.id;
                 e.n_particles += 1;
                 if e.particles.len() < cap {
                     e.particles.push(v.id[p]);
@@ -787,7 +829,7 @@ impl Monitor {
 
     /// Merges a cluster into an open event of the same kind nearby, or opens
     /// one; usize::MAX when the event store is full.
-    fn attach(&mut self, kind: EventKind, c: Cluster, v: &StateView, g: f64) -> usize {
+    fn attach(&mut self, kind: EventKind, c: Cluster, v: &StateView, g: f64, stops: bool) -> usize {
         let step = v.step;
         let open = self.events.iter().rposition(|e| {
             e.kind == kind
@@ -795,11 +837,8 @@ impl Monitor {
                     || v.time - e.last_t <= self.cfg.merge_seconds)
                 && e.extent.near(&c.cells, self.cfg.merge_cells)
         });
-        let blow_out = matches!(
-            kind,
-            EventKind::BlowOut | EventKind::NonFinite | EventKind::Inversion
-        );
-        if open.is_none() && !blow_out && self.events.len() >= self.cfg.max_events {
+        // The event that stops a run is always stored.
+        if open.is_none() && !stops && self.events.len() >= self.cfg.max_events {
             self.events_dropped += 1;
             return usize::MAX;
         }
@@ -833,6 +872,13 @@ impl Monitor {
     /// Opens an event for the cluster; a hallmark holds for at least half its particles.
     fn open(&mut self, kind: EventKind, c: &Cluster, v: &StateView, g: f64) {
         let half = |k: usize| c.count > 0 && 2 * k >= c.count;
+        let fraction = |k: usize| {
+            if c.count > 0 {
+                k as f64 / c.count as f64
+            } else {
+                0.0
+            }
+        };
         let mut deformed_by = vec![];
         if half(c.deformed_rate) {
             deformed_by.push(DeformedBy::StrainRate);
@@ -867,6 +913,12 @@ impl Monitor {
                 advection_before,
                 critical_courant: self.critical_courant,
                 energy_floor: 0.0,
+                quiescent_fraction: fraction(c.quiescent),
+                deformed_fraction: fraction(c.deformed_rate),
+                peak_dev_rate: c.peak_rate,
+                t_peak_dev_rate: c.peak_rate_t.is_finite().then_some(c.peak_rate_t),
+                j_min: c.j_min.is_finite().then_some(c.j_min),
+                speed_before: c.speed_before,
             },
             outcome: Outcome::Recovered,
             state_hash: None,
@@ -900,7 +952,7 @@ impl Monitor {
             }
         }
         let Some(cells) = cells else { return };
-        let k = self.attach(kind, Cluster::new(cells, rule.into(), peak), v, g);
+        let k = self.attach(kind, Cluster::new(cells, rule.into(), peak), v, g, true);
         let cap = self.cfg.max_event_ids;
         let e = &mut self.events[k];
         e.n_particles = e.n_particles.max(count);
@@ -910,6 +962,39 @@ impl Monitor {
             }
             if bad(p) && !e.particles.contains(&v.id[p]) {
                 e.particles.push(v.id[p]);
+            }
+        }
+    }
+
+    /// Events for the particles the solver deleted at this step (escaped:
+    /// `blow_out`, inverted: `inversion`), by where they were; the run goes on.
+    fn culled_events(&mut self, v: &StateView, g: f64) {
+        use solver::CullReason;
+        let kinds = [
+            (CullReason::Escaped, EventKind::BlowOut, Rule::OutsideBox),
+            (CullReason::Inverted, EventKind::Inversion, Rule::Inversion),
+        ];
+        for (reason, kind, rule) in kinds {
+            let mut cells: Option<CellRange> = None;
+            let mut count = 0;
+            for c in v.culled.iter().filter(|c| c.reason == reason) {
+                let (i, j) = self.geom.cell_of(c.x);
+                let cell = CellRange::of(i, j);
+                cells = Some(cells.map_or(cell, |r| r.union(&cell)));
+                count += 1;
+            }
+            let Some(cells) = cells else { continue };
+            let k = self.attach(kind, Cluster::new(cells, rule.into(), 0.0), v, g, false);
+            if k == usize::MAX {
+                continue;
+            }
+            let cap = self.cfg.max_event_ids;
+            let e = &mut self.events[k];
+            e.n_particles += count;
+            for c in v.culled.iter().filter(|c| c.reason == reason) {
+                if e.particles.len() < cap {
+                    e.particles.push(c.id);
+                }
             }
         }
     }

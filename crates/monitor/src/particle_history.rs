@@ -1,30 +1,146 @@
-//! What the monitor remembers of each particle: its recent kinetic-energy
-//! maximum (decaying), the last step it moved faster than the quiescent
-//! speed, and its deviatoric strain-rate history (running maximum with its
-//! step, and the last step it was above the deformation threshold).
+//! What the monitor remembers of each particle, in seconds (dt differs 80x
+//! across the bug-report matrix): its recent kinetic-energy maximum
+//! (decaying), when it was last active (faster than `quiet_speed` or
+//! deforming faster than `quiet_rate`), how long it had been quiet before
+//! its current active stretch, and its running maximum of the in-plane
+//! |dev D| with the time reached, also as it stood when that stretch began.
 
-/// Step marker for "never".
-pub const NEVER: i64 = i64::MIN / 2;
+/// Time marker for "never".
+pub const NEVER: f64 = f64::NEG_INFINITY;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParticleHistory {
     pub ke_recent: Vec<f64>,
-    pub last_fast_step: Vec<i64>,
-    pub last_deformed_step: Vec<i64>,
-    /// Running maximum of |dev D| (written each step and checkpointed; not read yet, kept for a later issue).
-    pub max_dev_rate: Vec<f64>,
-    /// Step of `max_dev_rate` (written each step and checkpointed; not read yet, kept for a later issue).
-    pub max_dev_rate_step: Vec<i64>,
+    /// Last time the particle was active.
+    pub last_active: Vec<f64>,
+    /// Start of its current (or last) active stretch.
+    pub active_since: Vec<f64>,
+    /// Length of the quiet spell that ended at `active_since` (infinite when
+    /// it had never been active before).
+    pub quiet_before: Vec<f64>,
+    /// Running maximum of the in-plane |dev D| (1/s) and when it was reached.
+    pub peak_rate: Vec<f64>,
+    pub peak_rate_t: Vec<f64>,
+    /// `peak_rate` and `peak_rate_t` as they stood at `active_since`.
+    pub settled_peak: Vec<f64>,
+    pub settled_peak_t: Vec<f64>,
+}
+
+/// A particle's quiet spell and earlier peak |dev D| as seen at an onset.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Calm {
+    /// Seconds it had been quiet before this burst began.
+    pub quiet_for: f64,
+    pub peak_rate: f64,
+    pub peak_rate_t: f64,
 }
 
 impl ParticleHistory {
     pub fn new(n: usize) -> Self {
         ParticleHistory {
             ke_recent: vec![0.0; n],
-            last_fast_step: vec![NEVER; n],
-            last_deformed_step: vec![NEVER; n],
-            max_dev_rate: vec![0.0; n],
-            max_dev_rate_step: vec![NEVER; n],
+            last_active: vec![NEVER; n],
+            active_since: vec![NEVER; n],
+            quiet_before: vec![f64::INFINITY; n],
+            peak_rate: vec![0.0; n],
+            peak_rate_t: vec![NEVER; n],
+            settled_peak: vec![0.0; n],
+            settled_peak_t: vec![NEVER; n],
         }
+    }
+
+    /// Records particle `p` at time `t`; `prev_t` is the time of the previous
+    /// observation (an active particle then has `last_active == prev_t`).
+    #[inline(always)]
+    pub fn record(&mut self, p: usize, t: f64, prev_t: f64, active: bool, rate: f64) {
+        if active {
+            if self.last_active[p] != prev_t {
+                self.quiet_before[p] = t - self.last_active[p];
+                self.active_since[p] = t;
+                self.settled_peak[p] = self.peak_rate[p];
+                self.settled_peak_t[p] = self.peak_rate_t[p];
+            }
+            self.last_active[p] = t;
+        }
+        if rate > self.peak_rate[p] {
+            self.peak_rate[p] = rate;
+            self.peak_rate_t[p] = t;
+        }
+    }
+
+    /// The calm of particle `p` before a burst seen at time `t` (after
+    /// `record`). A burst that began within `grace` seconds counts from its
+    /// start, so a kick caught a few steps late still finds the quiet before it.
+    pub fn calm(&self, p: usize, t: f64, grace: f64) -> Calm {
+        if self.last_active[p] == t {
+            let recent = t - self.active_since[p] <= grace;
+            Calm {
+                quiet_for: if recent { self.quiet_before[p] } else { 0.0 },
+                peak_rate: self.settled_peak[p],
+                peak_rate_t: self.settled_peak_t[p],
+            }
+        } else {
+            Calm {
+                quiet_for: t - self.last_active[p],
+                peak_rate: self.peak_rate[p],
+                peak_rate_t: self.peak_rate_t[p],
+            }
+        }
+    }
+
+    /// Keeps the entries of the particles still present: `old_ids` were the
+    /// ids per slot before, `new_ids` after deletions (both in id order).
+    pub fn compact(&mut self, old_ids: &[u32], new_ids: &[u32]) {
+        let mut from = 0;
+        for (to, &id) in new_ids.iter().enumerate() {
+            while old_ids[from] != id {
+                from += 1;
+            }
+            self.ke_recent[to] = self.ke_recent[from];
+            self.last_active[to] = self.last_active[from];
+            self.active_since[to] = self.active_since[from];
+            self.quiet_before[to] = self.quiet_before[from];
+            self.peak_rate[to] = self.peak_rate[from];
+            self.peak_rate_t[to] = self.peak_rate_t[from];
+            self.settled_peak[to] = self.settled_peak[from];
+            self.settled_peak_t[to] = self.settled_peak_t[from];
+            from += 1;
+        }
+        let n = new_ids.len();
+        self.ke_recent.truncate(n);
+        self.last_active.truncate(n);
+        self.active_since.truncate(n);
+        self.quiet_before.truncate(n);
+        self.peak_rate.truncate(n);
+        self.peak_rate_t.truncate(n);
+        self.settled_peak.truncate(n);
+        self.settled_peak_t.truncate(n);
+    }
+
+    /// Every array, in checkpoint order.
+    pub fn arrays_mut(&mut self) -> [&mut Vec<f64>; 8] {
+        [
+            &mut self.ke_recent,
+            &mut self.last_active,
+            &mut self.active_since,
+            &mut self.quiet_before,
+            &mut self.peak_rate,
+            &mut self.peak_rate_t,
+            &mut self.settled_peak,
+            &mut self.settled_peak_t,
+        ]
+    }
+
+    pub fn arrays(&self) -> [&Vec<f64>; 8] {
+        [
+            &self.ke_recent,
+            &self.last_active,
+            &self.active_since,
+            &self.quiet_before,
+            &self.peak_rate,
+            &self.peak_rate_t,
+            &self.settled_peak,
+            &self.settled_peak_t,
+        ]
     }
 }

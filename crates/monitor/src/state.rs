@@ -8,7 +8,7 @@ use crate::Monitor;
 use bincode::Options;
 use solver::checkpoint::{unseal, CheckpointError, Reader, Writer};
 
-const MAGIC: &[u8; 8] = b"KICKMON3";
+const MAGIC: &[u8; 8] = b"KICKMON4";
 
 /// The events' encoding: bincode (little-endian, varint integers, f64 bits as
 /// they are) through `Event`'s serde derive, so the checkpoint and the summary
@@ -66,17 +66,16 @@ fn decode_error(e: &bincode::ErrorKind) -> CheckpointError {
 impl Monitor {
     /// The monitor's memory as sealed bytes (see the module docs).
     pub fn save_state(&self) -> Vec<u8> {
-        let n = self.event_mark.len();
-        let mut w = Writer(Vec::with_capacity(64 + n * 56));
+        let n = self.history.ke_recent.len();
+        let mut w = Writer(Vec::with_capacity(64 + n * 64 + self.event_mark.len() * 8));
         w.0.extend_from_slice(MAGIC);
         w.u64(n as u64);
-        let h = &self.history;
-        w.f64s(&h.ke_recent);
-        w.i64s(&h.last_fast_step);
-        w.i64s(&h.last_deformed_step);
-        w.f64s(&h.max_dev_rate);
-        w.i64s(&h.max_dev_rate_step);
+        w.u64(self.event_mark.len() as u64);
+        for a in self.history.arrays() {
+            w.f64s(a);
+        }
         w.u32s(&self.event_mark);
+        w.f64(self.prev_time);
         let (minimum, recent, next, filled) = self.energy.state();
         w.f64(minimum);
         w.u64(recent.len() as u64);
@@ -101,22 +100,23 @@ impl Monitor {
     /// Restores what `save_state` wrote; the monitor must be built for the same scene and config.
     pub fn restore_state(&mut self, bytes: &[u8]) -> Result<(), CheckpointError> {
         let mut r = Reader(unseal(bytes, MAGIC)?);
-        let n = r.u64()?;
-        let expected = self.event_mark.len() as u64;
-        if n != expected {
-            return Err(CheckpointError::ParticleCount {
-                stored: n,
-                expected,
-            });
+        for (stored, expected) in [
+            (r.u64()?, self.history.ke_recent.len()),
+            (r.u64()?, self.event_mark.len()),
+        ] {
+            if stored != expected as u64 {
+                return Err(CheckpointError::ParticleCount {
+                    stored,
+                    expected: expected as u64,
+                });
+            }
         }
         self.accel_step = None;
-        let h = &mut self.history;
-        r.f64s(&mut h.ke_recent)?;
-        r.i64s(&mut h.last_fast_step)?;
-        r.i64s(&mut h.last_deformed_step)?;
-        r.f64s(&mut h.max_dev_rate)?;
-        r.i64s(&mut h.max_dev_rate_step)?;
+        for a in self.history.arrays_mut() {
+            r.f64s(a)?;
+        }
         r.u32s(&mut self.event_mark)?;
+        self.prev_time = r.f64()?;
         let minimum = r.f64()?;
         let mut recent = vec![0.0; r.u64()? as usize];
         if recent.len() != self.energy.state().1.len() {
@@ -182,6 +182,12 @@ mod tests {
                 advection_before: -0.0,
                 critical_courant: 1.7,
                 energy_floor: 5e-324,
+                quiescent_fraction: 1.0 / 3.0,
+                deformed_fraction: 0.0,
+                peak_dev_rate: f64::MAX,
+                t_peak_dev_rate: None,
+                j_min: Some(-0.0),
+                speed_before: 1e-300,
             },
             outcome: crate::events::Outcome::NonFinite,
             state_hash: None,

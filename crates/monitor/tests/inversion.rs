@@ -10,11 +10,17 @@ use solver::*;
 /// A block slammed into the floor at 30 m/s with a time step 10x the
 /// advective limit: some particle inverts within a few steps.
 fn slam(j_update: JUpdate, gamma: f64) -> Solver {
+    slam_with(j_update, gamma, OnLoss::Stop)
+}
+
+fn slam_with(j_update: JUpdate, gamma: f64, on_loss: OnLoss) -> Solver {
     let mut material = Material::new(1e3);
     material.gamma = gamma;
     let mut scene = Scene::dam_break(material);
     scene.bodies[0].rect = [0.2, 0.0, 0.4, 0.2];
     scene.bodies[0].velocity = [0.0, -30.0];
+    scene.on_escape = on_loss;
+    scene.on_inversion = on_loss;
     let method = Method {
         dt_value: Some(3e-3),
         j_update,
@@ -83,5 +89,55 @@ fn an_inversion_stops_the_run_at_its_first_step() {
                 "exp keeps J > 0: det F caught it"
             );
         }
+    }
+}
+
+#[test]
+fn under_delete_inverted_and_escaped_particles_are_logged_and_the_run_goes_on() {
+    let mut s = slam_with(JUpdate::Det, 7.0, OnLoss::Delete);
+    let mut m = common::fresh_monitor(&s);
+    let n0 = s.particle_count() as u64;
+    let mut stop = None;
+    for _ in 0..50 {
+        s.step().unwrap();
+        let v = s.view();
+        assert!(
+            v.j.iter().all(|j| *j > 0.0),
+            "no inverted particle is carried on"
+        );
+        let r = m.observe(&v);
+        assert_eq!(r.particles_lost, v.losses.count());
+        if let Some(reason) = &r.blow_out {
+            stop = Some((reason.clone(), r.mass_lost_fraction));
+            break;
+        }
+    }
+    let l = s.losses();
+    assert!(l.inverted > 0, "the slam inverts particles: {l:?}");
+    assert_eq!(s.particle_count() as u64 + l.count(), n0);
+    // Every deleted particle is counted in an event of its kind.
+    let counted = |kind: EventKind| -> u64 {
+        m.events()
+            .iter()
+            .filter(|e| e.kind == kind)
+            .map(|e| e.n_particles as u64)
+            .sum()
+    };
+    assert_eq!(counted(EventKind::Inversion), l.inverted);
+    assert_eq!(counted(EventKind::BlowOut), l.escaped);
+    let e = m
+        .events()
+        .iter()
+        .find(|e| e.kind == EventKind::Inversion)
+        .unwrap();
+    assert_eq!(e.cause, monitor::Cause::Inversion);
+    assert!(!e.particles.is_empty());
+    // The run stops only past lost_mass_limit (10 %), and then says so.
+    match stop {
+        Some((reason, lost)) => {
+            assert!(reason.contains("lost_mass_limit"), "{reason}");
+            assert!(lost > 0.1, "{lost}");
+        }
+        None => assert!(l.mass() <= 0.1 * m.initial_mass(), "{l:?}"),
     }
 }

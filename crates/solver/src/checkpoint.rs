@@ -6,7 +6,7 @@ use crate::particles::{Mat2, Particles, Vec2};
 use crate::Solver;
 
 const MAGIC: &[u8; 8] = b"KICKSTAT";
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum CheckpointError {
@@ -267,7 +267,15 @@ pub fn save(s: &Solver) -> Vec<u8> {
     let mut w = Writer(Vec::with_capacity(64 + ps.len() * 240));
     w.0.extend_from_slice(MAGIC);
     w.u64(VERSION as u64);
+    w.u64(s.n_initial as u64);
     w.u64(ps.len() as u64);
+    let l = &s.losses;
+    w.u64(l.escaped);
+    w.u64(l.inverted);
+    w.f64(l.mass_escaped);
+    w.f64(l.mass_inverted);
+    w.bool(l.t_first.is_some());
+    w.f64(l.t_first.unwrap_or(0.0));
     w.u64(s.step);
     w.f64(s.time);
     w.f64(s.dt);
@@ -285,6 +293,9 @@ pub fn save(s: &Solver) -> Vec<u8> {
     w.f64s(&ps.vol0);
     w.f64s(&ps.pressure);
     w.f64s(&ps.dev_rate);
+    w.u32s(&ps.id);
+    let material: Vec<u32> = ps.material.iter().map(|&m| m as u32).collect();
+    w.u32s(&material);
     w.seal()
 }
 
@@ -295,20 +306,43 @@ pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
     if version != VERSION {
         return Err(CheckpointError::Version(version));
     }
-    let n = r.u64()?;
-    let expected = s.particles.len() as u64;
-    if n != expected {
+    let n_initial = r.u64()?;
+    let expected = s.n_initial as u64;
+    if n_initial != expected {
         return Err(CheckpointError::ParticleCount {
-            stored: n,
+            stored: n_initial,
             expected,
         });
     }
+    let n = r.u64()?;
+    let escaped = r.u64()?;
+    let inverted = r.u64()?;
+    if n.checked_add(escaped).and_then(|k| k.checked_add(inverted)) != Some(n_initial) {
+        return Err(CheckpointError::ParticleCount {
+            stored: n.saturating_add(escaped).saturating_add(inverted),
+            expected,
+        });
+    }
+    let mass_escaped = r.f64()?;
+    let mass_inverted = r.f64()?;
+    let has_first = r.bool()?;
+    let t_first = r.f64()?;
+    s.losses = crate::Losses {
+        escaped,
+        inverted,
+        mass_escaped,
+        mass_inverted,
+        t_first: has_first.then_some(t_first),
+    };
+    s.culled.clear();
     s.step = r.u64()?;
     s.time = r.f64()?;
     s.dt = r.f64()?;
     s.dt_fixed = r.f64()?;
     s.dissipated = r.f64()?;
     let ps = &mut s.particles;
+    ps.resize(n as usize);
+    s.stencils.resize(n as usize, Default::default());
     r.vec2s(&mut ps.x)?;
     r.vec2s(&mut ps.v)?;
     r.vec2s(&mut ps.v_prev)?;
@@ -321,5 +355,18 @@ pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
     r.f64s(&mut ps.vol0)?;
     r.f64s(&mut ps.pressure)?;
     r.f64s(&mut ps.dev_rate)?;
+    r.u32s(&mut ps.id)?;
+    let mut material = vec![0u32; n as usize];
+    r.u32s(&mut material)?;
+    let n_materials = s.cfg.scene.materials.len().max(1);
+    for (m, code) in ps.material.iter_mut().zip(material) {
+        if code as usize >= n_materials {
+            return Err(CheckpointError::UnknownCode {
+                what: "material",
+                code: code as u64,
+            });
+        }
+        *m = code as u16;
+    }
     r.finish()
 }

@@ -66,6 +66,18 @@ pub enum InitialState {
     Hydrostatic,
 }
 
+/// What happens to a particle that leaves the box or inverts (J <= 0).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OnLoss {
+    /// The monitor stops the run (status `blew_up`).
+    #[default]
+    Stop,
+    /// The solver deletes it at the end of the step and counts it (Uintah's
+    /// behaviour); the run stops once `lost_mass_limit` of the mass is gone.
+    Delete,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum EosKind {
@@ -196,6 +208,13 @@ pub struct Scene {
     pub jitter: f64,
     /// Seed of the jitter (one per ensemble member).
     pub seed: u64,
+    /// A particle outside the box (non-periodic axes): stop the run or delete it.
+    pub on_escape: OnLoss,
+    /// A particle with J <= 0 or det F <= 0: stop the run or delete it.
+    pub on_inversion: OnLoss,
+    /// Fraction of the initial mass that deleted particles may take before
+    /// the run counts as blown up (the harness's convention, not Uintah's).
+    pub lost_mass_limit: f64,
     #[serde(rename = "body")]
     pub bodies: Vec<Body>,
     /// Filled from the study's `[materials]` tables, in file order.
@@ -217,6 +236,9 @@ impl Default for Scene {
             periodic: [false, false],
             jitter: 0.0,
             seed: 0,
+            on_escape: OnLoss::Stop,
+            on_inversion: OnLoss::Stop,
+            lost_mass_limit: 0.1,
             bodies: vec![],
             materials: vec![],
         }
@@ -429,6 +451,7 @@ impl SolverConfig {
         within(s.t_end, 1e-9, 1e4, "scene.t_end")?;
         within(s.gravity, 0.0, 1e4, "scene.gravity")?;
         within(s.jitter, 0.0, 1e-3, "scene.jitter")?;
+        within(s.lost_mass_limit, 1e-9, 1.0, "scene.lost_mass_limit")?;
         check(
             !s.bodies.is_empty(),
             "scene.body",

@@ -23,6 +23,7 @@ pub mod shape;
 mod shape_bspline;
 mod shape_gimp;
 mod shape_linear;
+pub mod stage_cull;
 mod stage_g2p;
 mod stage_grid;
 mod stage_p2g;
@@ -37,12 +38,14 @@ pub use checkpoint::CheckpointError;
 pub use config::*;
 pub use energy::Energy;
 pub use particles::{Mat2, Vec2};
+pub use stage_cull::{CullReason, Culled, Losses};
 pub use stage_times::StageTimes;
 pub use view::{GridView, StateView};
 
 use grid::Grid;
 use particles::Particles;
 use shape::{Shape, Stencil};
+use stage_cull::CullRules;
 use stage_sort::Bins;
 
 /// Why a step could not be taken.
@@ -127,6 +130,13 @@ pub struct Solver {
     grid_mass_p2g: f64,
     n_outside: usize,
     n_nonfinite: usize,
+    /// Particle count at t = 0 (deleted particles included).
+    n_initial: usize,
+    /// None unless `on_escape` or `on_inversion` is "delete".
+    cull_rules: Option<CullRules>,
+    losses: Losses,
+    /// The particles deleted at the last step (capacity: every particle).
+    culled: Vec<Culled>,
 }
 
 impl Solver {
@@ -157,6 +167,7 @@ impl Solver {
         let grid = Grid::new(Vec2::from(s.origin), s.cell, s.cells(), s.periodic);
         let n = particles.len();
         let chunks = par::chunk_count(n);
+        let cull_rules = CullRules::of(s, cfg.method.j_update);
         let mut solver = Solver {
             shape: Shape::new(cfg.method.shape, s.ppc),
             gravity: Vec2::new(0.0, -s.gravity),
@@ -181,6 +192,10 @@ impl Solver {
             grid_mass_p2g: 0.0,
             n_outside: 0,
             n_nonfinite: 0,
+            n_initial: n,
+            cull_rules,
+            losses: Losses::default(),
+            culled: Vec::with_capacity(n),
         };
         solver.start_clock();
         solver
@@ -192,6 +207,10 @@ impl Solver {
         self.step = 0;
         self.time = 0.0;
         self.dissipated = 0.0;
+        // Particles deleted while relaxing to equilibrium are not losses of the run.
+        self.n_initial = self.particles.len();
+        self.losses = Losses::default();
+        self.culled.clear();
         self.measure();
         self.dt_fixed = self.cfl_dt();
         self.dt = self.dt_fixed;
@@ -270,10 +289,32 @@ impl Solver {
         scheme::advance(self, &mut clock);
         self.step += 1;
         self.time += dt;
+        self.cull();
         self.measure();
         stage_times::lap(&mut self.times.other, &mut clock);
         self.times.steps += 1;
         Ok(())
+    }
+
+    /// Deletes escaped or inverted particles when the scene asks for it.
+    fn cull(&mut self) {
+        let Some(rules) = &self.cull_rules else {
+            return;
+        };
+        let ps = &mut self.particles;
+        if stage_cull::cull(ps, rules, self.time, &mut self.losses, &mut self.culled) > 0 {
+            self.stencils.truncate(ps.len());
+        }
+    }
+
+    /// Particles deleted since t = 0 (`on_escape` / `on_inversion = "delete"`).
+    pub fn losses(&self) -> Losses {
+        self.losses
+    }
+
+    /// Particle count at t = 0, deleted particles included.
+    pub fn initial_particle_count(&self) -> usize {
+        self.n_initial
     }
 
     /// Energies, blow-out counters and signal speed after a step.

@@ -104,11 +104,18 @@ pub fn keep_warm<R: Send>(serial: impl FnOnce() -> R + Send) -> R {
         return serial();
     }
     let done = AtomicBool::new(false);
+    // Set on drop, so that a panic in `serial` releases the spinning worker
+    // (otherwise the join never returns and the panic never surfaces).
+    struct Done<'a>(&'a AtomicBool);
+    impl Drop for Done<'_> {
+        fn drop(&mut self) {
+            self.0.store(true, Ordering::Release);
+        }
+    }
     let (out, ()) = rayon::join(
         || {
-            let out = serial();
-            done.store(true, Ordering::Release);
-            out
+            let _done = Done(&done);
+            serial()
         },
         || {
             while !done.load(Ordering::Acquire) {

@@ -63,3 +63,86 @@ impl Particles {
         self.id.push(id);
     }
 }
+
+impl Particles {
+    /// Keeps the particles for which `keep(p)` holds, in id order, without
+    /// reallocating; `keep` sees each slot's state before any is moved.
+    pub fn retain(&mut self, mut keep: impl FnMut(&Particles, usize) -> bool) -> usize {
+        let n = self.len();
+        let mut w = 0;
+        for p in 0..n {
+            if !keep(self, p) {
+                continue;
+            }
+            if w != p {
+                self.move_slot(p, w);
+            }
+            w += 1;
+        }
+        self.truncate(w);
+        n - w
+    }
+
+    fn move_slot(&mut self, from: usize, to: usize) {
+        self.x[to] = self.x[from];
+        self.v[to] = self.v[from];
+        self.v_prev[to] = self.v_prev[from];
+        self.affine[to] = self.affine[from];
+        self.f[to] = self.f[from];
+        self.j[to] = self.j[from];
+        self.mass[to] = self.mass[from];
+        self.vol0[to] = self.vol0[from];
+        self.vol[to] = self.vol[from];
+        self.stress[to] = self.stress[from];
+        self.pressure[to] = self.pressure[from];
+        self.dev_rate[to] = self.dev_rate[from];
+        self.wave_speed[to] = self.wave_speed[from];
+        self.stored_energy[to] = self.stored_energy[from];
+        self.material[to] = self.material[from];
+        self.id[to] = self.id[from];
+    }
+
+    /// Sets the particle count to `n` (new slots zeroed, to be overwritten:
+    /// restoring a checkpoint).
+    pub fn resize(&mut self, n: usize) {
+        if n <= self.len() {
+            return self.truncate(n);
+        }
+        self.x.resize(n, Vec2::zeros());
+        self.v.resize(n, Vec2::zeros());
+        self.v_prev.resize(n, Vec2::zeros());
+        self.affine.resize(n, Mat2::zeros());
+        self.f.resize(n, Mat2::identity());
+        self.j.resize(n, 1.0);
+        self.mass.resize(n, 0.0);
+        self.vol0.resize(n, 0.0);
+        self.vol.resize(n, 0.0);
+        self.stress.resize(n, Mat2::zeros());
+        self.pressure.resize(n, 0.0);
+        self.dev_rate.resize(n, 0.0);
+        self.wave_speed.resize(n, 0.0);
+        self.stored_energy.resize(n, 0.0);
+        self.material.resize(n, 0);
+        self.id.resize(n, 0);
+    }
+
+    /// Drops every particle from slot `n` on (capacity is kept).
+    pub fn truncate(&mut self, n: usize) {
+        self.x.truncate(n);
+        self.v.truncate(n);
+        self.v_prev.truncate(n);
+        self.affine.truncate(n);
+        self.f.truncate(n);
+        self.j.truncate(n);
+        self.mass.truncate(n);
+        self.vol0.truncate(n);
+        self.vol.truncate(n);
+        self.stress.truncate(n);
+        self.pressure.truncate(n);
+        self.dev_rate.truncate(n);
+        self.wave_speed.truncate(n);
+        self.stored_energy.truncate(n);
+        self.material.truncate(n);
+        self.id.truncate(n);
+    }
+}

@@ -3,6 +3,7 @@
 use crate::config::{JUpdate, Material, Scene, ShapeKind};
 use crate::energy::Energy;
 use crate::particles::{Mat2, Vec2};
+use crate::stage_cull::{Culled, Losses};
 use crate::Solver;
 
 /// Grid geometry and nodal fields after the last step (ghost layers included).
@@ -67,6 +68,11 @@ pub struct StateView<'a> {
     pub n_outside: usize,
     /// Particles with a non-finite position, velocity, J or pressure.
     pub n_nonfinite: usize,
+    /// Particles deleted since t = 0, and those deleted at the last step.
+    pub losses: Losses,
+    pub culled: &'a [Culled],
+    /// Particle count at t = 0 (ids run from 0 below it).
+    pub n_initial: usize,
 }
 
 pub fn make(s: &Solver) -> StateView<'_> {
@@ -110,5 +116,8 @@ pub fn make(s: &Solver) -> StateView<'_> {
         courant: s.courant,
         n_outside: s.n_outside,
         n_nonfinite: s.n_nonfinite,
+        losses: s.losses,
+        culled: &s.culled,
+        n_initial: s.n_initial,
     }
 }

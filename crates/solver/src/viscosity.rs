@@ -6,7 +6,9 @@ use crate::particles::Mat2;
 pub struct Viscous {
     /// In-plane viscous stress 2 mu dev(D).
     pub stress: Mat2,
-    /// |dev D| including the out-of-plane component.
+    /// In-plane |dev D| = |D - tr(D)/2 I| (Frobenius), the monitor's
+    /// deformation-rate signal: zero for in-plane isotropic compression, where
+    /// the 3D deviator would read 0.82 d for D = diag(d, d).
     pub dev_rate: f64,
     /// Dissipated power per current volume, 2 mu dev(D) : dev(D).
     pub power: f64,
@@ -19,7 +21,15 @@ pub fn newtonian(mu: f64, d: &Mat2) -> Viscous {
     let norm2 = dev.norm_squared() + third * third;
     Viscous {
         stress: 2.0 * mu * dev,
-        dev_rate: norm2.sqrt(),
+        dev_rate: in_plane_dev_rate(d),
         power: 2.0 * mu * norm2,
     }
+}
+
+/// |D - tr(D)/2 I| of an in-plane rate of deformation (Frobenius norm).
+#[inline]
+pub fn in_plane_dev_rate(d: &Mat2) -> f64 {
+    let half_diff = 0.5 * (d[(0, 0)] - d[(1, 1)]);
+    let shear = 0.5 * (d[(0, 1)] + d[(1, 0)]);
+    (2.0 * (half_diff * half_diff + shear * shear)).sqrt()
 }

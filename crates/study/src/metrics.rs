@@ -146,6 +146,10 @@ pub fn summarise(
         max_accel_g: peak("max_accel_g"),
         front_rms_error: z_wall.and_then(|z| front_rms_error(ts, z)),
         events_dropped: 0,
+        particles_escaped: 0,
+        particles_inverted: 0,
+        mass_lost_fraction: 0.0,
+        t_first_loss: None,
     }
 }
 

@@ -447,12 +447,17 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
         status == Status::Completed,
     );
     metrics.events_dropped = d.monitor.events_dropped();
+    let losses = d.solver.losses();
+    metrics.particles_escaped = losses.escaped;
+    metrics.particles_inverted = losses.inverted;
+    metrics.mass_lost_fraction = losses.mass() / d.monitor.initial_mass();
+    metrics.t_first_loss = losses.t_first;
     Ok(Simulated {
         status,
         reason,
         steps: d.solver.step_count(),
         t_end: d.solver.time(),
-        particles: d.solver.particle_count(),
+        particles: d.solver.initial_particle_count(),
         final_hash: d.solver.state_hash(),
         metrics,
         events,

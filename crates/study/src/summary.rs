@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Bumped whenever a field of `Summary` or `Metrics` changes meaning or name.
-pub const SCHEMA_VERSION: u32 = 4;
+pub const SCHEMA_VERSION: u32 = 5;
 
 /// How a case ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -71,6 +71,13 @@ pub struct Metrics {
     pub front_rms_error: Option<f64>,
     /// Event openings past `monitor.max_events`, counted per step.
     pub events_dropped: u64,
+    /// Particles deleted (`scene.on_escape` / `on_inversion = "delete"`):
+    /// escaped, inverted, their share of the initial mass, and the time of
+    /// the first deletion.
+    pub particles_escaped: u64,
+    pub particles_inverted: u64,
+    pub mass_lost_fraction: f64,
+    pub t_first_loss: Option<f64>,
 }
 
 /// Events of one cause.
@@ -95,6 +102,7 @@ pub struct Summary {
     /// Simulated time reached (s).
     pub t_end: f64,
     pub wall_s: f64,
+    /// Particles at t = 0 (deleted ones included).
     pub particles: usize,
     pub particle_steps_per_s: f64,
     /// 64-bit state hash (hex) of the particle arrays at the last step.

@@ -1,0 +1,135 @@
+//! Cull stage (end of step): deletes the particles that left the box or
+//! inverted when the scene says so (`on_escape` / `on_inversion =
+//! "delete"`, Uintah's behaviour), keeping id order, and counts them. Under
+//! "stop" nothing is deleted: the monitor sees the particle and stops the run.
+
+use crate::config::{JUpdate, OnLoss, Scene};
+use crate::particles::{Particles, Vec2};
+use serde::{Deserialize, Serialize};
+
+/// Why a particle was deleted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CullReason {
+    /// Outside the box on a non-periodic axis.
+    Escaped,
+    /// J <= 0 or det F <= 0.
+    Inverted,
+}
+
+/// A particle deleted at the last step, as it was when deleted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Culled {
+    pub id: u32,
+    pub x: Vec2,
+    pub v: Vec2,
+    pub mass: f64,
+    pub reason: CullReason,
+}
+
+/// Particles deleted since t = 0.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Losses {
+    pub escaped: u64,
+    pub inverted: u64,
+    pub mass_escaped: f64,
+    pub mass_inverted: f64,
+    /// Time of the first deletion (None while none).
+    pub t_first: Option<f64>,
+}
+
+impl Losses {
+    pub fn count(&self) -> u64 {
+        self.escaped + self.inverted
+    }
+
+    pub fn mass(&self) -> f64 {
+        self.mass_escaped + self.mass_inverted
+    }
+}
+
+/// Which deletions are on for a scene (None when both are "stop").
+#[derive(Clone, Copy, Debug)]
+pub struct CullRules {
+    escape: bool,
+    inversion: bool,
+    /// det F is checked apart from J (the exp J update keeps J > 0).
+    det_apart: bool,
+    lo: Vec2,
+    hi: Vec2,
+    periodic: [bool; 2],
+}
+
+impl CullRules {
+    pub fn of(scene: &Scene, j_update: JUpdate) -> Option<Self> {
+        let escape = scene.on_escape == OnLoss::Delete;
+        let inversion = scene.on_inversion == OnLoss::Delete;
+        let lo = Vec2::from(scene.origin);
+        (escape || inversion).then_some(CullRules {
+            escape,
+            inversion,
+            det_apart: j_update == JUpdate::Exp,
+            lo,
+            hi: lo + Vec2::from(scene.size),
+            periodic: scene.periodic,
+        })
+    }
+
+    fn reason(&self, ps: &Particles, p: usize) -> Option<CullReason> {
+        // Inversion first, as the monitor judges it: an inverted particle
+        // often leaves the box in the same step.
+        if self.inversion && (ps.j[p] <= 0.0 || (self.det_apart && ps.f[p].determinant() <= 0.0)) {
+            return Some(CullReason::Inverted);
+        }
+        let x = ps.x[p];
+        // A non-finite position is not an escape: the monitor stops the run on it.
+        if self.escape
+            && (0..2).any(|k| !self.periodic[k] && (x[k] < self.lo[k] || x[k] > self.hi[k]))
+        {
+            return Some(CullReason::Escaped);
+        }
+        None
+    }
+}
+
+/// Deletes the particles `rules` select; `culled` receives them (cleared
+/// first, its capacity reserved for every particle so that it never grows).
+pub fn cull(
+    ps: &mut Particles,
+    rules: &CullRules,
+    time: f64,
+    losses: &mut Losses,
+    culled: &mut Vec<Culled>,
+) -> usize {
+    culled.clear();
+    if !(0..ps.len()).any(|p| rules.reason(ps, p).is_some()) {
+        return 0;
+    }
+    let deleted = ps.retain(|ps, p| match rules.reason(ps, p) {
+        None => true,
+        Some(reason) => {
+            culled.push(Culled {
+                id: ps.id[p],
+                x: ps.x[p],
+                v: ps.v[p],
+                mass: ps.mass[p],
+                reason,
+            });
+            false
+        }
+    });
+    for c in culled.iter() {
+        match c.reason {
+            CullReason::Escaped => {
+                losses.escaped += 1;
+                losses.mass_escaped += c.mass;
+            }
+            CullReason::Inverted => {
+                losses.inverted += 1;
+                losses.mass_inverted += c.mass;
+            }
+        }
+    }
+    losses.t_first.get_or_insert(time);
+    deleted
+}
