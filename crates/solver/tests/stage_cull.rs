@@ -52,8 +52,8 @@ fn an_escaped_particle_is_deleted_and_counted() {
     assert_eq!(l.t_first, Some(1e-3));
     // The block is untouched by the deletion: same state as under "stop".
     let kv = kept.view();
-    assert_eq!(&v.x[..], &kv.x[..block]);
-    assert_eq!(&v.id[..], &kv.id[..block]);
+    assert_eq!(v.x, &kv.x[..block]);
+    assert_eq!(v.id, &kv.id[..block]);
     // The next step runs (nothing left outside the grid) and deletes nothing more.
     s.step().unwrap();
     assert!(s.view().culled.is_empty());
