@@ -99,3 +99,54 @@ fn injected_energy_is_half_m_dv_squared() {
         .unwrap();
     assert!((e.energy_injected / expected - 1.0).abs() < 0.05, "{e:?}");
 }
+
+/// The smallest push found: dv from 0.01 to 1 m/s on an interior 3 x 3 patch
+/// of the column at rest. Every push opens an event at its step in its
+/// region with no other event (no false alarm); the cause is `injection`
+/// once the pushed energy 1/2 m dv^2 passes the event's floor
+/// injection_floor_factor m g dt sqrt(2 g H) / 2, else `impact`.
+#[test]
+fn the_smallest_push_found_and_when_it_counts_as_a_kick() {
+    let col = common::column();
+    let s = 30;
+    let steps = s + col.window + 100;
+    let cells = [18, 15, 21, 18];
+    let mut table = vec![];
+    for dv in [0.01, 0.02, 0.03, 0.05, 0.07, 0.1, 0.2, 0.5, 1.0] {
+        let perturb = vec![Perturb {
+            step: s,
+            region: common::region(0.01, cells[0], cells[1], cells[2], cells[3]),
+            dv: [dv, 0.0],
+        }];
+        let (m, _) = common::run_window(&col.cfg, &col.start, &col.monitor, perturb, steps);
+        let at_push: Vec<_> = m
+            .events()
+            .iter()
+            .filter(|e| (s..=s + 1).contains(&e.first_step))
+            .collect();
+        let others = m.events().len() - at_push.len();
+        let cause = at_push.iter().map(|e| e.cause).min();
+        table.push((dv, at_push.len(), others, cause));
+    }
+    eprintln!("dv (m/s), events at the push, other events, cause");
+    for row in &table {
+        eprintln!("{row:?}");
+    }
+    for &(dv, at_push, others, cause) in &table {
+        assert_eq!(others, 0, "dv {dv}: a false alarm");
+        if dv >= 0.03 {
+            assert!(at_push >= 1, "dv {dv}: not found");
+        }
+        if dv >= 0.1 {
+            assert_eq!(cause, Some(monitor::Cause::Injection), "dv {dv}");
+        }
+    }
+    // Once labelled a kick, every larger push is one too.
+    let first_kick = table
+        .iter()
+        .position(|r| r.3 == Some(monitor::Cause::Injection))
+        .unwrap();
+    assert!(table[first_kick..]
+        .iter()
+        .all(|r| r.3 == Some(monitor::Cause::Injection)));
+}

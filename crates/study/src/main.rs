@@ -304,6 +304,8 @@ fn main() -> ExitCode {
                 Ok(s) => s,
                 Err(e) => return bad_input(&e.to_string()),
             };
+            use std::io::Write;
+            let mut out = std::io::stdout().lock();
             for case in &study.cases {
                 let m = &case.solver.method;
                 let mats: Vec<String> = case
@@ -313,7 +315,8 @@ fn main() -> ExitCode {
                     .iter()
                     .map(|m| format!("{:?} K={} gamma={} mu={}", m.eos, m.k, m.gamma, m.viscosity))
                     .collect();
-                println!(
+                let line = writeln!(
+                    out,
                     "{}\t{:?} {:?} {:?} cfl={} dt={:?}\t{}",
                     case.name,
                     m.shape,
@@ -323,6 +326,10 @@ fn main() -> ExitCode {
                     m.dt,
                     mats.join("; ")
                 );
+                // A closed pipe (`kick list | head`) ends the listing quietly.
+                if line.is_err() {
+                    break;
+                }
             }
             ExitCode::SUCCESS
         }

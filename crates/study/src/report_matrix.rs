@@ -16,11 +16,11 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 /// One case of the matrix, with the values of the parameters that vary.
-struct Row {
-    summary: Summary,
-    dir: PathBuf,
+pub struct Row {
+    pub summary: Summary,
+    pub dir: PathBuf,
     /// Values of `Matrix::axes`, as text.
-    params: Vec<String>,
+    pub params: Vec<String>,
     /// Relative link to the case's page, when it rendered.
     link: Option<String>,
 }
@@ -42,7 +42,7 @@ impl Row {
         Row::nan(self.summary.metrics.t_first_kick)
     }
 
-    fn hydro_late(&self) -> f64 {
+    pub fn hydro_late(&self) -> f64 {
         Row::nan(self.summary.metrics.hydro_rel_rms_late)
     }
 
@@ -70,14 +70,45 @@ impl Row {
     }
 }
 
-const OUTCOMES: [(&str, &str, RGBColor); 4] = [
-    ("completed", "survived", RGBColor(90, 170, 90)),
-    ("kicked", "kicked", RGBColor(240, 160, 60)),
-    ("blew_up", "blew up", RGBColor(200, 50, 50)),
-    ("failed", "failed", RGBColor(150, 150, 150)),
+/// The outcome heatmap's classes, best to worst: how a run ended when it
+/// never kicked, else the cause of its first kick (docs/physics.md 4b).
+const CLASSES: [(&str, RGBColor); 6] = [
+    ("no kick, survived", RGBColor(90, 170, 90)),
+    ("no kick, blew up", RGBColor(235, 175, 175)),
+    ("injection first", RGBColor(240, 150, 50)),
+    ("inversion first", RGBColor(190, 40, 40)),
+    ("anomaly first", RGBColor(140, 60, 170)),
+    ("failed", RGBColor(150, 150, 150)),
 ];
 
+impl Row {
+    /// Index into `CLASSES`.
+    fn class(&self) -> usize {
+        let s = &self.summary;
+        if s.status == Status::Failed {
+            return 5;
+        }
+        let first = s
+            .events
+            .iter()
+            .filter(|e| e.is_kick())
+            .min_by(|a, b| a.t.total_cmp(&b.t));
+        match first {
+            None if s.status == Status::Completed => 0,
+            None => 1,
+            Some(e) if e.is_anomaly() => 4,
+            Some(e) if e.cause == monitor::Cause::Inversion => 3,
+            Some(_) => 2,
+        }
+    }
+}
+
 /// Median, smallest and largest of the finite values (None when there are none).
+/// Median of the finite values (None when there are none).
+pub fn median(values: &[f64]) -> Option<f64> {
+    spread(values.iter().copied()).map(|s| s.0)
+}
+
 fn spread(values: impl Iterator<Item = f64>) -> Option<(f64, f64, f64)> {
     let mut v: Vec<f64> = values.filter(|x| x.is_finite()).collect();
     if v.is_empty() {
@@ -132,9 +163,9 @@ fn param_text(v: &serde_json::Value) -> String {
 }
 
 /// The rows of a matrix, sorted by the varying parameters, and those parameters' keys.
-struct Matrix {
-    axes: Vec<String>,
-    rows: Vec<Row>,
+pub struct Matrix {
+    pub axes: Vec<String>,
+    pub rows: Vec<Row>,
 }
 
 impl Matrix {
@@ -187,7 +218,7 @@ impl Matrix {
         Ok(Matrix { axes, rows })
     }
 
-    fn axis(&self, suffix: &str) -> Option<usize> {
+    pub fn axis(&self, suffix: &str) -> Option<usize> {
         self.axes.iter().position(|n| n.ends_with(suffix))
     }
 }
@@ -208,6 +239,7 @@ pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
     let mut page = Page::default();
     text_summary(&m.rows, &mut page);
     if !m.axes.is_empty() {
+        crate::report_behaviours::behaviours(&m, &mut page);
         heatmaps(&m, &out, &mut page)?;
         stability_map(&m, &out, &mut page)?;
     }
@@ -394,11 +426,10 @@ impl<'a> HeatLayout<'a> {
 /// with the median first-kick and survival times, and their range over an ensemble.
 fn outcome_cell(runs: &[&Row]) -> (RGBColor, String) {
     let count = |o: &str| runs.iter().filter(|r| r.outcome() == o).count();
-    // OUTCOMES runs from best to worst and max_by_key keeps the last maximum.
-    let outcome = OUTCOMES
-        .iter()
-        .max_by_key(|o| count(o.0))
-        .expect("four outcomes");
+    // CLASSES runs from best to worst and max_by_key keeps the last maximum.
+    let class = (0..CLASSES.len())
+        .max_by_key(|&c| runs.iter().filter(|r| r.class() == c).count())
+        .expect("six classes");
     let kick = spread(runs.iter().map(|r| r.t_first_kick()));
     let blew = runs.iter().any(|r| r.outcome() == "blew_up");
     let end = spread(runs.iter().map(|r| r.t_end())).filter(|_| blew);
@@ -418,20 +449,20 @@ fn outcome_cell(runs: &[&Row]) -> (RGBColor, String) {
     } else {
         "ok".into()
     };
-    (outcome.2, text)
+    (CLASSES[class].1, text)
 }
 
 fn heatmaps(m: &Matrix, out: &Path, page: &mut Page) -> Res {
     let layout = HeatLayout::new(m);
     let outcome = layout.figure(
-        "Outcome and time of first kick (s)",
-        HeatKey::Legend(OUTCOMES.iter().map(|o| (o.1.to_string(), o.2)).collect()),
+        "Outcome by the cause of the first kick; time of first kick and blow-up (s)",
+        HeatKey::Legend(CLASSES.iter().map(|c| (c.0.to_string(), c.1)).collect()),
         outcome_cell,
     );
     page.h2("Outcome");
     page.figure(
         &render(&outcome, out, "heatmap_outcome")?,
-        "Outcome per case: k t = first kick at t (s), x t = blew up at t (s); over an ensemble the median ± half its range and the most frequent outcome",
+        "Colour: the cause of the first kick (a kick is an injection or an inversion; the anomaly is a kick with the hallmark), or how a run that never kicked ended; over an ensemble the most frequent class (ties: the worse). Text: k t = first kick at t (s), x t = blew up at t (s), the median ± half the range over an ensemble",
     );
     let hydro: Vec<f64> = m.rows.iter().map(|r| r.hydro_late()).collect();
     let scale = ColourScale::robust(&hydro, true);

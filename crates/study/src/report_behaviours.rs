@@ -1,0 +1,189 @@
+//! The four behaviours the bug report saw in the original codes
+//! (docs/physics.md section 3), each stated with the numbers of this matrix
+//! that show or refute it. Survival counts a completed run as t_end.
+
+use crate::plot_common::short;
+use crate::report::{f64_column, read_parquet};
+use crate::report_html::Page;
+use crate::report_matrix::{median, Matrix, Row};
+use crate::summary::Status;
+use std::collections::BTreeMap;
+
+/// The window in which the bug report saw the checkerboard appear (s).
+pub const CHECKERBOARD_WINDOW: (f64, f64) = (0.01, 0.1);
+/// Behaviour 3 as numbers: above this at K >= 1.5 MPa ...
+pub const CHECKERBOARD_HIGH: f64 = 0.3;
+/// ... and below this at the smallest K, over the same window.
+pub const CHECKERBOARD_LOW: f64 = 0.1;
+
+fn param(r: &Row, suffix: &str) -> Option<f64> {
+    r.summary
+        .params
+        .iter()
+        .find(|(k, _)| k.ends_with(suffix))
+        .and_then(|(_, v)| v.as_f64())
+}
+
+/// Largest checkerboard index over `CHECKERBOARD_WINDOW`, from the case's timeseries.
+pub fn early_checkerboard(r: &Row) -> Option<f64> {
+    let df = read_parquet(&r.dir.join("timeseries.parquet")).ok()?;
+    let (t, cb) = (f64_column(&df, "t")?, f64_column(&df, "checkerboard")?);
+    let (lo, hi) = CHECKERBOARD_WINDOW;
+    t.iter()
+        .zip(&cb)
+        .filter(|(t, c)| **t >= lo && **t <= hi && c.is_finite())
+        .map(|(_, c)| *c)
+        .reduce(f64::max)
+}
+
+fn verdict(shown: bool, partly: bool) -> &'static str {
+    if shown {
+        "<b>reproduced</b>"
+    } else if partly {
+        "<b>partly reproduced</b>"
+    } else {
+        "<b>not reproduced</b>"
+    }
+}
+
+fn count(rows: &[&Row], keep: impl Fn(&Row) -> bool) -> usize {
+    rows.iter().filter(|r| keep(r)).count()
+}
+
+fn median_of(values: impl Iterator<Item = f64>) -> String {
+    let v: Vec<f64> = values.filter(|v| v.is_finite()).collect();
+    median(&v).map_or("-".into(), short)
+}
+
+pub fn behaviours(m: &Matrix, page: &mut Page) {
+    let ks: Vec<f64> = {
+        let mut ks: Vec<f64> = m.rows.iter().filter_map(|r| param(r, ".K")).collect();
+        ks.sort_by(f64::total_cmp);
+        ks.dedup();
+        ks
+    };
+    let (Some(&k_min), Some(&k_max)) = (ks.first(), ks.last()) else {
+        return;
+    };
+    if ks.len() < 2 {
+        return;
+    }
+    page.h2("The four behaviours of the bug report");
+    let at = |keep: &dyn Fn(f64) -> bool| -> Vec<&Row> {
+        m.rows
+            .iter()
+            .filter(|r| param(r, ".K").is_some_and(keep))
+            .collect()
+    };
+    let small = at(&|k| k == k_min);
+    let large = at(&|k| k >= 1.5e6 || k == k_max);
+
+    // 1. Small K: a kick that blows most particles out within a few steps.
+    let blown: Vec<&Row> = small
+        .iter()
+        .copied()
+        .filter(|r| r.summary.status == Status::BlewUp)
+        .collect();
+    let kick_to_end =
+        |r: &Row| r.summary.t_end - r.summary.metrics.t_first_kick.unwrap_or(f64::NAN);
+    let quick = count(&blown, |r| kick_to_end(r) <= 0.05);
+    page.p(&format!(
+        "1. Small K ({} Pa): a clean run ends in a kick that blows most particles out within a few steps. \
+         {} of {} runs blew up (median at {} s), {} of them within 0.05 s of their first kick \
+         (median from first kick to blow-up {} s); mass lost when they stopped: median {}, \
+         particles escaped: median {}, inverted: median {}. {}",
+        short(k_min),
+        blown.len(),
+        small.len(),
+        median_of(blown.iter().map(|r| r.summary.t_end)),
+        quick,
+        median_of(blown.iter().map(|r| kick_to_end(r))),
+        median_of(blown.iter().map(|r| r.summary.metrics.mass_lost_fraction)),
+        median_of(blown.iter().map(|r| r.summary.metrics.particles_escaped as f64)),
+        median_of(blown.iter().map(|r| r.summary.metrics.particles_inverted as f64)),
+        verdict(
+            2 * quick > small.len(),
+            !blown.is_empty()
+        )
+    ));
+
+    // 2. Larger K survives but is far from hydrostatic.
+    let completed: Vec<&Row> = large
+        .iter()
+        .copied()
+        .filter(|r| r.summary.status == Status::Completed)
+        .collect();
+    let late: Vec<f64> = completed.iter().map(|r| r.hydro_late()).collect();
+    let far = count(&completed, |r| r.hydro_late() >= 10.0);
+    page.p(&format!(
+        "2. Larger K (K &ge; {} Pa) survives to t_end with a pressure orders of magnitude off hydrostatic. \
+         {} of {} runs completed; their late hydrostatic departure (relative RMS over the last second): \
+         median {}, {} of them &ge; 10. {}",
+        short(large.iter().filter_map(|r| param(r, ".K")).fold(f64::INFINITY, f64::min)),
+        completed.len(),
+        large.len(),
+        median_of(late.iter().copied()),
+        far,
+        verdict(
+            !completed.is_empty() && 2 * far > completed.len(),
+            !completed.is_empty() && median(&late).is_some_and(|h| h >= 1.0)
+        )
+    ));
+
+    // 3. Larger K checkerboards immediately; the smallest K does not.
+    let early =
+        |rows: &[&Row]| -> Vec<f64> { rows.iter().filter_map(|r| early_checkerboard(r)).collect() };
+    let (cb_large, cb_small) = (early(&large), early(&small));
+    let high = cb_large.iter().filter(|c| **c > CHECKERBOARD_HIGH).count();
+    let low = cb_small.iter().filter(|c| **c < CHECKERBOARD_LOW).count();
+    page.p(&format!(
+        "3. Larger K: the pressure checkerboards at once (t in {}-{} s). Largest checkerboard index \
+         over that window: above {CHECKERBOARD_HIGH} in {high} of {} runs at K &ge; 1.5 MPa (median {}); \
+         below {CHECKERBOARD_LOW} in {low} of {} runs at {} Pa (median {}). {}",
+        CHECKERBOARD_WINDOW.0,
+        CHECKERBOARD_WINDOW.1,
+        cb_large.len(),
+        median_of(cb_large.iter().copied()),
+        cb_small.len(),
+        short(k_min),
+        median_of(cb_small.iter().copied()),
+        verdict(
+            2 * high > cb_large.len() && 2 * low > cb_small.len(),
+            2 * high > cb_large.len() || 2 * low > cb_small.len()
+        )
+    ));
+
+    // 4. Less viscosity, less stable: pair every case with its viscous twin.
+    let Some(mu_axis) = m.axis(".viscosity") else {
+        return;
+    };
+    let mut pairs: BTreeMap<Vec<String>, [Vec<f64>; 2]> = BTreeMap::new();
+    for r in &m.rows {
+        let Some(mu) = param(r, ".viscosity") else {
+            continue;
+        };
+        let mut key = r.params.clone();
+        key.remove(mu_axis);
+        pairs.entry(key).or_default()[usize::from(mu > 0.0)].push(r.summary.t_end);
+    }
+    let (mut shorter, mut longer, mut same) = (0, 0, 0);
+    for [inviscid, viscous] in pairs.values() {
+        let (Some(a), Some(b)) = (median(inviscid), median(viscous)) else {
+            continue;
+        };
+        if a < 0.99 * b {
+            shorter += 1;
+        } else if a > 1.01 * b {
+            longer += 1;
+        } else {
+            same += 1;
+        }
+    }
+    let total = shorter + longer + same;
+    page.p(&format!(
+        "4. Less viscosity, less stable. Of {total} cases paired by everything but the viscosity, the \
+         inviscid one survived a shorter time (median over its runs, 1 % margin) in {shorter}, longer in \
+         {longer}, as long in {same}. {}",
+        verdict(2 * shorter > total, shorter > longer)
+    ));
+}
