@@ -136,11 +136,20 @@ fn list_expands_the_bug_report_matrix() {
         .lines()
         .map(|l| l.split('\t').next().unwrap())
         .collect();
-    assert_eq!(names.len(), 64);
+    // 64 cases x an ensemble of 3.
+    assert_eq!(names.len(), 192);
     let unique: std::collections::BTreeSet<_> = names.iter().collect();
-    assert_eq!(unique.len(), 64, "case names are unique");
-    assert!(names.contains(&"K1.5MPa_tait_mu0.5_fixed"), "{names:?}");
-    assert!(names.contains(&"K15kPa_power-g1_mu0_dyn"), "{names:?}");
+    assert_eq!(unique.len(), 192, "case names are unique");
+    for member in ["e0", "e1", "e2"] {
+        assert!(
+            names.contains(&format!("K1.5MPa_tait_mu0.5_fixed_{member}").as_str()),
+            "{names:?}"
+        );
+        assert!(
+            names.contains(&format!("K15kPa_power-g1_mu0_dyn_{member}").as_str()),
+            "{names:?}"
+        );
+    }
 }
 
 fn bad(study_text: &str, extra: &[&str]) -> String {

@@ -1,6 +1,6 @@
 //! USF, USL and MUSL as orderings of the same stages.
 
-use crate::config::{SchemeKind, TransferKind};
+use crate::config::{ForceKind, SchemeKind, TransferKind};
 use crate::stage_p2g::{self, Terms};
 use crate::stage_times::lap;
 use crate::{par, stage_g2p, stage_grid, stage_stress, Solver};
@@ -98,6 +98,10 @@ fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
         bins: &s.bins,
         width: s.shape.width(),
         affine: s.cfg.method.transfer == TransferKind::Apic,
+        mls: match s.cfg.method.force {
+            ForceKind::Mls => s.shape.apic_inverse_inertia(),
+            ForceKind::Gradient => None,
+        },
         gravity: s.gravity,
     };
     stage_p2g::p2g(&inputs, terms, &mut s.grid);
@@ -122,6 +126,8 @@ fn stress(s: &mut Solver, which: StressVelocity, clock: &mut Instant) {
         materials: &s.cfg.scene.materials,
         j_update: s.cfg.method.j_update,
         dt: s.dt,
+        mls: s.cfg.method.force == ForceKind::Mls,
+        f_reset: s.cfg.method.f_reset,
     };
     s.dissipated += stage_stress::update(&inputs, &mut s.particles, &mut s.partials1);
     lap(&mut s.times.stress, clock);

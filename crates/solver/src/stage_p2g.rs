@@ -29,6 +29,9 @@ pub struct Inputs<'a> {
     pub width: usize,
     /// Include the APIC affine term in the momentum.
     pub affine: bool,
+    /// MLS force: D^-1 h^2 of the B-spline (4 quadratic, 3 cubic); None =
+    /// the gradient force.
+    pub mls: Option<f64>,
     pub gravity: Vec2,
 }
 
@@ -180,10 +183,16 @@ fn scatter_particle<const W: usize, const MASS: bool, const MOMENTUM: bool, cons
         (Vec2::zeros(), Mat2::zeros())
     };
     // Internal force at node (a, c): A (dNx wy, wx dNy) with A = -V sigma / h.
-    let a_mat = if FORCE {
-        ps.stress[p] * (-ps.vol[p] * pass.inv_h)
-    } else {
-        Mat2::zeros()
+    // MLS: -V sigma D^-1 (x_i - x_p) N, the same form with dN_x -> N_x (a - fx),
+    // dN_y -> N_y (c - fy) and A = -V sigma (D^-1 h^2) / h.
+    let (a_mat, dwx, dwy) = match inputs.mls {
+        Some(inertia) if FORCE => (
+            ps.stress[p] * (-ps.vol[p] * inertia * pass.inv_h),
+            std::array::from_fn::<f64, W, _>(|a| wx[a] * (a as f64 - fx)),
+            std::array::from_fn::<f64, W, _>(|c| wy[c] * (c as f64 - fy)),
+        ),
+        _ if FORCE => (ps.stress[p] * (-ps.vol[p] * pass.inv_h), dwx, dwy),
+        _ => (Mat2::zeros(), dwx, dwy),
     };
     debug_assert!(base + (W - 1) * (dims[0] + 1) < pass.len);
     for c in 0..W {

@@ -19,6 +19,10 @@ pub struct Inputs<'a> {
     pub materials: &'a [Material],
     pub j_update: JUpdate,
     pub dt: f64,
+    /// MLS-MPM: the velocity gradient is the particle's affine matrix C.
+    pub mls: bool,
+    /// F <- J^(1/2) I after the update (`method.f_reset`).
+    pub f_reset: bool,
 }
 
 /// Updates F, J, V, stress, pressure and |dev D|; returns the viscous work of this step.
@@ -71,6 +75,8 @@ fn run<const W: usize>(
         materials,
         j_update,
         dt,
+        mls,
+        f_reset,
     } = *inputs;
     let nx = grid.dims[0];
     let inv_h = 1.0 / grid.h;
@@ -87,16 +93,35 @@ fn run<const W: usize>(
         particles.stored_energy.par_chunks_mut(CHUNK),
         particles.vol0.par_chunks(CHUNK),
         particles.material.par_chunks(CHUNK),
-        stencils.par_chunks(CHUNK),
+        stencils
+            .par_chunks(CHUNK)
+            .zip(particles.affine.par_chunks(CHUNK)),
         partials[..n_chunks].par_iter_mut(),
     )
         .into_par_iter()
         .pieces(piece)
         .for_each(
-            |(f, j, vol, stress, pressure, dev_rate, wave, stored, vol0, mat, st, work)| {
+            |(
+                f,
+                j,
+                vol,
+                stress,
+                pressure,
+                dev_rate,
+                wave,
+                stored,
+                vol0,
+                mat,
+                (st, affine),
+                work,
+            )| {
                 let mut acc = 0.0;
                 for k in 0..f.len() {
-                    let l = velocity_gradient::<W>(shape, &st[k], velocity, nx, inv_h);
+                    let l = if mls {
+                        affine[k]
+                    } else {
+                        velocity_gradient::<W>(shape, &st[k], velocity, nx, inv_h)
+                    };
                     let f_new = (Mat2::identity() + dt * l) * f[k];
                     let det = f_new.determinant();
                     let (f_next, j_next) = match j_update {
@@ -107,7 +132,12 @@ fn run<const W: usize>(
                             (f_new * (jn / det).abs().sqrt(), jn)
                         }
                     };
-                    f[k] = f_next;
+                    // An inverted F is kept as it is, for the inversion checks to see.
+                    f[k] = if f_reset && j_next > 0.0 {
+                        Mat2::identity() * j_next.sqrt()
+                    } else {
+                        f_next
+                    };
                     j[k] = j_next;
                     vol[k] = vol0[k] * j_next;
                     let m = &materials[mat[k] as usize];

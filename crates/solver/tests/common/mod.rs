@@ -12,6 +12,7 @@ pub fn method(shape: ShapeKind, transfer: TransferKind, scheme: SchemeKind) -> M
         dt_value: None,
         j_update: JUpdate::Det,
         min_node_mass: 0.0,
+        ..Method::default()
     }
 }
 
