@@ -322,6 +322,14 @@ pub struct Method {
     /// that ignore F; it blinds the distortion flag (not the strain-rate
     /// hallmark).
     pub f_reset: bool,
+    /// Cell-averaged dilatation (Mast et al. 2012), blend b in 0 ..= 1 (0 =
+    /// off): J_p <- (1 - b) J_p + b sum_c V / sum_c V0.
+    pub cell_dilatation: f64,
+    /// J-bar by particle-grid averaging (Zhao, Jiang & Choo 2023), blend b
+    /// in 0 ..= 1 (0 = off).
+    pub j_bar: f64,
+    /// Pressure smoothing through the nodes (CB-Geo's option).
+    pub pressure_smoothing: bool,
 }
 
 impl Default for Method {
@@ -338,6 +346,9 @@ impl Default for Method {
             min_node_mass: 0.0,
             force: ForceKind::Gradient,
             f_reset: false,
+            cell_dilatation: 0.0,
+            j_bar: 0.0,
+            pressure_smoothing: false,
         }
     }
 }
@@ -438,6 +449,13 @@ impl SolverConfig {
         if let Some(dt) = m.dt_value {
             within(dt, 1e-12, 1.0, "method.dt_value")?;
         }
+        within(m.cell_dilatation, 0.0, 1.0, "method.cell_dilatation")?;
+        within(m.j_bar, 0.0, 1.0, "method.j_bar")?;
+        check(
+            m.cell_dilatation == 0.0 || m.j_bar == 0.0,
+            "method.j_bar",
+            "cannot be combined with method.cell_dilatation (two averagings of J: choose one)",
+        )?;
         if m.force == ForceKind::Mls {
             // D = sum N (x_i - x_p)(x_i - x_p)^T is singular at the nodes for linear and uGIMP shapes.
             check(

@@ -17,6 +17,7 @@ mod init_hydrostatic;
 mod measure;
 pub mod par;
 pub mod particles;
+pub mod remedy_volumetric;
 pub mod scene;
 mod scheme;
 pub mod shape;
@@ -137,6 +138,8 @@ pub struct Solver {
     losses: Losses,
     /// The particles deleted at the last step (capacity: every particle).
     culled: Vec<Culled>,
+    /// Scratch of the volumetric remedies (empty when none is on).
+    volumetric: remedy_volumetric::Scratch,
 }
 
 impl Solver {
@@ -196,7 +199,12 @@ impl Solver {
             cull_rules,
             losses: Losses::default(),
             culled: Vec::with_capacity(n),
+            volumetric: remedy_volumetric::Scratch::default(),
         };
+        let m = &solver.cfg.method;
+        if m.cell_dilatation > 0.0 || m.j_bar > 0.0 || m.pressure_smoothing {
+            solver.volumetric = remedy_volumetric::Scratch::new(&solver.grid, n);
+        }
         solver.start_clock();
         solver
     }

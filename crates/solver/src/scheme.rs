@@ -130,7 +130,26 @@ fn stress(s: &mut Solver, which: StressVelocity, clock: &mut Instant) {
         f_reset: s.cfg.method.f_reset,
     };
     s.dissipated += stage_stress::update(&inputs, &mut s.particles, &mut s.partials1);
+    volumetric_remedies(s);
     lap(&mut s.times.stress, clock);
+}
+
+/// Cell-averaged dilatation or J-bar, then pressure smoothing (each off by default).
+fn volumetric_remedies(s: &mut Solver) {
+    use crate::remedy_volumetric as rv;
+    let m = &s.cfg.method;
+    let (ps, scratch) = (&mut s.particles, &mut s.volumetric);
+    if m.cell_dilatation > 0.0 {
+        rv::cell_dilatation(ps, &s.grid, m.cell_dilatation, scratch);
+    } else if m.j_bar > 0.0 {
+        rv::j_bar(ps, &s.stencils, &s.shape, &s.grid, m.j_bar, scratch);
+    }
+    if m.cell_dilatation > 0.0 || m.j_bar > 0.0 {
+        rv::reevaluate_eos(ps, &s.cfg.scene.materials);
+    }
+    if m.pressure_smoothing {
+        rv::smooth_pressure(ps, &s.stencils, &s.shape, &s.grid, scratch);
+    }
 }
 
 fn g2p(s: &mut Solver, clock: &mut Instant) {
