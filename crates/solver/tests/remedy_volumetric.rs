@@ -1,8 +1,9 @@
 //! The defining property of each volumetric remedy (docs/physics.md section 5),
-#![allow(clippy::needless_range_loop)]
 //! on a disordered block whose J varies from particle to particle: the
 //! stress stage runs with a zero grid velocity, so F and J change only by
 //! the remedy.
+
+#![allow(clippy::needless_range_loop)]
 
 mod common;
 
