@@ -245,7 +245,54 @@ pub struct Event {
     pub(crate) injected_at_open: f64,
 }
 
+/// NaN and +inf as f64::MAX, -inf as f64::MIN: JSON has no non-finite
+/// numbers (serde_json writes them as null, which does not read back as f64),
+/// and a blow-up produces them.
+fn finite(v: f64) -> f64 {
+    if v.is_nan() || v == f64::INFINITY {
+        f64::MAX
+    } else if v == f64::NEG_INFINITY {
+        f64::MIN
+    } else {
+        v
+    }
+}
+
 impl Event {
+    /// A copy whose floats JSON can hold (see `finite`); the summary stores this.
+    pub fn json_safe(&self) -> Event {
+        let mut e = self.clone();
+        for v in [
+            &mut e.t,
+            &mut e.last_t,
+            &mut e.peak_accel_g,
+            &mut e.peak_z,
+            &mut e.energy_injected,
+            &mut e.courant,
+            &mut e.region.x_min,
+            &mut e.region.y_min,
+            &mut e.region.x_max,
+            &mut e.region.y_max,
+            &mut e.evidence.courant_before,
+            &mut e.evidence.advection_before,
+            &mut e.evidence.critical_courant,
+            &mut e.evidence.energy_floor,
+            &mut e.evidence.quiescent_fraction,
+            &mut e.evidence.deformed_fraction,
+            &mut e.evidence.peak_dev_rate,
+            &mut e.evidence.speed_before,
+        ] {
+            *v = finite(*v);
+        }
+        for v in [&mut e.evidence.t_peak_dev_rate, &mut e.evidence.j_min]
+            .into_iter()
+            .flatten()
+        {
+            *v = finite(*v);
+        }
+        e
+    }
+
     /// Most of the event's particles were highly deformed before it (by `deformed_by`).
     pub fn previously_deformed(&self) -> bool {
         !self.deformed_by.is_empty()

@@ -11,6 +11,7 @@ pub mod plot_case;
 pub mod plot_common;
 pub mod plot_matrix;
 pub mod report;
+pub mod report_ablation;
 pub mod report_behaviours;
 pub mod report_case;
 pub mod report_html;

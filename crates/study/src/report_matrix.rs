@@ -104,6 +104,11 @@ impl Row {
 }
 
 /// Median, smallest and largest of the finite values (None when there are none).
+/// "m" or "m [lo, hi]" over the finite values ("-" when there are none).
+pub fn spread_text(values: impl Iterator<Item = f64>, runs: usize, digits: usize) -> String {
+    spread(values).map_or("-".into(), |s| with_spread(s, runs, digits))
+}
+
 /// Median of the finite values (None when there are none).
 pub fn median(values: &[f64]) -> Option<f64> {
     spread(values.iter().copied()).map(|s| s.0)
@@ -240,6 +245,7 @@ pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
     text_summary(&m.rows, &mut page);
     if !m.axes.is_empty() {
         crate::report_behaviours::behaviours(&m, &mut page);
+        crate::report_ablation::ablation_table(&m, &mut page);
         heatmaps(&m, &out, &mut page)?;
         stability_map(&m, &out, &mut page)?;
     }

@@ -382,6 +382,10 @@ fn name_part(key: &str, v: &Value) -> String {
         ("viscosity", _) => format!("mu{}", as_f64(v)),
         ("dt", Value::String(s)) if s == "dynamic" => "dyn".into(),
         (_, Value::String(s)) => s.clone(),
+        // A table that changes nothing: the axis's reference value.
+        (_, Value::Table(t)) if t.is_empty() => "base".into(),
+        (_, Value::Boolean(true)) => last.to_string(),
+        (_, Value::Boolean(false)) => format!("no_{last}"),
         (_, Value::Table(t)) => t
             .iter()
             .map(|(k, v)| name_part(k, v))
@@ -481,6 +485,8 @@ mod tests {
             "power-g7"
         );
         assert_eq!(name_part("method.cfl", &toml("0.1")), "cfl0.1");
+        assert_eq!(name_part("method", &toml("{}")), "base");
+        assert_eq!(name_part("method", &toml("{ f_reset = true }")), "f_reset");
     }
 
     #[test]

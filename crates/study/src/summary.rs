@@ -137,15 +137,69 @@ impl Summary {
     }
 
     /// Writes `dir/summary.json` atomically (the last file a case writes).
+    /// A blow-up's non-finite event figures are written as +-f64::MAX, so
+    /// that the file reads back (JSON has no NaN or infinity).
     pub fn write(&self, dir: &Path) -> std::io::Result<()> {
+        let safe = Summary {
+            events: self.events.iter().map(Event::json_safe).collect(),
+            ..self.clone()
+        };
         write_atomic(
             &dir.join(Self::FILE),
-            serde_json::to_string_pretty(self)?.as_bytes(),
+            serde_json::to_string_pretty(&safe)?.as_bytes(),
         )
     }
 
     /// The case logged at least one kick.
     pub fn kicked(&self) -> bool {
         self.metrics.t_first_kick.is_some()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A blown-up run's events hold infinities and NaN: the summary still reads back.
+    #[test]
+    fn non_finite_event_figures_read_back() {
+        let dir = std::env::temp_dir().join(format!("kick-summary-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut event: Event = serde_json::from_value(serde_json::json!({
+            "id": 1, "kind": "kick", "first_step": 3, "last_step": 4, "t": 0.1, "last_t": 0.2,
+            "cells": {"i_min": 0, "j_min": 0, "i_max": 1, "j_max": 1},
+            "region": {"x_min": 0.0, "y_min": 0.0, "x_max": 0.01, "y_max": 0.01},
+            "extent": {"i_min": 0, "j_min": 0, "i_max": 1, "j_max": 1},
+            "n_particles": 4, "particles": [1, 2], "peak_accel_g": 1.0, "peak_z": 2.0,
+            "energy_injected": 0.0, "courant": 0.2, "quiescent_before": false,
+            "deformed_by": [], "rules": ["ke_spike"], "state_hash": null, "checkpoint": null
+        }))
+        .unwrap();
+        event.evidence.advection_before = f64::INFINITY;
+        event.energy_injected = f64::NAN;
+        event.evidence.j_min = Some(f64::NEG_INFINITY);
+        let summary = Summary {
+            schema_version: SCHEMA_VERSION,
+            case: "c".into(),
+            params: BTreeMap::new(),
+            status: Status::BlewUp,
+            reason: "r".into(),
+            steps: 4,
+            t_end: 0.2,
+            wall_s: 1.0,
+            particles: 10,
+            particle_steps_per_s: 40.0,
+            final_state_hash: "0".into(),
+            events: vec![event],
+            metrics: Metrics::default(),
+        };
+        summary.write(&dir).unwrap();
+        let back = Summary::read(&dir).unwrap();
+        let e = &back.events[0];
+        assert_eq!(e.evidence.advection_before, f64::MAX);
+        assert_eq!(e.energy_injected, f64::MAX);
+        assert_eq!(e.evidence.j_min, Some(f64::MIN));
+        assert_eq!(e.t, 0.1);
+        std::fs::remove_dir_all(&dir).ok();
     }
 }
