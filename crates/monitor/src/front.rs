@@ -1,5 +1,8 @@
 //! Surge front: the far edge of the furthest filled cell connected to the
-//! floor through filled cells (4-neighbours), so a stray particle cannot move it.
+//! column's base through filled cells (4-neighbours), so neither a stray
+//! particle nor a droplet that lands ahead on the floor can move it. The base
+//! is the bottom row under the initial column (the widest body, standing in
+//! the lower-left corner).
 
 use crate::checkerboard::CellField;
 use crate::geometry::Geometry;
@@ -18,13 +21,14 @@ impl Front {
         }
     }
 
-    /// x of the front (metres from the box's left wall); None when no floor cell is filled.
+    /// x of the front (metres from the box's left wall); None when no base cell is filled.
     pub fn position(&mut self, geom: &Geometry, field: &CellField) -> Option<f64> {
         let [nx, ny] = geom.cells;
         let filled = |c: usize| field.count[c] >= geom.filled_min();
         self.seen.fill(false);
         self.stack.clear();
-        for i in 0..nx {
+        let base = ((geom.column_width / geom.cell).round() as usize).clamp(1, nx);
+        for i in 0..base {
             if filled(i) {
                 self.seen[i] = true;
                 self.stack.push(i as u32);

@@ -16,6 +16,7 @@ pub mod report_behaviours;
 pub mod report_case;
 pub mod report_html;
 pub mod report_matrix;
+pub mod report_refinement;
 pub mod reproduce;
 pub mod run_case;
 pub mod snapshot;

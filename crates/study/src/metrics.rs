@@ -29,36 +29,141 @@ fn mean(v: impl Iterator<Item = f64>) -> Option<f64> {
     (n > 0).then(|| s / n as f64)
 }
 
+/// The simulated front as (T, Z) rows of the timeseries (finite ones).
+fn front_track(ts: &Timeseries) -> Vec<(f64, f64)> {
+    ts.column("front_t")
+        .iter()
+        .zip(ts.column("front_z"))
+        .filter(|(t, z)| t.is_finite() && z.is_finite())
+        .map(|(t, z)| (*t, *z))
+        .collect()
+}
+
 /// RMS of Z_sim - Z_data over the data points the run covers, while the
 /// measured front is short of the far wall (Z < z_wall).
 pub fn front_rms_error(ts: &Timeseries, z_wall: f64) -> Option<f64> {
-    let (tt, zz) = (ts.column("front_t"), ts.column("front_z"));
-    let pts: Vec<(f64, f64)> = tt
-        .iter()
-        .zip(zz)
-        .filter(|(t, z)| t.is_finite() && z.is_finite())
-        .map(|(t, z)| (*t, *z))
-        .collect();
-    let mut sum = 0.0;
-    let mut n = 0;
-    for (t, z) in martin_moyce() {
-        if z >= z_wall {
-            continue;
-        }
-        let Some(k) = pts.windows(2).position(|w| w[0].0 <= t && t <= w[1].0) else {
-            continue;
-        };
-        let (a, b) = (pts[k], pts[k + 1]);
-        let s = if b.0 > a.0 {
-            (t - a.0) / (b.0 - a.0)
-        } else {
-            0.0
-        };
-        let z_sim = a.1 + s * (b.1 - a.1);
-        sum += (z_sim - z) * (z_sim - z);
+    let sim = front_track(ts);
+    rms(martin_moyce()
+        .into_iter()
+        .filter(|p| p.1 < z_wall)
+        .filter_map(|(t, z)| interpolate(&sim, t).map(|zs| zs - z)))
+}
+
+/// Early regime (inertia-driven collapse) ends here, in T = t sqrt(2 g / a).
+pub const T_EARLY_END: f64 = 3.5;
+/// The experiment's gate-opening lag is looked for within this many T units.
+pub const MAX_TIME_SHIFT: f64 = 0.3;
+
+/// The surge front against Martin & Moyce in two regimes (docs/physics.md
+/// section 4): RMS of Z_sim - Z_data at the data's T values while the data
+/// front is short of the far wall; early (T <= 3.5) raw, and after the best
+/// time shift s in [-0.3, 0.3] (Z_sim(T - s) against Z_data(T): s > 0 when
+/// the experiment lags the model); late (T > 3.5) the RMS and the simulated
+/// front speed dZ/dT (least squares over the late data's T range), which
+/// Ritter's endless-reservoir solution puts at 2 and the data at about 1.7.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrontErrors {
+    pub early_rms: Option<f64>,
+    pub early_shifted_rms: Option<f64>,
+    pub time_shift: Option<f64>,
+    pub late_speed: Option<f64>,
+    pub late_rms: Option<f64>,
+}
+
+/// Z of a trajectory sorted by T, linearly interpolated (None outside it).
+fn interpolate(sim: &[(f64, f64)], t: f64) -> Option<f64> {
+    let k = sim.windows(2).position(|w| w[0].0 <= t && t <= w[1].0)?;
+    let (a, b) = (sim[k], sim[k + 1]);
+    let s = if b.0 > a.0 {
+        (t - a.0) / (b.0 - a.0)
+    } else {
+        0.0
+    };
+    Some(a.1 + s * (b.1 - a.1))
+}
+
+fn rms(errors: impl Iterator<Item = f64>) -> Option<f64> {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for e in errors {
+        sum += e * e;
         n += 1;
     }
     (n > 0).then(|| (sum / n as f64).sqrt())
+}
+
+/// Least-squares slope of y against x (None below two distinct x).
+pub fn slope(points: impl Iterator<Item = (f64, f64)>) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = points.collect();
+    let n = pts.len() as f64;
+    if pts.len() < 2 {
+        return None;
+    }
+    let (mx, my) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / n,
+        pts.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+/// `sim`: the simulated (T, Z), sorted by T; `data`: Martin & Moyce's.
+pub fn front_errors(sim: &[(f64, f64)], data: &[(f64, f64)], z_wall: f64) -> FrontErrors {
+    let before_wall = |&&(_, z): &&(f64, f64)| z < z_wall;
+    let early: Vec<(f64, f64)> = data
+        .iter()
+        .filter(before_wall)
+        .filter(|p| p.0 <= T_EARLY_END)
+        .copied()
+        .collect();
+    let late: Vec<(f64, f64)> = data
+        .iter()
+        .filter(before_wall)
+        .filter(|p| p.0 > T_EARLY_END)
+        .copied()
+        .collect();
+    let error_at = |shift: f64| {
+        rms(early
+            .iter()
+            .filter_map(|&(t, z)| interpolate(sim, t - shift).map(|zs| zs - z)))
+    };
+    // Grid search at 0.001 in T; only shifts at which every early point is covered.
+    let covered = |shift: f64| {
+        early
+            .iter()
+            .all(|&(t, _)| interpolate(sim, t - shift).is_some())
+    };
+    let best = (-300..=300)
+        .map(|k| k as f64 * MAX_TIME_SHIFT / 300.0)
+        .filter(|&s| covered(s))
+        .filter_map(|s| error_at(s).map(|e| (s, e)))
+        .min_by(|a, b| a.1.total_cmp(&b.1));
+    // Over the late data's T range only: the same window as the data.
+    let t_last = late.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+    let sim_late = sim
+        .iter()
+        .filter(|p| p.0 > T_EARLY_END && p.0 <= t_last && p.1 < z_wall)
+        .copied();
+    FrontErrors {
+        early_rms: error_at(0.0),
+        early_shifted_rms: best.map(|b| b.1),
+        time_shift: best.map(|b| b.0),
+        late_speed: slope(sim_late),
+        late_rms: rms(late
+            .iter()
+            .filter_map(|&(t, z)| interpolate(sim, t).map(|zs| zs - z))),
+    }
+}
+
+/// Observed order of convergence: the least-squares slope of ln(error)
+/// against ln(h) (None with fewer than two positive errors).
+pub fn observed_order(h: &[f64], error: &[f64]) -> Option<f64> {
+    slope(
+        h.iter()
+            .zip(error)
+            .filter(|(h, e)| **h > 0.0 && **e > 0.0 && e.is_finite())
+            .map(|(h, e)| (h.ln(), e.ln())),
+    )
 }
 
 /// Mean of column `name` over the rows of the last simulated second up to
@@ -126,6 +231,9 @@ pub fn summarise(
     let (hydro_rel_rms_late, hydro_rel_rms_pre_failure) = split("hydro_rel_rms");
     let (hydro_max_late, hydro_max_pre_failure) = split("hydro_max");
     let (checkerboard_late, checkerboard_pre_failure) = split("checkerboard");
+    let front = z_wall.map_or(FrontErrors::default(), |z| {
+        front_errors(&front_track(ts), &martin_moyce(), z)
+    });
     Metrics {
         hydro_rel_rms_late,
         hydro_max_late,
@@ -145,6 +253,11 @@ pub fn summarise(
         node_advection_max: peak("node_advection"),
         max_accel_g: peak("max_accel_g"),
         front_rms_error: z_wall.and_then(|z| front_rms_error(ts, z)),
+        front_rms_error_early: front.early_rms,
+        front_rms_error_early_shifted: front.early_shifted_rms,
+        front_time_shift: front.time_shift,
+        front_speed_late: front.late_speed,
+        front_rms_error_late: front.late_rms,
         events_dropped: 0,
         particles_escaped: 0,
         particles_inverted: 0,
@@ -157,6 +270,57 @@ pub fn summarise(
 mod tests {
     use super::*;
     use crate::timeseries::Peaks;
+
+    /// A front that accelerates to T = 3.5, then runs at dZ/dT = 1.7.
+    fn reference(t: f64) -> f64 {
+        if t <= 3.5 {
+            1.0 + 0.3 * t * t
+        } else {
+            1.0 + 0.3 * 3.5 * 3.5 + 1.7 * (t - 3.5)
+        }
+    }
+
+    /// A model that runs 0.1 T ahead of the data: the shift is found and
+    /// removes the early error; the late speed is the built 1.7. A model
+    /// 0.02 above the data has early RMS 0.02.
+    #[test]
+    fn front_errors_find_a_known_shift_offset_and_speed() {
+        let data: Vec<(f64, f64)> = (1..=18)
+            .map(|k| 0.5 * k as f64)
+            .map(|t| (t, reference(t)))
+            .collect();
+        let track = |f: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
+            (0..=1000)
+                .map(|k| 0.01 * k as f64)
+                .map(|t| (t, f(t)))
+                .collect()
+        };
+        let ahead = front_errors(&track(&|t| reference(t + 0.1)), &data, 100.0);
+        assert!(
+            (ahead.time_shift.unwrap() - 0.1).abs() < 1.5e-3,
+            "{ahead:?}"
+        );
+        assert!(ahead.early_shifted_rms.unwrap() < 1e-3, "{ahead:?}");
+        assert!(ahead.early_rms.unwrap() > 0.1, "{ahead:?}");
+        assert!((ahead.late_speed.unwrap() - 1.7).abs() < 1e-9, "{ahead:?}");
+        assert!((ahead.late_rms.unwrap() - 0.17).abs() < 1e-9, "{ahead:?}");
+        let above = front_errors(&track(&|t| reference(t) + 0.02), &data, 100.0);
+        assert!((above.early_rms.unwrap() - 0.02).abs() < 1e-4, "{above:?}");
+        assert!(above.early_shifted_rms.unwrap() <= above.early_rms.unwrap());
+        // Data past the wall are left out: with the wall at Z = 3 no late point remains.
+        let walled = front_errors(&track(&reference), &data, 3.0);
+        assert_eq!(walled.late_rms, None);
+    }
+
+    #[test]
+    fn observed_order_of_synthetic_errors() {
+        let h = [0.02, 0.01, 0.005];
+        let first: Vec<f64> = h.iter().map(|h| 3.0 * h).collect();
+        let second: Vec<f64> = h.iter().map(|h| 0.5 * h * h).collect();
+        assert!((observed_order(&h, &first).unwrap() - 1.0).abs() < 1e-12);
+        assert!((observed_order(&h, &second).unwrap() - 2.0).abs() < 1e-12);
+        assert_eq!(observed_order(&h[..1], &first[..1]), None);
+    }
     use monitor::{FieldMetrics, StepReport};
 
     /// A timeseries whose only content is the front trajectory (T, Z).

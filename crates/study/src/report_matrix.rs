@@ -246,6 +246,7 @@ pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
     if !m.axes.is_empty() {
         crate::report_behaviours::behaviours(&m, &mut page);
         crate::report_ablation::ablation_table(&m, &mut page);
+        crate::report_refinement::refinement_table(&m, &mut page);
         heatmaps(&m, &out, &mut page)?;
         stability_map(&m, &out, &mut page)?;
     }

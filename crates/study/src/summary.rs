@@ -69,6 +69,19 @@ pub struct Metrics {
     pub max_accel_g: Option<f64>,
     /// RMS of Z against Martin & Moyce while the front is short of the far wall.
     pub front_rms_error: Option<f64>,
+    /// The same in two regimes (`metrics::front_errors`): early (T <= 3.5)
+    /// raw and after the best time shift (in T, |shift| <= 0.3), late (T >
+    /// 3.5) the RMS and the simulated dZ/dT.
+    #[serde(default)]
+    pub front_rms_error_early: Option<f64>,
+    #[serde(default)]
+    pub front_rms_error_early_shifted: Option<f64>,
+    #[serde(default)]
+    pub front_time_shift: Option<f64>,
+    #[serde(default)]
+    pub front_speed_late: Option<f64>,
+    #[serde(default)]
+    pub front_rms_error_late: Option<f64>,
     /// Event openings past `monitor.max_events`, counted per step.
     pub events_dropped: u64,
     /// Particles deleted (`scene.on_escape` / `on_inversion = "delete"`):
