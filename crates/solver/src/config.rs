@@ -78,6 +78,16 @@ pub enum ForceKind {
     Mls,
 }
 
+/// A wall of the box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Wall {
+    Left,
+    Right,
+    Floor,
+    Top,
+}
+
 /// What happens to a particle that leaves the box or inverts (J <= 0).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -227,6 +237,9 @@ pub struct Scene {
     /// Fraction of the initial mass that deleted particles may take before
     /// the run counts as blown up (the harness's convention, not Uintah's).
     pub lost_mass_limit: f64,
+    /// Walls with zero tangential grid velocity (the others are free-slip
+    /// symmetry planes), e.g. `no_slip = ["floor"]`.
+    pub no_slip: Vec<Wall>,
     #[serde(rename = "body")]
     pub bodies: Vec<Body>,
     /// Filled from the study's `[materials]` tables, in file order.
@@ -251,13 +264,34 @@ impl Default for Scene {
             on_escape: OnLoss::Stop,
             on_inversion: OnLoss::Stop,
             lost_mass_limit: 0.1,
+            no_slip: vec![],
             bodies: vec![],
             materials: vec![],
         }
     }
 }
 
+impl Wall {
+    /// The axis the wall is normal to.
+    pub fn axis(self) -> usize {
+        match self {
+            Wall::Left | Wall::Right => 0,
+            Wall::Floor | Wall::Top => 1,
+        }
+    }
+}
+
 impl Scene {
+    /// No-slip flags per [axis][low side, high side].
+    pub fn no_slip_mask(&self) -> [[bool; 2]; 2] {
+        let mut mask = [[false; 2]; 2];
+        for w in &self.no_slip {
+            let side = usize::from(matches!(w, Wall::Right | Wall::Top));
+            mask[w.axis()][side] = true;
+        }
+        mask
+    }
+
     /// docs/physics.md section 1: 0.8 x 0.6 box, 0.2 x 0.4 water column, h = 1 cm, 2 x 2 ppc.
     pub fn dam_break(material: Material) -> Self {
         Scene {
@@ -504,6 +538,13 @@ impl SolverConfig {
         within(s.gravity, 0.0, 1e4, "scene.gravity")?;
         within(s.jitter, 0.0, 1e-3, "scene.jitter")?;
         within(s.lost_mass_limit, 1e-9, 1.0, "scene.lost_mass_limit")?;
+        for w in &s.no_slip {
+            check(
+                !s.periodic[w.axis()],
+                "scene.no_slip",
+                format!("{w:?} is on a periodic axis (scene.periodic): there is no wall there"),
+            )?;
+        }
         check(
             !s.bodies.is_empty(),
             "scene.body",

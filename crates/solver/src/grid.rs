@@ -28,11 +28,18 @@ pub enum NodeRole {
 pub trait Mirrored: Copy + AddAssign {
     /// Reflection across a wall normal to `axis`.
     fn mirror(self, axis: usize) -> Self;
+    /// The image across a no-slip wall: every vector component reversed, so
+    /// that the wall node's velocity folds to zero.
+    fn point_mirror(self) -> Self;
 }
 
 impl Mirrored for f64 {
     #[inline]
     fn mirror(self, _axis: usize) -> Self {
+        self
+    }
+    #[inline]
+    fn point_mirror(self) -> Self {
         self
     }
 }
@@ -42,6 +49,10 @@ impl Mirrored for Vec2 {
     fn mirror(mut self, axis: usize) -> Self {
         self[axis] = -self[axis];
         self
+    }
+    #[inline]
+    fn point_mirror(self) -> Self {
+        -self
     }
 }
 
@@ -81,6 +92,8 @@ pub struct Grid {
     fold_ops: [Vec<BoundaryOp>; 2],
     fill_ops: [Vec<BoundaryOp>; 2],
     roles: [Vec<NodeRole>; 2],
+    /// No-slip walls, [axis][low side, high side].
+    no_slip: [[bool; 2]; 2],
 }
 
 impl Grid {
@@ -123,7 +136,20 @@ impl Grid {
             fold_ops: [dims[1], dims[0]].map(|d| Vec::with_capacity(2 * (PAD + 1) * d)),
             fill_ops: [dims[1], dims[0]].map(|d| Vec::with_capacity(2 * (PAD + 1) * d)),
             roles,
+            no_slip: [[false; 2]; 2],
         }
+    }
+
+    /// Makes the walls marked [axis][low, high] no-slip (zero tangential
+    /// velocity as well as normal): their images reverse every component.
+    pub fn with_no_slip(mut self, no_slip: [[bool; 2]; 2]) -> Self {
+        self.no_slip = no_slip;
+        self
+    }
+
+    /// The wall a wall or ghost node at padded index `i` on `axis` belongs to is no-slip.
+    fn no_slip_at(&self, axis: usize, i: usize) -> bool {
+        self.no_slip[axis][usize::from(i > PAD)]
     }
 
     #[inline]
@@ -155,6 +181,9 @@ impl Grid {
         let (i, j) = self.coords(node);
         for (axis, k) in [(0, i), (1, j)] {
             if self.roles[axis][k] == NodeRole::Wall {
+                if self.no_slip_at(axis, k) {
+                    return Vec2::zeros();
+                }
                 v[axis] = 0.0;
             }
         }
@@ -249,11 +278,13 @@ impl Grid {
                                 i + partner * nx
                             }) as u32
                         };
+                        let point = self.no_slip_at(axis, if axis == 0 { i } else { j });
                         let op = |other, flip| BoundaryOp {
                             node: n as u32,
                             other,
                             axis: axis as u8,
                             flip,
+                            point,
                         };
                         // Fold in y only over in-box columns (x ghosts are folded first).
                         if !(axis == 1 && ghost(role_x)) {
@@ -281,12 +312,7 @@ impl Grid {
     /// self-mirrors wall nodes, x first, then y over in-box columns.
     pub fn fold<T: Mirrored>(&self, values: &mut [T]) {
         for op in self.fold_ops.iter().flatten() {
-            let v = values[op.node as usize];
-            let v = if op.flip {
-                v.mirror(op.axis as usize)
-            } else {
-                v
-            };
+            let v = op.image(values[op.node as usize]);
             values[op.other as usize] += v;
         }
     }
@@ -294,12 +320,7 @@ impl Grid {
     /// Sets every active ghost node to the (mirrored) value of its partner.
     pub fn fill<T: Mirrored>(&self, values: &mut [T]) {
         for op in self.fill_ops.iter().flatten() {
-            let v = values[op.other as usize];
-            values[op.node as usize] = if op.flip {
-                v.mirror(op.axis as usize)
-            } else {
-                v
-            };
+            values[op.node as usize] = op.image(values[op.other as usize]);
         }
     }
 }
@@ -313,6 +334,19 @@ struct BoundaryOp {
     other: u32,
     axis: u8,
     flip: bool,
+    /// A no-slip wall's image (every component reversed).
+    point: bool,
+}
+
+impl BoundaryOp {
+    #[inline]
+    fn image<T: Mirrored>(&self, v: T) -> T {
+        match (self.flip, self.point) {
+            (false, _) => v,
+            (true, false) => v.mirror(self.axis as usize),
+            (true, true) => v.point_mirror(),
+        }
+    }
 }
 
 fn role(i: i64, n: i64, periodic: bool) -> NodeRole {

@@ -167,7 +167,8 @@ impl Solver {
     /// A solver over given particles (tests and benchmarks seed their own).
     pub fn with_particles(cfg: SolverConfig, particles: Particles) -> Self {
         let s = &cfg.scene;
-        let grid = Grid::new(Vec2::from(s.origin), s.cell, s.cells(), s.periodic);
+        let grid = Grid::new(Vec2::from(s.origin), s.cell, s.cells(), s.periodic)
+            .with_no_slip(s.no_slip_mask());
         let n = particles.len();
         let chunks = par::chunk_count(n);
         let cull_rules = CullRules::of(s, cfg.method.j_update);

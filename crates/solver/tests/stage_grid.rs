@@ -219,3 +219,62 @@ fn threshold_out_of_range_is_refused() {
         cfg.validate().unwrap();
     }
 }
+
+/// A no-slip floor: the grid velocity on the floor's nodes is zero in both
+/// components after every update, and a block sliding on it loses its
+/// tangential momentum; refused on a periodic axis.
+#[test]
+fn a_no_slip_floor_stops_the_fluid_at_the_wall() {
+    let run = |no_slip: Vec<Wall>| {
+        let mut scene =
+            common::box_scene([0.6, 0.3], [0.1, 0.0, 0.3, 0.1], Material::tait(1e5), 9.81);
+        scene.bodies[0].velocity = [1.0, 0.0];
+        scene.no_slip = no_slip;
+        let mut s = common::solver(
+            scene,
+            common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl),
+        );
+        let mut floor_speed: f64 = 0.0;
+        for _ in 0..100 {
+            s.step().unwrap();
+            let v = s.view();
+            let g = v.grid;
+            for &n in g.active {
+                let y = g.padded_origin.y + (n as usize / g.dims[0]) as f64 * g.h;
+                if y.abs() < 1e-12 && g.mass[n as usize] > 0.0 {
+                    floor_speed = floor_speed.max(g.velocity[n as usize].norm());
+                }
+            }
+        }
+        let v = s.view();
+        let px: f64 = v.v.iter().zip(v.mass).map(|(u, m)| u.x * m).sum();
+        (floor_speed, px, v.mass.iter().sum::<f64>())
+    };
+    let (free_speed, free_px, mass) = run(vec![]);
+    let (stuck_speed, stuck_px, _) = run(vec![Wall::Floor]);
+    assert_eq!(stuck_speed, 0.0, "no-slip floor nodes move");
+    assert!(
+        free_speed > 0.5,
+        "free-slip floor nodes slide: {free_speed}"
+    );
+    assert!(
+        (free_px / mass - 1.0).abs() < 1e-9,
+        "free slip keeps x momentum: {free_px}"
+    );
+    assert!(
+        stuck_px < 0.95 * free_px,
+        "no slip drags: {stuck_px} vs {free_px}"
+    );
+    // On a periodic axis there is no wall to stick to.
+    let mut scene = common::box_scene([0.6, 0.3], [0.1, 0.0, 0.3, 0.1], Material::tait(1e5), 9.81);
+    scene.periodic = [true, false];
+    scene.no_slip = vec![Wall::Left];
+    let err = Solver::new(SolverConfig {
+        scene,
+        method: Method::baseline(),
+        perturb: vec![],
+    })
+    .err()
+    .unwrap();
+    assert_eq!(err.key, "scene.no_slip");
+}

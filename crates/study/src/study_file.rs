@@ -381,6 +381,11 @@ fn name_part(key: &str, v: &Value) -> String {
         ("K", Value::Float(_) | Value::Integer(_)) => format!("K{}", si_pascal(as_f64(v))),
         ("viscosity", _) => format!("mu{}", as_f64(v)),
         ("cell", Value::Float(_)) => format!("h{}cm", 100.0 * as_f64(v)),
+        ("no_slip", Value::Array(walls)) if walls.is_empty() => "slip".into(),
+        ("no_slip", Value::Array(walls)) => {
+            let names: Vec<String> = walls.iter().map(|w| name_part("", w)).collect();
+            format!("noslip-{}", names.join("-"))
+        }
         ("dt", Value::String(s)) if s == "dynamic" => "dyn".into(),
         (_, Value::String(s)) => s.clone(),
         // A table that changes nothing: the axis's reference value.
@@ -488,6 +493,11 @@ mod tests {
         assert_eq!(name_part("method.cfl", &toml("0.1")), "cfl0.1");
         assert_eq!(name_part("method", &toml("{}")), "base");
         assert_eq!(name_part("scene.cell", &toml("0.005")), "h0.5cm");
+        assert_eq!(name_part("scene.no_slip", &toml("[]")), "slip");
+        assert_eq!(
+            name_part("scene.no_slip", &toml("[\"floor\"]")),
+            "noslip-floor"
+        );
         assert_eq!(name_part("method", &toml("{ f_reset = true }")), "f_reset");
     }
 
