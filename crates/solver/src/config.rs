@@ -25,6 +25,8 @@ pub enum TransferKind {
     /// FLIP blended with PIC by `Method::flip_alpha` (1 = pure FLIP).
     Flip,
     Apic,
+    /// XPIC(m) (Hammerquist & Nairn 2017), m = `Method::xpic_order`.
+    Xpic,
 }
 
 /// When the stress is updated relative to the grid momentum update.
@@ -364,6 +366,8 @@ pub struct Method {
     pub j_bar: f64,
     /// Pressure smoothing through the nodes (CB-Geo's option).
     pub pressure_smoothing: bool,
+    /// The order m of `transfer = "xpic"` (1 = PIC).
+    pub xpic_order: u32,
 }
 
 impl Default for Method {
@@ -383,6 +387,7 @@ impl Default for Method {
             cell_dilatation: 0.0,
             j_bar: 0.0,
             pressure_smoothing: false,
+            xpic_order: 2,
         }
     }
 }
@@ -484,6 +489,7 @@ impl SolverConfig {
             within(dt, 1e-12, 1.0, "method.dt_value")?;
         }
         within(m.cell_dilatation, 0.0, 1.0, "method.cell_dilatation")?;
+        within(m.xpic_order as f64, 1.0, 16.0, "method.xpic_order")?;
         within(m.j_bar, 0.0, 1.0, "method.j_bar")?;
         check(
             m.cell_dilatation == 0.0 || m.j_bar == 0.0,

@@ -32,6 +32,7 @@ mod stage_sort;
 mod stage_stress;
 pub mod stage_times;
 pub mod timestep;
+pub mod transfer_xpic;
 mod view;
 pub mod viscosity;
 
@@ -140,6 +141,8 @@ pub struct Solver {
     culled: Vec<Culled>,
     /// Scratch of the volumetric remedies (empty when none is on).
     volumetric: remedy_volumetric::Scratch,
+    /// Scratch of XPIC(m) (empty for the other transfers).
+    xpic: transfer_xpic::Scratch,
 }
 
 impl Solver {
@@ -201,7 +204,11 @@ impl Solver {
             losses: Losses::default(),
             culled: Vec::with_capacity(n),
             volumetric: remedy_volumetric::Scratch::default(),
+            xpic: transfer_xpic::Scratch::default(),
         };
+        if solver.cfg.method.transfer == TransferKind::Xpic {
+            solver.xpic = transfer_xpic::Scratch::new(&solver.grid, n);
+        }
         let m = &solver.cfg.method;
         if m.cell_dilatation > 0.0 || m.j_bar > 0.0 || m.pressure_smoothing {
             solver.volumetric = remedy_volumetric::Scratch::new(&solver.grid, n);

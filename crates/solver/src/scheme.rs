@@ -153,9 +153,21 @@ fn volumetric_remedies(s: &mut Solver) {
 }
 
 fn g2p(s: &mut Solver, clock: &mut Instant) {
+    let xpic = s.cfg.method.transfer == TransferKind::Xpic;
+    if xpic {
+        let order = s.cfg.method.xpic_order;
+        crate::transfer_xpic::smooth(
+            &mut s.particles,
+            &s.stencils,
+            &s.shape,
+            &s.grid,
+            order,
+            &mut s.xpic,
+        );
+    }
     let transfer = stage_g2p::Transfer {
         kind: s.cfg.method.transfer,
-        flip_alpha: s.cfg.method.flip_alpha,
+        flip_alpha: if xpic { 1.0 } else { s.cfg.method.flip_alpha },
     };
     stage_g2p::g2p(
         &mut s.particles,

@@ -34,6 +34,8 @@ pub fn g2p(
         TransferKind::Pic => PIC,
         TransferKind::Flip if transfer.flip_alpha > 0.0 => FLIP,
         TransferKind::Flip => PIC,
+        // The particle velocity is S v* already: FLIP's increment on top.
+        TransferKind::Xpic => FLIP,
         TransferKind::Apic if shape.apic_inverse_inertia().is_some() => APIC_SPLINE,
         TransferKind::Apic => APIC_GRADIENT,
     };
