@@ -64,7 +64,7 @@ fn project<const W: usize>(
     stencils: &[Stencil],
     shape: &Shape,
     grid: &Grid,
-    out: &mut Vec<Vec2>,
+    out: &mut [Vec2],
 ) {
     let nx = grid.dims[0];
     for &n in &grid.active {
