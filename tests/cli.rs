@@ -332,6 +332,54 @@ fn bench_prints_one_json_line() {
     assert!(v["monitor_seconds"].as_f64().unwrap() > 0.0);
     let with = v["particle_steps_per_s_with_monitor"].as_f64().unwrap();
     assert!(with > 0.0 && with < v["particle_steps_per_s"].as_f64().unwrap());
+    assert_eq!(v["particles_outside_max"], 0);
+    assert!(v["blow_out"].is_null());
+}
+
+#[test]
+fn bench_set_times_a_remedy_and_refuses_a_bad_key() {
+    let args = |set: &str| -> Vec<String> {
+        [
+            "bench",
+            "--scene",
+            "dam-break",
+            "--steps",
+            "5",
+            "--shape",
+            "bspline2",
+            "--transfer",
+            "apic",
+            "--set",
+            set,
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    let run = |set: &str| {
+        let a = args(set);
+        kick(&a.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let o = run("method.f_reset=true");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value =
+        serde_json::from_str(String::from_utf8(o.stdout).unwrap().trim()).unwrap();
+    assert_eq!(v["method_sets"][0], "method.f_reset=true");
+    // MLS on linear shapes, an unknown key, a scene key: exit 2, named.
+    let o = kick(&[
+        "bench",
+        "--scene",
+        "dam-break",
+        "--steps",
+        "5",
+        "--set",
+        "method.force=mls",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("method.force"), "{}", stderr(&o));
+    for bad in ["method.no_such_key=1", "scene.cell=0.02"] {
+        let o = run(bad);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {}", stderr(&o));
+    }
 }
 
 const SMALL_MATRIX: &str = r#"

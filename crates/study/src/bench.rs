@@ -24,6 +24,38 @@ pub struct BenchOptions {
     pub transfer: TransferKind,
     /// Dam-break cell size (m).
     pub cell: f64,
+    /// `method.KEY=VALUE` overrides (remedies), applied to either scene.
+    pub method_sets: Vec<String>,
+}
+
+/// Applies `method.KEY=VALUE` overrides through the study file's own serde types.
+fn apply_method_sets(method: &mut Method, sets: &[String]) -> Result<(), String> {
+    if sets.is_empty() {
+        return Ok(());
+    }
+    let mut table = toml::Value::try_from(&*method).map_err(|e| e.to_string())?;
+    for set in sets {
+        let (key, value) = set
+            .split_once('=')
+            .ok_or_else(|| format!("--set {set}: expected method.KEY=VALUE"))?;
+        let key = key
+            .trim()
+            .strip_prefix("method.")
+            .ok_or_else(|| format!("--set {set}: only method.* keys apply to a benchmark"))?;
+        let value: toml::Value = format!("v = {}", value.trim())
+            .parse::<toml::Table>()
+            .ok()
+            .and_then(|mut t| t.remove("v"))
+            .unwrap_or_else(|| toml::Value::String(value.trim().to_string()));
+        table
+            .as_table_mut()
+            .expect("a method is a table")
+            .insert(key.to_string(), value);
+    }
+    *method = table
+        .try_into()
+        .map_err(|e: toml::de::Error| format!("--set: {}", e.message()))?;
+    Ok(())
 }
 
 /// The mpm88 scene: 8192 particles (fixed seed) in [0.2, 0.6]^2 of a unit box,
@@ -47,11 +79,18 @@ pub fn mpm88_sized(n_particles: usize, n_grid: usize) -> (SolverConfig, Particle
         size: [(n_grid - 6) as f64 * h, (n_grid - 6) as f64 * h],
         cell: h,
         ppc: 2,
-        t_end: 1e9,
+        // Longer than any benchmark (5e7 steps), within the validated range.
+        t_end: 1e4,
         gravity: 9.8,
         initial: InitialState::ZeroStress,
         periodic: [false, false],
-        bodies: vec![],
+        // The particles are seeded below (random, as the original); the body
+        // records where, for validation.
+        bodies: vec![solver::Body {
+            rect: [0.2, 0.2, 0.6, 0.6],
+            material: String::new(),
+            velocity: [0.0, -1.0],
+        }],
         materials: vec![mat],
         ..Scene::default()
     };
@@ -90,6 +129,19 @@ pub fn mpm88_sized(n_particles: usize, n_grid: usize) -> (SolverConfig, Particle
     )
 }
 
+/// The benchmark's configuration with the overrides applied, validated (bad
+/// input is refused before any work).
+pub fn validate(opts: &BenchOptions) -> Result<(), String> {
+    let mut cfg = match opts.scene {
+        BenchScene::Mpm88 => mpm88().0,
+        BenchScene::DamBreak => {
+            SolverConfig::benchmark_dam_break(opts.shape, opts.transfer, opts.cell)
+        }
+    };
+    apply_method_sets(&mut cfg.method, &opts.method_sets)?;
+    cfg.validate().map_err(|e| e.to_string())
+}
+
 pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads)
@@ -98,21 +150,24 @@ pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
     pool.install(|| {
         let (mut solver, name, shape, transfer) = match opts.scene {
             BenchScene::Mpm88 => {
-                let (cfg, ps) = mpm88();
+                let (mut cfg, ps) = mpm88();
+                apply_method_sets(&mut cfg.method, &opts.method_sets)?;
+                cfg.validate().map_err(|e| e.to_string())?;
                 let (shape, transfer) = (cfg.method.shape, cfg.method.transfer);
                 (Solver::with_particles(cfg, ps), "mpm88", shape, transfer)
             }
-            BenchScene::DamBreak => (
-                Solver::new(SolverConfig::benchmark_dam_break(
-                    opts.shape,
-                    opts.transfer,
-                    opts.cell,
-                ))
-                .map_err(|e| e.to_string())?,
-                "dam_break",
-                opts.shape,
-                opts.transfer,
-            ),
+            BenchScene::DamBreak => {
+                let mut cfg =
+                    SolverConfig::benchmark_dam_break(opts.shape, opts.transfer, opts.cell);
+                apply_method_sets(&mut cfg.method, &opts.method_sets)?;
+                let (shape, transfer) = (cfg.method.shape, cfg.method.transfer);
+                (
+                    Solver::new(cfg).map_err(|e| e.to_string())?,
+                    "dam_break",
+                    shape,
+                    transfer,
+                )
+            }
         };
         // Warm-up outside the timing (caches, rayon workers).
         for _ in 0..10 {
@@ -154,6 +209,7 @@ pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
         let ns = |t: f64| 1e9 * t / ps;
         Ok(json!({
             "scene": name,
+            "method_sets": opts.method_sets,
             "shape": shape,
             "transfer": transfer,
             "particles": n,

@@ -112,6 +112,9 @@ enum Command {
         /// Cell size in metres (dam_break only; 0.0025 gives 51 200 particles).
         #[arg(long, default_value_t = 0.01)]
         cell: f64,
+        /// Any `method.*` study key, e.g. --set method.f_reset=true (a remedy's cost).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
 }
 
@@ -340,6 +343,7 @@ fn main() -> ExitCode {
             shape,
             transfer,
             cell,
+            set,
         } => {
             if threads == 0 || steps == 0 {
                 return bad_input("--threads and --steps must be >= 1");
@@ -354,7 +358,11 @@ fn main() -> ExitCode {
                 shape,
                 transfer,
                 cell,
+                method_sets: set,
             };
+            if let Err(e) = bench::validate(&opts) {
+                return bad_input(&e);
+            }
             match bench::run(&opts) {
                 Ok(line) => {
                     println!("{line}");
