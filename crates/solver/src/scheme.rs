@@ -128,6 +128,7 @@ fn stress(s: &mut Solver, which: StressVelocity, clock: &mut Instant) {
         dt: s.dt,
         mls: s.cfg.method.force == ForceKind::Mls,
         f_reset: s.cfg.method.f_reset,
+        drop_inverted: s.cfg.scene.on_inversion == crate::config::OnLoss::Delete,
     };
     s.dissipated += stage_stress::update(&inputs, &mut s.particles, &mut s.partials1);
     volumetric_remedies(s);

@@ -23,6 +23,10 @@ pub struct Inputs<'a> {
     pub mls: bool,
     /// F <- J^(1/2) I after the update (`method.f_reset`).
     pub f_reset: bool,
+    /// `scene.on_inversion = "delete"`: a particle that inverts here carries
+    /// no stress (it is deleted at the end of the step; under USF its
+    /// singular pressure would otherwise push its neighbours this step).
+    pub drop_inverted: bool,
 }
 
 /// Updates F, J, V, stress, pressure and |dev D|; returns the viscous work of this step.
@@ -77,6 +81,7 @@ fn run<const W: usize>(
         dt,
         mls,
         f_reset,
+        drop_inverted,
     } = *inputs;
     let nx = grid.dims[0];
     let inv_h = 1.0 / grid.h;
@@ -156,6 +161,15 @@ fn run<const W: usize>(
                 }
                 for (s, &p) in stress.iter_mut().zip(pressure.iter()) {
                     *s -= p * Mat2::identity();
+                }
+                if drop_inverted {
+                    for k in 0..f.len() {
+                        if !(j[k] > 0.0) || (j_update == JUpdate::Exp && f[k].determinant() <= 0.0)
+                        {
+                            stress[k] = Mat2::zeros();
+                            pressure[k] = 0.0;
+                        }
+                    }
                 }
                 work[0] = acc;
             },

@@ -118,3 +118,40 @@ fn an_inverted_particle_is_deleted_under_delete() {
     assert!(v.culled.iter().all(|c| c.reason == CullReason::Inverted));
     assert!(v.id.windows(2).all(|w| w[0] < w[1]), "ids stay in order");
 }
+
+/// Under `on_inversion = "delete"` a particle that inverts in the stress
+/// stage carries no stress (under USF it would push its neighbours in that
+/// very step before being deleted); under "stop" its stress is kept for the
+/// monitor to see.
+#[test]
+fn an_inverting_particle_carries_no_stress_under_delete() {
+    let stress_of_inverted = |on_inversion: OnLoss| {
+        let mut scene =
+            common::box_scene([1.0, 1.0], [0.3, 0.3, 0.7, 0.7], Material::new(1e5), 0.0);
+        scene.on_inversion = on_inversion;
+        let cfg = SolverConfig {
+            scene: scene.clone(),
+            method: common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usf),
+            perturb: vec![],
+        };
+        let mut ps = solver::scene::seed(&scene);
+        let victim = ps.len() / 3;
+        ps.f[victim] = Mat2::new(-0.1, 0.0, 0.0, 1.0);
+        ps.j[victim] = -0.1;
+        let mut s = Solver::with_particles(cfg, ps);
+        s.run_stage(Stage::Sort).unwrap();
+        s.run_stage(Stage::Stress).unwrap();
+        let v = s.view();
+        (v.stress[victim], v.pressure[victim], v.stress[victim + 1])
+    };
+    let (kept, p_kept, _) = stress_of_inverted(OnLoss::Stop);
+    assert!(kept.norm() > 1e5 && p_kept != 0.0, "{kept}");
+    let (dropped, p_dropped, neighbour) = stress_of_inverted(OnLoss::Delete);
+    assert_eq!(dropped, Mat2::zeros());
+    assert_eq!(p_dropped, 0.0);
+    assert_eq!(
+        neighbour,
+        Mat2::zeros(),
+        "a particle at J = 1 has no stress either way"
+    );
+}
