@@ -164,7 +164,9 @@ fn run<const W: usize>(
                 }
                 if drop_inverted {
                     for k in 0..f.len() {
-                        if !(j[k] > 0.0) || (j_update == JUpdate::Exp && f[k].determinant() <= 0.0)
+                        if j[k].is_nan()
+                            || j[k] <= 0.0
+                            || (j_update == JUpdate::Exp && f[k].determinant() <= 0.0)
                         {
                             stress[k] = Mat2::zeros();
                             pressure[k] = 0.0;
