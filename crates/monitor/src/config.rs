@@ -21,9 +21,10 @@ pub struct MonitorConfig {
     pub ke_spike_ratio: f64,
     /// ... with the recent maximum floored by 1/2 m v_q^2 at this speed (m/s).
     pub quiescent_speed: f64,
-    /// Steps over which a particle's kinetic-energy history decays (1/e): a
-    /// spike is a jump within a few steps, whatever their size.
-    pub ke_history_steps: f64,
+    /// Seconds over which a particle's kinetic-energy history decays (1/e): a
+    /// spike is a jump within this time (a window in seconds: dt differs 80x
+    /// across the bug-report matrix).
+    pub ke_history_seconds: f64,
     /// Hallmark, quiescent before: over `quiet_seconds` before onset the
     /// particle was never faster than `quiet_speed` (m/s; 0.05 sqrt(g H) at
     /// H = 0.4 m) nor deformed faster than `quiet_rate` (in-plane |dev D|, 1/s).
@@ -39,20 +40,20 @@ pub struct MonitorConfig {
     /// Clusters with fewer flagged particles are noise, not kicks (default: one
     /// cell's worth at 2 x 2 particles per cell).
     pub min_cluster_particles: usize,
-    /// Events closer than this many cells, and than this many steps or
-    /// seconds (stiff cases take tiny steps), are merged.
+    /// Events closer than this many cells, and than this many seconds (a
+    /// window in seconds: stiff cases take tiny steps), are merged.
     pub merge_cells: usize,
-    pub merge_steps: u64,
     pub merge_seconds: f64,
     /// Events stored per run; later openings are only counted, per step
     /// (blow-outs are always stored).
     pub max_events: usize,
     /// Particle ids kept per event (the count is always exact).
     pub max_event_ids: usize,
-    /// Energy injected within `injection_window` steps counts as an event when it
-    /// exceeds this multiple of the explicit-stepping noise floor.
+    /// Energy injected within the last `injection_seconds` (at most the last
+    /// `step_history::CAPACITY` steps) counts as an event when it exceeds this
+    /// multiple of the explicit-stepping noise floor.
     pub injection_floor_factor: f64,
-    pub injection_window: u64,
+    pub injection_seconds: f64,
     /// Blow-out: a particle faster than this multiple of sqrt(2 g H_box).
     pub escape_speed_factor: f64,
 }
@@ -67,7 +68,7 @@ impl Default for MonitorConfig {
             window_tile_cells: 4,
             ke_spike_ratio: 25.0,
             quiescent_speed: 0.05,
-            ke_history_steps: 50.0,
+            ke_history_seconds: 0.005,
             quiet_seconds: 0.05,
             quiet_speed: 0.1,
             quiet_rate: 2.0,
@@ -75,12 +76,11 @@ impl Default for MonitorConfig {
             distortion_ratio: 4.0,
             min_cluster_particles: 4,
             merge_cells: 3,
-            merge_steps: 5,
             merge_seconds: 0.01,
             max_events: 500,
             max_event_ids: 64,
             injection_floor_factor: 3.0,
-            injection_window: 20,
+            injection_seconds: 0.005,
             escape_speed_factor: 10.0,
         }
     }
@@ -106,7 +106,7 @@ impl MonitorConfig {
             kick_z,
             ke_spike_ratio,
             quiescent_speed,
-            ke_history_steps,
+            ke_history_seconds,
             quiet_seconds,
             quiet_speed,
             quiet_rate,
@@ -114,8 +114,15 @@ impl MonitorConfig {
             distortion_ratio,
             merge_seconds,
             injection_floor_factor,
+            injection_seconds,
             escape_speed_factor
         );
+        if self.injection_seconds <= 0.0 {
+            return Err((
+                "injection_seconds".to_string(),
+                format!("{} is out of range (allowed > 0)", self.injection_seconds),
+            ));
+        }
         // Counts size buffers (a window of steps, cells, events): bounded so a
         // typo is an error, not an allocation that aborts the run.
         macro_rules! count_within {
@@ -134,10 +141,8 @@ impl MonitorConfig {
             window_tile_cells: 1, 1_000;
             min_cluster_particles: 0, 1_000_000_000;
             merge_cells: 0, 1_000_000;
-            merge_steps: 0, 1_000_000_000;
             max_events: 0, 10_000_000;
             max_event_ids: 0, 1_000_000;
-            injection_window: 1, 1_000_000;
         );
         Ok(())
     }

@@ -403,6 +403,11 @@ pub struct Evidence {
     pub j_min: Option<f64>,
     #[serde(default)]
     pub speed_before: f64,
+    /// Their largest transfer jump |v - v_prev - dt a_p| at onset (m/s): the
+    /// velocity change the transfer made beside the force-driven one (a kick
+    /// can arrive through the transfer).
+    #[serde(default)]
+    pub transfer_jump: f64,
 }
 
 /// How the run went on after an event.
@@ -461,6 +466,7 @@ mod tests {
                 t_peak_dev_rate: Some(0.1),
                 j_min: Some(0.97),
                 speed_before: 0.02,
+                transfer_jump: 0.4,
             },
             outcome: Outcome::Recovered,
             state_hash: Some("00ff".into()),

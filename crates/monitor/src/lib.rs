@@ -48,10 +48,19 @@ pub struct StepReport {
     pub e_total: f64,
     /// Total minus its running minimum.
     pub energy_injected: f64,
-    /// Injection over the last `injection_window` steps, and its noise floor.
+    /// Injection over the last `injection_seconds`, and its noise floor.
     pub injection_window: f64,
     pub injection_floor: f64,
+    /// Transfer loss accumulated since t = 0: sum over steps and particles of
+    /// 1/2 m (|v_prev + dt a_p|^2 - |v|^2), the kinetic energy the transfer
+    /// took from FLIP's exact update (PIC and APIC dissipate there). It is
+    /// added to the total in every injection test, except under APIC.
+    pub transfer_loss: f64,
+    /// Largest force-driven acceleration |a_p| (in g).
     pub max_accel_g: f64,
+    /// Largest transfer jump |v - v_prev - dt a_p| (m/s): the velocity change
+    /// not driven by forces (for PIC and APIC, sum_i N_i v_i - v_prev).
+    pub max_transfer_jump: f64,
     /// Largest z computed this step (0 when no particle was a candidate).
     pub max_z: f64,
     pub max_ke_ratio: f64,
@@ -115,7 +124,7 @@ pub struct FieldMetrics {
 #[derive(Clone, Copy, Debug)]
 struct Candidate {
     p: u32,
-    /// |dv| / dt.
+    /// Force-driven |a_p|.
     a: f64,
     /// NaN until scored (a gaining candidate above `kick_accel_g`), 0 when not scored.
     z: f64,
@@ -127,16 +136,15 @@ struct Candidate {
 /// The thresholds of the per-particle pass, from the config, g and dt.
 #[derive(Clone, Copy, Debug)]
 struct ScanThresholds {
-    /// Per-step decay of the kinetic-energy history.
+    /// Per-step decay of the kinetic-energy history, exp(-dt / ke_history_seconds).
     decay: f64,
     /// Quiescent speed squared (floors the kinetic-energy history as 1/2 m v_q^2).
     quiescent2: f64,
     /// Hallmark activity thresholds: quiet_speed squared, and quiet_rate.
     quiet_speed2: f64,
     quiet_rate: f64,
-    inv_dt: f64,
-    /// Squared velocity jump of a candidate: (accel_candidate_g g dt)^2.
-    candidate_dv2: f64,
+    /// Squared acceleration of a candidate: (accel_candidate_g g)^2.
+    candidate_a2: f64,
     /// det F differs from J (the exp J update): check it apart for inversion.
     det_apart: bool,
     ke_spike_ratio: f64,
@@ -148,29 +156,28 @@ impl ScanThresholds {
     fn new(cfg: &MonitorConfig, g: f64, dt: f64, det_apart: bool) -> Self {
         let candidate_a = cfg.accel_candidate_g * g;
         ScanThresholds {
-            decay: (-1.0 / cfg.ke_history_steps.max(1.0)).exp(),
+            decay: (-dt / cfg.ke_history_seconds.max(1e-300)).exp(),
             quiescent2: cfg.quiescent_speed * cfg.quiescent_speed,
             quiet_speed2: cfg.quiet_speed * cfg.quiet_speed,
             quiet_rate: cfg.quiet_rate,
-            inv_dt: 1.0 / dt,
-            candidate_dv2: (candidate_a * dt).powi(2),
+            candidate_a2: candidate_a * candidate_a,
             det_apart,
             ke_spike_ratio: cfg.ke_spike_ratio,
             kick_a: cfg.kick_accel_g * g,
         }
     }
 
-    /// The candidate particle `p` (velocity jump dv2 >= candidate_dv2), or None
+    /// The candidate particle `p` (squared acceleration a2 >= candidate_a2), or None
     /// when no rule fired and no z is to come. `gaining`: its kinetic energy grew.
     fn candidate(
         &self,
         p: usize,
-        dv2: f64,
+        a2: f64,
         ke_ratio: f64,
         gaining: bool,
         calm: Calm,
     ) -> Option<Candidate> {
-        let a = dv2.sqrt() * self.inv_dt;
+        let a = a2.sqrt();
         let mut rules = Rules::NONE;
         if ke_ratio >= self.ke_spike_ratio {
             rules.insert(Rule::KeSpike);
@@ -192,7 +199,10 @@ impl ScanThresholds {
 struct Scan {
     max_ratio: f64,
     max_speed2: f64,
-    max_dv2: f64,
+    max_a2: f64,
+    /// Largest squared transfer jump, and this step's transfer loss.
+    max_jump2: f64,
+    transfer_loss: f64,
     j_min: f64,
     j_max: f64,
     /// Smallest det F (J <= 0 or det F <= 0 is an inversion; the exp J update keeps J > 0).
@@ -208,7 +218,9 @@ impl Scan {
         Scan {
             max_ratio: 0.0,
             max_speed2: 0.0,
-            max_dv2: 0.0,
+            max_a2: 0.0,
+            max_jump2: 0.0,
+            transfer_loss: 0.0,
             j_min: f64::INFINITY,
             j_max: f64::NEG_INFINITY,
             det_min: f64::INFINITY,
@@ -260,6 +272,8 @@ struct Cluster {
     j_min: f64,
     /// Largest speed of its particles at the start of the step.
     speed_before: f64,
+    /// Largest transfer jump of its particles this step (m/s).
+    transfer_jump: f64,
 }
 
 impl Cluster {
@@ -279,6 +293,7 @@ impl Cluster {
             peak_rate_t: particle_history::NEVER,
             j_min: f64::INFINITY,
             speed_before: 0.0,
+            transfer_jump: 0.0,
         }
     }
 }
@@ -287,7 +302,7 @@ impl Cluster {
 pub struct Monitor {
     pub cfg: MonitorConfig,
     pub geom: Geometry,
-    /// |dv| / dt per particle, filled only on steps that need it (`fill_accel`).
+    /// Force-driven |a_p| per particle, filled only on steps that need it (`fill_accel`).
     accel: Vec<f64>,
     accel_step: Option<u64>,
     flagged: Vec<Candidate>,
@@ -317,6 +332,8 @@ pub struct Monitor {
     ids: Vec<u32>,
     /// Mass at t = 0, deleted particles included.
     initial_mass: f64,
+    /// Transfer loss accumulated since t = 0 (see `StepReport::transfer_loss`).
+    transfer_loss: f64,
 }
 
 /// Nodes lighter than this fraction of a full cell's mass rho0 h^2 are left
@@ -347,7 +364,7 @@ impl Monitor {
             bins: CellBins::new(&geom, n),
             stats: WindowStats::new(&geom, n),
             history: ParticleHistory::new(n),
-            energy: EnergyBudget::new(v.energy.total(), cfg.injection_window as usize),
+            energy: EnergyBudget::new(v.energy.total(), v.time, cfg.injection_seconds),
             cell_label: vec![UNLABELLED; cells],
             touched: Vec::with_capacity(cells),
             stack: Vec::with_capacity(cells),
@@ -365,6 +382,7 @@ impl Monitor {
             prev_time: v.time,
             ids: v.id.to_vec(),
             initial_mass: v.mass.iter().sum::<f64>() + v.losses.mass(),
+            transfer_loss: 0.0,
             geom,
             cfg,
         }
@@ -402,14 +420,14 @@ impl Monitor {
         }
     }
 
-    /// Acceleration |v - v_prev| / dt of every particle for this step (once).
+    /// Force-driven |a_p| of every particle for this step (once).
     fn fill_accel(&mut self, v: &StateView) {
         if self.accel_step == Some(v.step) {
             return;
         }
-        let inv_dt = 1.0 / v.dt.max(1e-300);
-        for (a, (vn, vp)) in self.accel.iter_mut().zip(v.v.iter().zip(v.v_prev)) {
-            *a = (vn - vp).norm() * inv_dt;
+        self.accel.resize(v.accel.len(), 0.0);
+        for (a, acc) in self.accel.iter_mut().zip(v.accel) {
+            *a = acc.norm();
         }
         self.accel_step = Some(v.step);
     }
@@ -432,7 +450,19 @@ impl Monitor {
             0.0
         };
         self.flagged.retain(|c| !c.rules.is_empty());
-        let injection = self.energy.observe(v.energy.total());
+        if scan.transfer_loss.is_finite() {
+            self.transfer_loss += scan.transfer_loss;
+        }
+        // The transfer's dissipation must not hide a gain elsewhere. Under
+        // APIC the particle kinetic energy leaves out the affine velocity's,
+        // so energy moved into C would count as lost (a floor impact then
+        // reads as an injection): logged, not added.
+        let loss = if v.transfer == solver::TransferKind::Apic {
+            0.0
+        } else {
+            self.transfer_loss
+        };
+        let injection = self.energy.observe(v.time, v.energy.total() + loss);
         let floor =
             solver::energy::injection_noise_floor(self.initial_mass, g, self.geom.size.y, dt);
         let (min_node_mass_ratio, max_node_a, max_node_speed) = self.grid_figures(v);
@@ -460,7 +490,9 @@ impl Monitor {
             energy_injected: injection.total,
             injection_window: injection.window,
             injection_floor: floor,
-            max_accel_g: scan.max_dv2.sqrt() * (1.0 / dt) / g,
+            transfer_loss: self.transfer_loss,
+            max_accel_g: scan.max_a2.sqrt() / g,
+            max_transfer_jump: scan.max_jump2.sqrt(),
             max_z,
             max_ke_ratio: scan.max_ratio,
             max_speed,
@@ -491,9 +523,10 @@ impl Monitor {
         let mut s = Scan::new();
         self.flagged.clear();
         // Every slice cut to n up front: no bounds checks in the loop.
-        let (vel, vel_prev, mass, jac, dev_rate, def) = (
+        let (vel, vel_prev, accel, mass, jac, dev_rate, def) = (
             &v.v[..n],
             &v.v_prev[..n],
+            &v.accel[..n],
             &v.mass[..n],
             &v.j[..n],
             &v.dev_rate[..n],
@@ -501,11 +534,15 @@ impl Monitor {
         );
         let h = &mut self.history;
         for p in 0..n {
-            // Squared velocity jumps compared against (a dt)^2: no root per particle.
-            let dv2 = (vel[p] - vel_prev[p]).norm_squared();
-            s.max_dv2 = s.max_dv2.max(dv2);
-            let candidate = dv2 >= t.candidate_dv2;
+            // Squared accelerations compared against a^2: no root per particle.
+            let a2 = accel[p].norm_squared();
+            s.max_a2 = s.max_a2.max(a2);
+            let candidate = a2 >= t.candidate_a2;
             let speed2 = vel[p].norm_squared();
+            // FLIP's exact update against what the transfer gave.
+            let flip = vel_prev[p] + dt * accel[p];
+            s.max_jump2 = s.max_jump2.max((vel[p] - flip).norm_squared());
+            s.transfer_loss += 0.5 * mass[p] * (flip.norm_squared() - speed2);
             let prev2 = vel_prev[p].norm_squared();
             let e = 0.5 * mass[p] * speed2;
             let ke_ref = h.ke_recent[p].max(0.5 * mass[p] * t.quiescent2);
@@ -520,7 +557,7 @@ impl Monitor {
             h.record(p, time, prev_time, active, rate);
             if candidate {
                 let calm = h.calm(p, time, grace);
-                if let Some(c) = t.candidate(p, dv2, ratio, speed2 > prev2, calm) {
+                if let Some(c) = t.candidate(p, a2, ratio, speed2 > prev2, calm) {
                     s.need_z |= c.z.is_nan();
                     self.flagged.push(c);
                 }
@@ -658,11 +695,11 @@ impl Monitor {
                 EventKind::NonFinite => Outcome::NonFinite,
                 _ => Outcome::BlowOut,
             });
-        let (merge_steps, merge_seconds) = (self.cfg.merge_steps, self.cfg.merge_seconds);
+        let merge_seconds = self.cfg.merge_seconds;
         for e in self
             .events
             .iter_mut()
-            .filter(|e| e.last_step + merge_steps >= v.step || e.last_t + merge_seconds >= v.time)
+            .filter(|e| e.last_step == v.step || e.last_t + merge_seconds >= v.time)
         {
             e.outcome = outcome;
         }
@@ -788,6 +825,8 @@ impl Monitor {
             c.count += 1;
             c.j_min = c.j_min.min(v.j[p]);
             c.speed_before = c.speed_before.max(v.v_prev[p].norm());
+            let flip = v.v_prev[p] + v.dt * v.accel[p];
+            c.transfer_jump = c.transfer_jump.max((v.v[p] - flip).norm());
             if f.calm.quiet_for >= quiet {
                 c.quiescent += 1;
             }
@@ -833,8 +872,7 @@ impl Monitor {
         let step = v.step;
         let open = self.events.iter().rposition(|e| {
             e.kind == kind
-                && (e.last_step + self.cfg.merge_steps >= step
-                    || v.time - e.last_t <= self.cfg.merge_seconds)
+                && (e.last_step + 1 >= step || v.time - e.last_t <= self.cfg.merge_seconds)
                 && e.extent.near(&c.cells, self.cfg.merge_cells)
         });
         // The event that stops a run is always stored.
@@ -919,6 +957,7 @@ impl Monitor {
                 t_peak_dev_rate: c.peak_rate_t.is_finite().then_some(c.peak_rate_t),
                 j_min: c.j_min.is_finite().then_some(c.j_min),
                 speed_before: c.speed_before,
+                transfer_jump: c.transfer_jump,
             },
             outcome: Outcome::Recovered,
             state_hash: None,

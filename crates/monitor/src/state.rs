@@ -8,7 +8,7 @@ use crate::Monitor;
 use bincode::Options;
 use solver::checkpoint::{unseal, CheckpointError, Reader, Writer};
 
-const MAGIC: &[u8; 8] = b"KICKMON4";
+const MAGIC: &[u8; 8] = b"KICKMON5";
 
 /// The events' encoding: bincode (little-endian, varint integers, f64 bits as
 /// they are) through `Event`'s serde derive, so the checkpoint and the summary
@@ -76,12 +76,14 @@ impl Monitor {
         }
         w.u32s(&self.event_mark);
         w.f64(self.prev_time);
-        let (minimum, recent, next, filled) = self.energy.state();
+        let (minimum, times, recent, next, filled) = self.energy.state();
         w.f64(minimum);
         w.u64(recent.len() as u64);
+        w.f64s(times);
         w.f64s(recent);
         w.u64(next as u64);
         w.u64(filled as u64);
+        w.f64(self.transfer_loss);
         w.f64(self.prev_injected);
         w.u64(self.events_dropped);
         w.bytes(&encode_events(&self.events));
@@ -118,14 +120,20 @@ impl Monitor {
         r.u32s(&mut self.event_mark)?;
         self.prev_time = r.f64()?;
         let minimum = r.f64()?;
-        let mut recent = vec![0.0; r.u64()? as usize];
-        if recent.len() != self.energy.state().1.len() {
+        let len = r.u64()? as usize;
+        if len != self.energy.state().2.len() {
             return Err(CheckpointError::Truncated);
         }
+        let (mut times, mut recent) = (vec![0.0; len], vec![0.0; len]);
+        r.f64s(&mut times)?;
         r.f64s(&mut recent)?;
         let next = r.u64()? as usize;
         let filled = r.u64()? as usize;
-        self.energy.restore(minimum, &recent, next, filled);
+        if next >= len || filled > len {
+            return Err(CheckpointError::Truncated);
+        }
+        self.energy.restore(minimum, &times, &recent, next, filled);
+        self.transfer_loss = r.f64()?;
         self.prev_injected = r.f64()?;
         self.events_dropped = r.u64()?;
         let mut events = decode_events(r.bytes()?)?;
@@ -188,6 +196,7 @@ mod tests {
                 t_peak_dev_rate: None,
                 j_min: Some(-0.0),
                 speed_before: 1e-300,
+                transfer_jump: f64::INFINITY,
             },
             outcome: crate::events::Outcome::NonFinite,
             state_hash: None,

@@ -36,8 +36,8 @@ fn pushes_within_merge_seconds_are_one_event_and_two_without_it() {
     let col = common::column();
     let dt = Solver::new(col.cfg.clone()).unwrap().next_dt();
     let cfg = MonitorConfig::default();
-    // The second push is past merge_steps but well within merge_seconds.
-    assert!(GAP > cfg.merge_steps && (GAP as f64) * dt < 0.5 * cfg.merge_seconds);
+    // The second push is well within merge_seconds.
+    assert!((GAP as f64) * dt < 0.5 * cfg.merge_seconds);
     let steps = FIRST + GAP + 60;
     let (merged, _) = common::run_window(&col.cfg, &col.start, &col.monitor, two_pushes(), steps);
     assert_eq!(kicks(&merged), 1, "{:#?}", merged.events());
@@ -45,13 +45,14 @@ fn pushes_within_merge_seconds_are_one_event_and_two_without_it() {
     assert_eq!(e.first_step, FIRST);
     assert!(e.last_step >= FIRST + GAP, "{e:?}");
 
-    let mut by_steps = col.monitor.clone();
-    by_steps.cfg.merge_seconds = 0.0;
-    let (split, _) = common::run_window(&col.cfg, &col.start, &by_steps, two_pushes(), steps);
+    let mut shorter = col.monitor.clone();
+    // A window shorter than the gap, still spanning a few steps.
+    shorter.cfg.merge_seconds = 0.25 * GAP as f64 * dt;
+    let (split, _) = common::run_window(&col.cfg, &col.start, &shorter, two_pushes(), steps);
     assert_eq!(kicks(&split), 2, "{:#?}", split.events());
     assert_eq!(split.events_dropped(), 0);
 
-    let mut capped = by_steps.clone();
+    let mut capped = shorter.clone();
     capped.cfg.max_events = 1;
     let (one, _) = common::run_window(&col.cfg, &col.start, &capped, two_pushes(), steps);
     assert_eq!(one.events().len(), 1, "{:#?}", one.events());

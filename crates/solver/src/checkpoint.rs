@@ -6,7 +6,7 @@ use crate::particles::{Mat2, Particles, Vec2};
 use crate::Solver;
 
 const MAGIC: &[u8; 8] = b"KICKSTAT";
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum CheckpointError {
@@ -284,6 +284,7 @@ pub fn save(s: &Solver) -> Vec<u8> {
     w.vec2s(&ps.x);
     w.vec2s(&ps.v);
     w.vec2s(&ps.v_prev);
+    w.vec2s(&ps.accel);
     w.mat2s(&ps.affine);
     w.mat2s(&ps.f);
     w.mat2s(&ps.stress);
@@ -346,6 +347,7 @@ pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
     r.vec2s(&mut ps.x)?;
     r.vec2s(&mut ps.v)?;
     r.vec2s(&mut ps.v_prev)?;
+    r.vec2s(&mut ps.accel)?;
     r.mat2s(&mut ps.affine)?;
     r.mat2s(&mut ps.f)?;
     r.mat2s(&mut ps.stress)?;

@@ -399,7 +399,8 @@ impl Method {
     }
 }
 
-/// Fault injection (`[[perturb]]`): at step `step`, after G2P, add `dv` to every particle in `region`.
+/// Fault injection (`[[perturb]]`): at step `step`, after G2P, add `dv` to every particle in
+/// `region`, an impulse: dv / dt is also added to its force-driven acceleration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Perturb {

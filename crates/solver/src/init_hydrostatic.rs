@@ -48,6 +48,7 @@ pub fn relax(s: &mut Solver) -> Result<(), StepError> {
     let ps = &mut s.particles;
     ps.v.iter_mut().for_each(|v| *v = Vec2::zeros());
     ps.v_prev.iter_mut().for_each(|v| *v = Vec2::zeros());
+    ps.accel.iter_mut().for_each(|a| *a = Vec2::zeros());
     ps.affine.iter_mut().for_each(|c| *c = Mat2::zeros());
     result
 }

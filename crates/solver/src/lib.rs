@@ -369,9 +369,13 @@ impl Solver {
             }
             let [x0, y0, x1, y1] = pert.region;
             let dv = Vec2::from(pert.dv);
-            for (x, v) in self.particles.x.iter().zip(self.particles.v.iter_mut()) {
+            // An impulse: it drives the particle, so it is part of its force-driven acceleration.
+            let da = dv / self.dt;
+            let ps = &mut self.particles;
+            for ((x, v), a) in ps.x.iter().zip(ps.v.iter_mut()).zip(ps.accel.iter_mut()) {
                 if x.x >= x0 && x.x <= x1 && x.y >= y0 && x.y <= y1 {
                     *v += dv;
+                    *a += da;
                 }
             }
         }

@@ -12,6 +12,10 @@ pub struct Particles {
     pub v: Vec<Vec2>,
     /// Velocity at the start of the last step.
     pub v_prev: Vec<Vec2>,
+    /// Force-driven acceleration of the last step, sum_i N_i (v_i^new - v_i) / dt
+    /// (FLIP's exact increment, walls applied), plus any `[[perturb]]` impulse
+    /// over dt. The rest of v - v_prev is the transfer's own jump.
+    pub accel: Vec<Vec2>,
     /// APIC affine velocity (zero for PIC/FLIP).
     pub affine: Vec<Mat2>,
     /// Full deformation gradient (in-plane; F_zz = 1).
@@ -48,6 +52,7 @@ impl Particles {
         self.x.push(x);
         self.v.push(v);
         self.v_prev.push(v);
+        self.accel.push(Vec2::zeros());
         self.affine.push(Mat2::zeros());
         self.f.push(Mat2::identity());
         self.j.push(1.0);
@@ -87,6 +92,7 @@ impl Particles {
         self.x[to] = self.x[from];
         self.v[to] = self.v[from];
         self.v_prev[to] = self.v_prev[from];
+        self.accel[to] = self.accel[from];
         self.affine[to] = self.affine[from];
         self.f[to] = self.f[from];
         self.j[to] = self.j[from];
@@ -111,6 +117,7 @@ impl Particles {
         self.x.resize(n, Vec2::zeros());
         self.v.resize(n, Vec2::zeros());
         self.v_prev.resize(n, Vec2::zeros());
+        self.accel.resize(n, Vec2::zeros());
         self.affine.resize(n, Mat2::zeros());
         self.f.resize(n, Mat2::identity());
         self.j.resize(n, 1.0);
@@ -131,6 +138,7 @@ impl Particles {
         self.x.truncate(n);
         self.v.truncate(n);
         self.v_prev.truncate(n);
+        self.accel.truncate(n);
         self.affine.truncate(n);
         self.f.truncate(n);
         self.j.truncate(n);

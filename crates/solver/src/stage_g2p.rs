@@ -1,5 +1,7 @@
 //! Grid-to-particle transfer: particle velocity by PIC, FLIP blend or APIC,
-//! position moved with the grid velocity, periodic wrap. Sums run row by row
+//! position moved with the grid velocity, periodic wrap; and, for every
+//! transfer, the force-driven acceleration sum N_i (v_i^new - v_i) / dt that
+//! the monitor scores (docs/physics.md section 4b). Sums run row by row
 //! of the stencil (x inner), so each node costs a few multiply-adds.
 
 use crate::config::TransferKind;
@@ -71,6 +73,7 @@ fn run<const W: usize, const MODE: u8>(
     // B-splines: B is summed in cells, so C = B_cells h D^-1 = B_cells (D^-1 h^2) / h.
     let c_scale = shape.apic_inverse_inertia().unwrap_or(1.0) * inv_h;
     let alpha = transfer.flip_alpha;
+    let inv_dt = 1.0 / dt;
     let lo = grid.origin;
     let size = Vec2::new(grid.cells[0] as f64 * grid.h, grid.cells[1] as f64 * grid.h);
     let (vel, vel_new) = (&grid.vel[..], &grid.vel_new[..]);
@@ -78,11 +81,12 @@ fn run<const W: usize, const MODE: u8>(
         particles.x.par_iter_mut(),
         particles.v.par_iter_mut(),
         particles.affine.par_iter_mut(),
+        particles.accel.par_iter_mut(),
         stencils.par_iter(),
     )
         .into_par_iter()
         .pieces(crate::par::piece_len(stencils.len()))
-        .for_each(|(x, v, affine, st)| {
+        .for_each(|(x, v, affine, accel, st)| {
             let [fx, fy] = st.frac;
             let (wx, dwx) = shape.stencil_weights::<W>(fx);
             let (wy, dwy) = shape.stencil_weights::<W>(fy);
@@ -97,16 +101,16 @@ fn run<const W: usize, const MODE: u8>(
                 for a in 0..W {
                     let vn = vel_new[row + a];
                     s0 += wx[a] * vn;
+                    sd += wx[a] * (vn - vel[row + a]);
                     match MODE {
-                        FLIP => sd += wx[a] * (vn - vel[row + a]),
                         APIC_SPLINE => s1 += (wx[a] * a as f64) * vn,
                         APIC_GRADIENT => s1 += dwx[a] * vn,
                         _ => {}
                     }
                 }
                 v_pic += wy[c] * s0;
+                dv += wy[c] * sd;
                 match MODE {
-                    FLIP => dv += wy[c] * sd,
                     APIC_SPLINE => {
                         b0 += wy[c] * (s1 - fx * s0);
                         b1 += (wy[c] * (c as f64 - fy)) * s0;
@@ -118,6 +122,7 @@ fn run<const W: usize, const MODE: u8>(
                     _ => {}
                 }
             }
+            *accel = dv * inv_dt;
             *v = if MODE == FLIP {
                 alpha * (*v + dv) + (1.0 - alpha) * v_pic
             } else {

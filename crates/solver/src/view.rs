@@ -1,6 +1,6 @@
 //! The narrow read-only view of the state that the monitor observes.
 
-use crate::config::{JUpdate, Material, Scene, ShapeKind};
+use crate::config::{JUpdate, Material, Scene, ShapeKind, TransferKind};
 use crate::energy::Energy;
 use crate::particles::{Mat2, Vec2};
 use crate::stage_cull::{Culled, Losses};
@@ -35,12 +35,18 @@ pub struct StateView<'a> {
     pub materials: &'a [Material],
     /// The shape family (its critical Courant number judges time-step instability).
     pub shape: ShapeKind,
+    /// The transfer: under APIC the particles' kinetic energy leaves out the
+    /// affine velocity's, so the monitor does not add APIC's transfer loss.
+    pub transfer: TransferKind,
     /// How J follows F: under `Det`, J is det F bit for bit; under `Exp` they differ.
     pub j_update: JUpdate,
     pub x: &'a [Vec2],
     pub v: &'a [Vec2],
     /// Velocities at the start of the last step.
     pub v_prev: &'a [Vec2],
+    /// Force-driven acceleration of the last step (FLIP's exact increment over
+    /// dt, walls applied, plus `[[perturb]]` impulses over dt).
+    pub accel: &'a [Vec2],
     pub mass: &'a [f64],
     pub volume: &'a [f64],
     pub volume0: &'a [f64],
@@ -85,10 +91,12 @@ pub fn make(s: &Solver) -> StateView<'_> {
         scene: &s.cfg.scene,
         materials: &s.cfg.scene.materials,
         shape: s.cfg.method.shape,
+        transfer: s.cfg.method.transfer,
         j_update: s.cfg.method.j_update,
         x: &ps.x,
         v: &ps.v,
         v_prev: &ps.v_prev,
+        accel: &ps.accel,
         mass: &ps.mass,
         volume: &ps.vol,
         volume0: &ps.vol0,

@@ -1,6 +1,6 @@
 //! An unsupported block in free fall: v = -g t to round-off and the position
-//! within g t dt / 2 of the exact one (symplectic Euler), for every shape,
-//! transfer and scheme.
+//! within g t dt / 2 of the exact one (symplectic Euler), and a force-driven
+//! acceleration of exactly g, for every shape, transfer and scheme.
 
 use solver::*;
 
@@ -34,6 +34,9 @@ fn free_fall_is_exact() {
                     let err = (v.x[p].y - exact).abs();
                     assert!(err <= 0.5 * g * t * dt * (1.0 + 1e-9), "{tag}: {err}");
                     assert!((v.j[p] - 1.0).abs() < 1e-12, "{tag}: J {}", v.j[p]);
+                    // The force-driven acceleration is gravity alone.
+                    let a = v.accel[p] - Vec2::new(0.0, -g);
+                    assert!(a.norm() < 1e-9 * g, "{tag}: a {}", v.accel[p]);
                 }
             }
         }

@@ -11,7 +11,7 @@ pub struct Snapshot {
     pub x: Vec<Vec2>,
     pub v: Vec<Vec2>,
     pub pressure: Vec<f64>,
-    /// |dv| / dt of the last step.
+    /// Force-driven |a_p| of the last step (m/s^2).
     pub accel: Vec<f64>,
     pub j: Vec<f64>,
     pub id: Vec<u32>,
@@ -34,7 +34,6 @@ impl Snapshot {
     pub fn capture(&mut self, v: &StateView) {
         self.step = v.step;
         self.t = v.time;
-        let dt = v.dt.max(1e-300);
         self.x.clear();
         self.x.extend_from_slice(v.x);
         self.v.clear();
@@ -45,9 +44,9 @@ impl Snapshot {
         self.j.extend_from_slice(v.j);
         self.id.clear();
         self.id.extend_from_slice(v.id);
+        // The force-driven acceleration the monitor scores.
         self.accel.clear();
-        self.accel
-            .extend(v.v.iter().zip(v.v_prev).map(|(a, b)| (a - b).norm() / dt));
+        self.accel.extend(v.accel.iter().map(|a| a.norm()));
     }
 
     pub fn of(v: &StateView) -> Self {

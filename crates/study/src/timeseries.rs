@@ -17,7 +17,9 @@ pub const COLUMNS: &[&str] = &[
     "energy_injected",
     "injection_window",
     "injection_floor",
+    "transfer_loss",
     "max_accel_g",
+    "max_transfer_jump",
     "max_z",
     "max_ke_ratio",
     "max_speed",
@@ -46,6 +48,7 @@ pub const COLUMNS: &[&str] = &[
 #[derive(Clone, Copy, Debug)]
 pub struct Peaks {
     accel_g: f64,
+    transfer_jump: f64,
     z: f64,
     ke_ratio: f64,
     speed: f64,
@@ -63,6 +66,7 @@ impl Default for Peaks {
     fn default() -> Self {
         Peaks {
             accel_g: 0.0,
+            transfer_jump: 0.0,
             z: 0.0,
             ke_ratio: 0.0,
             speed: 0.0,
@@ -90,6 +94,7 @@ impl Peaks {
         self.node_mass = self.node_mass.min(r.min_node_mass_ratio);
         self.node_accel_g = self.node_accel_g.max(r.max_node_accel_g);
         self.node_advection = self.node_advection.max(r.node_advection);
+        self.transfer_jump = self.transfer_jump.max(r.max_transfer_jump);
         self.flagged += r.n_flagged;
         self.opened += r.events_opened;
     }
@@ -145,7 +150,9 @@ impl Timeseries {
             r.energy_injected,
             r.injection_window,
             r.injection_floor,
+            r.transfer_loss,
             p.accel_g,
+            p.transfer_jump,
             p.z,
             p.ke_ratio,
             p.speed,
