@@ -368,6 +368,10 @@ pub struct Method {
     pub pressure_smoothing: bool,
     /// The order m of `transfer = "xpic"` (1 = PIC).
     pub xpic_order: u32,
+    /// Null-space filter (Gritton & Berzins 2017) after G2P: the particle
+    /// velocities' consistent-mass projection onto the span of the shape
+    /// functions (FLIP only).
+    pub null_space_filter: bool,
 }
 
 impl Default for Method {
@@ -388,6 +392,7 @@ impl Default for Method {
             j_bar: 0.0,
             pressure_smoothing: false,
             xpic_order: 2,
+            null_space_filter: false,
         }
     }
 }
@@ -496,6 +501,14 @@ impl SolverConfig {
             m.cell_dilatation == 0.0 || m.j_bar == 0.0,
             "method.j_bar",
             "cannot be combined with method.cell_dilatation (two averagings of J: choose one)",
+        )?;
+        check(
+            !m.null_space_filter || m.transfer == TransferKind::Flip,
+            "method.null_space_filter",
+            format!(
+                "needs method.transfer = \"flip\" (got {:?}: PIC, APIC and XPIC velocities are already in the shape functions' span, so the filter would change nothing)",
+                m.transfer
+            ),
         )?;
         if m.force == ForceKind::Mls {
             // D = sum N (x_i - x_p)(x_i - x_p)^T is singular at the nodes for linear and uGIMP shapes.

@@ -17,6 +17,7 @@ mod init_hydrostatic;
 mod measure;
 pub mod par;
 pub mod particles;
+pub mod remedy_null_space;
 pub mod remedy_volumetric;
 pub mod scene;
 mod scheme;
@@ -143,6 +144,7 @@ pub struct Solver {
     volumetric: remedy_volumetric::Scratch,
     /// Scratch of XPIC(m) (empty for the other transfers).
     xpic: transfer_xpic::Scratch,
+    null_space: remedy_null_space::Scratch,
 }
 
 impl Solver {
@@ -205,7 +207,11 @@ impl Solver {
             culled: Vec::with_capacity(n),
             volumetric: remedy_volumetric::Scratch::default(),
             xpic: transfer_xpic::Scratch::default(),
+            null_space: remedy_null_space::Scratch::default(),
         };
+        if solver.cfg.method.null_space_filter {
+            solver.null_space = remedy_null_space::Scratch::new(&solver.grid, n);
+        }
         if solver.cfg.method.transfer == TransferKind::Xpic {
             solver.xpic = transfer_xpic::Scratch::new(&solver.grid, n);
         }

@@ -178,6 +178,15 @@ fn g2p(s: &mut Solver, clock: &mut Instant) {
         &transfer,
         s.dt,
     );
+    if s.cfg.method.null_space_filter {
+        crate::remedy_null_space::filter(
+            &mut s.particles,
+            &s.stencils,
+            &s.shape,
+            &s.grid,
+            &mut s.null_space,
+        );
+    }
     s.apply_perturbations();
     lap(&mut s.times.g2p, clock);
 }
