@@ -11,6 +11,9 @@ pub enum ShapeKind {
     Linear,
     /// Undeformed GIMP (particle half-width h / (2 ppc)).
     Gimp,
+    /// Convected-particle GIMP: the half-widths follow F's diagonal
+    /// (a suspect for "once highly deformed" mattering, not a remedy).
+    Cpgimp,
     /// Quadratic B-spline.
     Bspline2,
     /// Cubic B-spline.
@@ -509,6 +512,11 @@ impl SolverConfig {
                 "needs method.transfer = \"flip\" (got {:?}: PIC, APIC and XPIC velocities are already in the shape functions' span, so the filter would change nothing)",
                 m.transfer
             ),
+        )?;
+        check(
+            !(m.f_reset && m.shape == ShapeKind::Cpgimp),
+            "method.f_reset",
+            "cannot be combined with method.shape = \"cpgimp\" (the reset F would reshape the particle domains)",
         )?;
         if m.force == ForceKind::Mls {
             // D = sum N (x_i - x_p)(x_i - x_p)^T is singular at the nodes for linear and uGIMP shapes.

@@ -67,8 +67,8 @@ fn gather<const W: usize>(
     out: &mut [Vec2],
 ) {
     for (p, st) in stencils.iter().enumerate() {
-        let (wx, _) = shape.stencil_weights::<W>(st.frac[0]);
-        let (wy, _) = shape.stencil_weights::<W>(st.frac[1]);
+        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
         let mut sum = Vec2::zeros();
         for c in 0..W {
             let row = st.node as usize + c * nx;
@@ -94,8 +94,8 @@ fn scatter<const W: usize>(
         out[n as usize] = Vec2::zeros();
     }
     for (p, st) in stencils.iter().enumerate() {
-        let (wx, _) = shape.stencil_weights::<W>(st.frac[0]);
-        let (wy, _) = shape.stencil_weights::<W>(st.frac[1]);
+        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
         let mq = mass[p] * q[p];
         for c in 0..W {
             let row = st.node as usize + c * nx;

@@ -114,8 +114,8 @@ fn round_trip<const W: usize>(
     let nx = grid.dims[0];
     for p in 0..ps.len() {
         let st = &stencils[p];
-        let (wx, _) = shape.stencil_weights::<W>(st.frac[0]);
-        let (wy, _) = shape.stencil_weights::<W>(st.frac[1]);
+        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
         let (m, mq) = (ps.mass[p], ps.mass[p] * q[p]);
         for c in 0..W {
             let row = st.node as usize + c * nx;
@@ -128,8 +128,8 @@ fn round_trip<const W: usize>(
     }
     for p in 0..ps.len() {
         let st = &stencils[p];
-        let (wx, _) = shape.stencil_weights::<W>(st.frac[0]);
-        let (wy, _) = shape.stencil_weights::<W>(st.frac[1]);
+        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
         let mut sum = 0.0;
         for c in 0..W {
             let row = st.node as usize + c * nx;

@@ -13,6 +13,9 @@ pub const MAX_STENCIL: usize = 4;
 pub struct Stencil {
     pub node: u32,
     pub frac: [f64; 2],
+    /// GIMP particle half-width per axis in cell units (uGIMP: constant;
+    /// cpGIMP: follows F's diagonal); unused by the other families.
+    pub half: [f64; 2],
 }
 
 /// 1D weights of one particle on its stencil nodes `base .. base + width`.
@@ -27,9 +30,15 @@ pub struct Weights1d {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Shape {
     pub kind: ShapeKind,
-    /// GIMP particle half-width in cell units.
+    /// Undeformed GIMP particle half-width in cell units.
     gimp_half: f64,
 }
+
+/// cpGIMP half-widths stay within these bounds (cell units): above 1 the
+/// support would outgrow the 4-node stencil; the floor keeps the kernel's
+/// 1/(2l) well conditioned.
+pub const CPGIMP_HALF_MIN: f64 = 0.01;
+pub const CPGIMP_HALF_MAX: f64 = 1.0;
 
 impl Shape {
     pub fn new(kind: ShapeKind, ppc: usize) -> Self {
@@ -44,7 +53,21 @@ impl Shape {
         match self.kind {
             ShapeKind::Linear => 2,
             ShapeKind::Gimp | ShapeKind::Bspline2 => 3,
-            ShapeKind::Bspline3 => 4,
+            ShapeKind::Bspline3 | ShapeKind::Cpgimp => 4,
+        }
+    }
+
+    /// A particle's GIMP half-widths (cell units) for deformation gradient
+    /// `f`: cpGIMP scales the undeformed half-width by F's diagonal (F starts
+    /// at I, so this is the product of l_ii F_ii(new) / F_ii(old) over the
+    /// steps), clamped to [`CPGIMP_HALF_MIN`], [`CPGIMP_HALF_MAX`].
+    #[inline]
+    pub fn half_widths(&self, f: &crate::particles::Mat2) -> [f64; 2] {
+        match self.kind {
+            ShapeKind::Cpgimp => {
+                [0, 1].map(|a| (self.gimp_half * f[(a, a)]).clamp(CPGIMP_HALF_MIN, CPGIMP_HALF_MAX))
+            }
+            _ => [self.gimp_half; 2],
         }
     }
 
@@ -53,25 +76,39 @@ impl Shape {
         let shift = match self.kind {
             ShapeKind::Linear => 0.0,
             ShapeKind::Gimp | ShapeKind::Bspline2 => 0.5,
-            ShapeKind::Bspline3 => 1.0,
+            ShapeKind::Bspline3 | ShapeKind::Cpgimp => 1.0,
         };
         floor(xr - shift)
     }
 
-    /// Kernel value and derivative at signed distance `r` (cell units).
+    /// Kernel value and derivative at signed distance `r` (cell units), for
+    /// an undeformed particle.
     #[inline]
     pub fn kernel(&self, r: f64) -> (f64, f64) {
+        self.kernel_with_half(r, self.gimp_half)
+    }
+
+    /// Kernel value and derivative at signed distance `r` (cell units) for a
+    /// GIMP half-width `half` (used by cpGIMP only).
+    #[inline]
+    pub fn kernel_with_half(&self, r: f64, half: f64) -> (f64, f64) {
         match self.kind {
             ShapeKind::Linear => shape_linear::kernel(r),
             ShapeKind::Gimp => shape_gimp::kernel(r, self.gimp_half),
+            ShapeKind::Cpgimp => shape_gimp::kernel_any_width(r, half),
             ShapeKind::Bspline2 => shape_bspline::quadratic(r),
             ShapeKind::Bspline3 => shape_bspline::cubic(r),
         }
     }
 
-    /// Weights on the stencil of a particle at `xr` (cell units), as the
-    /// stages compute them with [`Shape::stencil_weights`].
+    /// Weights on the stencil of an undeformed particle at `xr` (cell units),
+    /// as the stages compute them with [`Shape::stencil_weights`].
     pub fn weights(&self, xr: f64) -> Weights1d {
+        self.weights_with_half(xr, self.gimp_half)
+    }
+
+    /// As [`Shape::weights`] for a GIMP half-width `half` (cpGIMP).
+    pub fn weights_with_half(&self, xr: f64, half: f64) -> Weights1d {
         let (base, f) = self.locate(xr);
         let mut out = Weights1d {
             base,
@@ -82,9 +119,9 @@ impl Shape {
             out.dw[..W].copy_from_slice(&dw);
         }
         match self.width() {
-            2 => put(&mut out, self.stencil_weights::<2>(f)),
-            3 => put(&mut out, self.stencil_weights::<3>(f)),
-            _ => put(&mut out, self.stencil_weights::<4>(f)),
+            2 => put(&mut out, self.stencil_weights::<2>(f, half)),
+            3 => put(&mut out, self.stencil_weights::<3>(f, half)),
+            _ => put(&mut out, self.stencil_weights::<4>(f, half)),
         }
         out
     }
@@ -93,8 +130,10 @@ impl Shape {
     /// `f` cells past the first one. Linear and quadratic take closed forms in
     /// `f` (no branches); the others evaluate the kernel node by node. The
     /// stages call this on the fly rather than storing weights per particle.
+    /// `half` is the particle's GIMP half-width on this axis (`Stencil::half`),
+    /// read by cpGIMP only.
     #[inline(always)]
-    pub fn stencil_weights<const W: usize>(&self, f: f64) -> ([f64; W], [f64; W]) {
+    pub fn stencil_weights<const W: usize>(&self, f: f64, half: f64) -> ([f64; W], [f64; W]) {
         let (mut w, mut dw) = ([0.0; W], [0.0; W]);
         match self.kind {
             ShapeKind::Linear if W == 2 => {
@@ -109,7 +148,7 @@ impl Shape {
             }
             _ => {
                 for k in 0..W.min(self.width()) {
-                    (w[k], dw[k]) = self.kernel(f - k as f64);
+                    (w[k], dw[k]) = self.kernel_with_half(f - k as f64, half);
                 }
             }
         }
@@ -129,7 +168,7 @@ impl Shape {
         match self.kind {
             ShapeKind::Bspline2 => Some(4.0),
             ShapeKind::Bspline3 => Some(3.0),
-            ShapeKind::Linear | ShapeKind::Gimp => None,
+            ShapeKind::Linear | ShapeKind::Gimp | ShapeKind::Cpgimp => None,
         }
     }
 }

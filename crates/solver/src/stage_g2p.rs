@@ -88,8 +88,8 @@ fn run<const W: usize, const MODE: u8>(
         .pieces(crate::par::piece_len(stencils.len()))
         .for_each(|(x, v, affine, accel, st)| {
             let [fx, fy] = st.frac;
-            let (wx, dwx) = shape.stencil_weights::<W>(fx);
-            let (wy, dwy) = shape.stencil_weights::<W>(fy);
+            let (wx, dwx) = shape.stencil_weights::<W>(fx, st.half[0]);
+            let (wy, dwy) = shape.stencil_weights::<W>(fy, st.half[1]);
             let base = st.node as usize;
             let mut v_pic = Vec2::zeros();
             let mut dv = Vec2::zeros();

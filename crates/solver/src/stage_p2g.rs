@@ -166,8 +166,8 @@ fn scatter_particle<const W: usize, const MASS: bool, const MOMENTUM: bool, cons
     let ps = inputs.particles;
     let st = &inputs.stencils[p];
     let [fx, fy] = st.frac;
-    let (wx, dwx) = inputs.shape.stencil_weights::<W>(fx);
-    let (wy, dwy) = inputs.shape.stencil_weights::<W>(fy);
+    let (wx, dwx) = inputs.shape.stencil_weights::<W>(fx, st.half[0]);
+    let (wy, dwy) = inputs.shape.stencil_weights::<W>(fy, st.half[1]);
     let base = st.node as usize;
     let m = ps.mass[p];
     // Momentum at node (a, c): N m (v + C h (a - fx, c - fy)), split into a

@@ -60,9 +60,9 @@ pub fn sort(
     let pad = crate::grid::PAD as i64;
     stencils
         .par_iter_mut()
-        .zip(particles.x.par_iter())
+        .zip(particles.x.par_iter().zip(particles.f.par_iter()))
         .pieces(crate::par::piece_len(particles.len()))
-        .for_each(|(st, x)| {
+        .for_each(|(st, (x, f))| {
             let r = (x - origin) * inv_h;
             let (bx, fx) = shape.locate(r.x);
             let (by, fy) = shape.locate(r.y);
@@ -80,6 +80,7 @@ pub fn sort(
                 OUTSIDE
             };
             st.frac = [fx, fy];
+            st.half = shape.half_widths(f);
         });
     let stencils = &*stencils;
     crate::par::keep_warm(|| {

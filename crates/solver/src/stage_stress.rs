@@ -48,8 +48,8 @@ fn velocity_gradient<const W: usize>(
     nx: usize,
     inv_h: f64,
 ) -> Mat2 {
-    let (wx, dwx) = shape.stencil_weights::<W>(st.frac[0]);
-    let (wy, dwy) = shape.stencil_weights::<W>(st.frac[1]);
+    let (wx, dwx) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+    let (wy, dwy) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
     let base = st.node as usize;
     let (mut col0, mut col1) = (Vec2::zeros(), Vec2::zeros());
     for c in 0..W {

@@ -4,7 +4,8 @@
 //! completeness conditions, on and around every stencil boundary.
 
 use solver::shape::Shape;
-use solver::ShapeKind;
+use solver::shape::{CPGIMP_HALF_MAX, CPGIMP_HALF_MIN};
+use solver::{Mat2, ShapeKind};
 
 mod common;
 
@@ -106,12 +107,13 @@ fn check_stage_weights<const W: usize>(shape: &Shape, x: f64) -> [f64; 4] {
     let eps = f64::EPSILON;
     let what = format!("{shape:?} at x = {x:e}");
     let (base, f) = shape.locate(x);
-    let (w, dw) = shape.stencil_weights::<W>(f);
+    let half = shape.half_widths(&Mat2::identity())[0];
+    let (w, dw) = shape.stencil_weights::<W>(f, half);
     // The stencil's first node and the offset range it implies.
     let lo = match shape.kind {
         ShapeKind::Linear => 0.0,
         ShapeKind::Gimp | ShapeKind::Bspline2 => 0.5,
-        ShapeKind::Bspline3 => 1.0,
+        ShapeKind::Bspline3 | ShapeKind::Cpgimp => 1.0,
     };
     assert!((lo..lo + 1.0).contains(&f), "{what}: offset {f}");
     assert_eq!(base as f64 + f, x, "{what}: base {base} + {f}");
@@ -208,4 +210,92 @@ fn stage_weights_are_complete_and_match_the_kernel() {
             );
         }
     }
+}
+
+/// cpGIMP at any half-width it may take: partition of unity, zero gradient
+/// sum, linear completeness, the derivative against finite differences,
+/// nothing outside the 4-node stencil, and uGIMP's kernel where the widths
+/// agree (the general convolution equals the closed form for l <= 1/2).
+#[test]
+fn cpgimp_any_half_width() {
+    let cp = Shape::new(ShapeKind::Cpgimp, 2);
+    for ppc in [1, 2, 3, 4] {
+        let u = Shape::new(ShapeKind::Gimp, ppc);
+        let l = u.half_widths(&Mat2::identity())[0];
+        for k in 0..801 {
+            let r = -2.0 + k as f64 * 0.005;
+            let (a, b) = (u.kernel(r), cp.kernel_with_half(r, l));
+            assert!(
+                (a.0 - b.0).abs() < 1e-14 && (a.1 - b.1).abs() < 1e-13,
+                "l {l} r {r}: uGIMP {a:?} vs cpGIMP {b:?}"
+            );
+        }
+    }
+    let mut l = CPGIMP_HALF_MIN;
+    while l <= CPGIMP_HALF_MAX {
+        for k in 0..613 {
+            let x = 7.0 + k as f64 * 0.001_63;
+            let w = cp.weights_with_half(x, l);
+            let sum: f64 = w.w.iter().sum();
+            let grad: f64 = w.dw.iter().sum();
+            let first: f64 = (0..4).map(|i| w.w[i] * (w.base + i as i64) as f64).sum();
+            let slope: f64 = (0..4).map(|i| w.dw[i] * (w.base + i as i64) as f64).sum();
+            assert!((sum - 1.0).abs() < 1e-13, "l {l} x {x}: sum {sum}");
+            assert!(grad.abs() < 1e-13, "l {l} x {x}: grad sum {grad}");
+            assert!((first - x).abs() < 1e-12, "l {l} x {x}: sum N x {first}");
+            assert!((slope - 1.0).abs() < 1e-12, "l {l} x {x}: sum dN x {slope}");
+            assert!(w.w.iter().all(|&n| n >= 0.0));
+            for node in [w.base - 1, w.base + 4] {
+                assert_eq!(cp.kernel_with_half(x - node as f64, l), (0.0, 0.0));
+            }
+        }
+        for k in 0..400 {
+            let r = -2.2 + k as f64 * 0.011_1;
+            let e = 1e-7;
+            let fd =
+                (cp.kernel_with_half(r + e, l).0 - cp.kernel_with_half(r - e, l).0) / (2.0 * e);
+            let d = cp.kernel_with_half(r, l).1;
+            assert!((fd - d).abs() < 1e-5, "l {l} r {r}: fd {fd} vs {d}");
+        }
+        l += 0.0137;
+    }
+}
+
+/// cpGIMP's half-widths follow F's diagonal from the undeformed h / (2 ppc),
+/// within their bounds; uGIMP's never move.
+#[test]
+fn cpgimp_half_widths_follow_f() {
+    let (cp, u) = (
+        Shape::new(ShapeKind::Cpgimp, 2),
+        Shape::new(ShapeKind::Gimp, 2),
+    );
+    let f = Mat2::new(1.6, 0.3, -0.2, 0.5);
+    assert_eq!(cp.half_widths(&Mat2::identity()), [0.25, 0.25]);
+    assert_eq!(cp.half_widths(&f), [0.25 * 1.6, 0.25 * 0.5]);
+    assert_eq!(u.half_widths(&f), [0.25, 0.25]);
+    let stretched = Mat2::new(9.0, 0.0, 0.0, 1e-4);
+    assert_eq!(
+        cp.half_widths(&stretched),
+        [CPGIMP_HALF_MAX, CPGIMP_HALF_MIN]
+    );
+}
+
+/// The F reset would reshape cpGIMP's particle domains: refused by key.
+#[test]
+fn cpgimp_with_f_reset_is_refused() {
+    use solver::{Material, Method, SchemeKind, Solver, SolverConfig, TransferKind};
+    let scene = common::box_scene([1.0, 1.0], [0.4, 0.4, 0.6, 0.6], Material::tait(1e5), 9.81);
+    let method = Method {
+        f_reset: true,
+        ..common::method(ShapeKind::Cpgimp, TransferKind::Flip, SchemeKind::Usf)
+    };
+    let err = Solver::new(SolverConfig {
+        scene,
+        method,
+        perturb: vec![],
+    })
+    .err()
+    .expect("cpGIMP with f_reset accepted");
+    assert_eq!(err.key, "method.f_reset", "{err:?}");
+    assert!(err.message.contains("cpgimp"), "{err:?}");
 }

@@ -47,9 +47,10 @@ pub fn solver(scene: Scene, method: Method) -> Solver {
     .expect("valid config")
 }
 
-pub const SHAPES: [ShapeKind; 4] = [
+pub const SHAPES: [ShapeKind; 5] = [
     ShapeKind::Linear,
     ShapeKind::Gimp,
+    ShapeKind::Cpgimp,
     ShapeKind::Bspline2,
     ShapeKind::Bspline3,
 ];
