@@ -166,37 +166,53 @@ pub fn observed_order(h: &[f64], error: &[f64]) -> Option<f64> {
     )
 }
 
-/// Mean of column `name` over the rows of the last simulated second up to
-/// the last row, without event rows and the t = 0 row.
-fn last_second_mean(ts: &Timeseries, name: &str) -> Option<f64> {
-    let t = ts.column("t");
-    let t_last = t.last().copied().unwrap_or(0.0);
+/// Mean of column `name` over the rows of the simulated second before
+/// `end` (up to and including it when `inclusive`), without event rows and
+/// the t = 0 row.
+fn second_before_mean(ts: &Timeseries, name: &str, end: f64, inclusive: bool) -> Option<f64> {
     mean(
-        t.iter()
+        ts.column("t")
+            .iter()
             .zip(ts.column(name))
             .zip(&ts.event_row)
-            .filter(|((ti, _), event)| **ti >= t_last - 1.0 && **ti > 0.0 && !**event)
+            .filter(|((ti, _), event)| {
+                let before = if inclusive { **ti <= end } else { **ti < end };
+                **ti >= end - 1.0 && **ti > 0.0 && before && !**event
+            })
             .map(|((_, v), _)| *v),
     )
 }
 
+/// When a failed run's state was last whole: the first row that counts a
+/// lost particle, else the last row (the failure itself).
+fn failure_onset(ts: &Timeseries) -> f64 {
+    let t = ts.column("t");
+    ts.column("particles_lost")
+        .iter()
+        .position(|&n| n > 0.0)
+        .map_or(t.last().copied().unwrap_or(0.0), |row| t[row])
+}
+
 /// The summary.json metrics block (`events_dropped` is the monitor's to
-/// fill). "Late" figures only for a run that reached t_end; a run that
-/// stopped gets the same figures over the second before it stopped, as
-/// `*_pre_failure`.
+/// fill). "Late" figures (the last simulated second) only for a run that
+/// reached t_end. A run that stopped gets the same figures as
+/// `*_pre_failure`, over the second before its state stopped being whole:
+/// before the first particle was deleted, or before the failing row when
+/// none was, so that neither the collapse nor the blow-up row is averaged in.
 pub fn summarise(
     ts: &Timeseries,
     events: &[Event],
     z_wall: Option<f64>,
     completed: bool,
 ) -> Metrics {
-    // (late, pre-failure): the same window, named by how the run ended.
+    let t_last = ts.column("t").last().copied().unwrap_or(0.0);
+    let onset = failure_onset(ts);
+    // (late, pre-failure), named by how the run ended.
     let split = |name: &str| {
-        let v = last_second_mean(ts, name);
         if completed {
-            (v, None)
+            (second_before_mean(ts, name, t_last, true), None)
         } else {
-            (None, v)
+            (None, second_before_mean(ts, name, onset, false))
         }
     };
     let peak = |name: &str| {
@@ -403,6 +419,43 @@ mod tests {
         assert_eq!(failed.hydro_rel_rms_late, None);
         assert_eq!(failed.hydro_rel_rms_pre_failure, Some(1.0));
         assert_eq!(failed.checkerboard_pre_failure, Some(1.0));
+        // A failing run: rows of 1.0 until a particle is lost at 1.5 s, then
+        // the collapse (1e6). Its pre-failure window ends before the loss.
+        let mut failing = Timeseries::new();
+        for k in 1..=12 {
+            let t = 0.25 * k as f64;
+            let lost = t >= 1.5;
+            let value = if lost { 1e6 } else { 1.0 };
+            let fields = FieldMetrics {
+                hydro_rel_rms: value,
+                checkerboard: Some(value),
+                ..Default::default()
+            };
+            let report = StepReport {
+                t,
+                particles_lost: if lost { 3 } else { 0 },
+                ..Default::default()
+            };
+            failing.push(&report, &Peaks::default(), &fields, false);
+        }
+        let failed = summarise(&failing, &[], None, false);
+        assert_eq!(failed.hydro_rel_rms_pre_failure, Some(1.0));
+        assert_eq!(failed.checkerboard_pre_failure, Some(1.0));
+        // Without a loss, the failing (last) row itself is left out.
+        let mut blown = Timeseries::new();
+        for (t, value) in [(0.5, 2.0), (1.0, 2.0), (1.25, 1e9)] {
+            let fields = FieldMetrics {
+                hydro_rel_rms: value,
+                ..Default::default()
+            };
+            let report = StepReport {
+                t,
+                ..Default::default()
+            };
+            blown.push(&report, &Peaks::default(), &fields, false);
+        }
+        let blown = summarise(&blown, &[], None, false);
+        assert_eq!(blown.hydro_rel_rms_pre_failure, Some(2.0));
         // A run shorter than a second: the t = 0 row still never counts.
         let mut short = Timeseries::new();
         for (t, v) in [(0.0, 100.0), (0.1, 2.0), (0.2, 4.0)] {
