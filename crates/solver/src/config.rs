@@ -144,6 +144,13 @@ pub struct Material {
     /// Tension cutoff (Pa): pressure never goes below this (absent = no cutoff).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pressure_floor: Option<f64>,
+    /// Shear modulus G (Pa) of the neo-Hookean shear part: 0 = a fluid.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub shear_modulus: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 /// Defaults of the optional material keys (one definition, used by serde and `Material::new`).
@@ -175,6 +182,7 @@ impl Material {
             viscosity: 0.0,
             j_res: defaults::j_res(),
             pressure_floor: None,
+            shear_modulus: 0.0,
         }
     }
 
@@ -518,6 +526,25 @@ impl SolverConfig {
             "method.f_reset",
             "cannot be combined with method.shape = \"cpgimp\" (the reset F would reshape the particle domains)",
         )?;
+        if self
+            .scene
+            .materials
+            .iter()
+            .any(|mat| mat.shear_modulus > 0.0)
+        {
+            // Their J update re-evaluates the EOS only, not the shear part.
+            for (key, on) in [
+                ("method.cell_dilatation", m.cell_dilatation > 0.0),
+                ("method.j_bar", m.j_bar > 0.0),
+                ("method.pressure_smoothing", m.pressure_smoothing),
+            ] {
+                check(
+                    !on,
+                    key,
+                    "is for fluids only so far: a material has shear_modulus > 0",
+                )?;
+            }
+        }
         if m.force == ForceKind::Mls {
             // D = sum N (x_i - x_p)(x_i - x_p)^T is singular at the nodes for linear and uGIMP shapes.
             check(
@@ -628,6 +655,12 @@ impl SolverConfig {
             if let Some(p) = m.pressure_floor {
                 within(p, -1e12, 1e12, &m.key(i, "pressure_floor"))?;
             }
+            within(m.shear_modulus, 0.0, 1e13, &m.key(i, "shear_modulus"))?;
+            check(
+                m.shear_modulus == 0.0 || !self.method.f_reset,
+                &m.key(i, "shear_modulus"),
+                "a solid (shear_modulus > 0) cannot be run with method.f_reset = true (the reset F forgets the shear)",
+            )?;
         }
         Ok(())
     }

@@ -25,6 +25,7 @@ pub mod shape;
 mod shape_bspline;
 mod shape_gimp;
 mod shape_linear;
+pub mod solid_neo_hookean;
 pub mod stage_cull;
 mod stage_g2p;
 mod stage_grid;

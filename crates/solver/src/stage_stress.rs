@@ -1,6 +1,6 @@
 //! Stress stage: velocity gradient from the grid, deformation-gradient and J
-//! update, EOS pressure plus Newtonian viscosity (plane strain, 3D deviator),
-//! and the EOS figures the time step and the energy need (one EOS call).
+//! update, EOS pressure plus Newtonian viscosity (plane strain, 3D deviator)
+//! plus a solid's neo-Hookean shear stress, and the EOS figures the time step and the energy need (one EOS call).
 
 use crate::config::{JUpdate, Material};
 use crate::grid::Grid;
@@ -85,6 +85,7 @@ fn run<const W: usize>(
     } = *inputs;
     let nx = grid.dims[0];
     let inv_h = 1.0 / grid.h;
+    let solids = materials.iter().any(|m| m.shear_modulus > 0.0);
     let n_chunks = crate::par::chunk_count(particles.len());
     let piece = crate::par::piece_chunks(particles.len());
     (
@@ -161,6 +162,13 @@ fn run<const W: usize>(
                 }
                 for (s, &p) in stress.iter_mut().zip(pressure.iter()) {
                     *s -= p * Mat2::identity();
+                }
+                if solids {
+                    for k in 0..f.len() {
+                        let m = &materials[mat[k] as usize];
+                        let (s, w, e) = (&mut stress[k], &mut wave[k], &mut stored[k]);
+                        crate::solid_neo_hookean::add_to(m, &f[k], vol0[k], s, w, e);
+                    }
                 }
                 if drop_inverted {
                     for k in 0..f.len() {

@@ -19,6 +19,16 @@ pub fn refresh_eos_cache(particles: &mut Particles, materials: &[Material]) {
         let state = m.eos(j);
         particles.wave_speed[p] = m.wave_speed_of(&state, j);
         particles.stored_energy[p] = particles.vol0[p] * state.energy;
+        // The stress itself is the stress stage's (restored, or zero at seeding).
+        let mut unused = crate::particles::Mat2::zeros();
+        crate::solid_neo_hookean::add_to(
+            m,
+            &particles.f[p],
+            particles.vol0[p],
+            &mut unused,
+            &mut particles.wave_speed[p],
+            &mut particles.stored_energy[p],
+        );
     }
 }
 
