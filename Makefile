@@ -52,6 +52,10 @@ bench: build
 	  $(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape bspline2 --transfer apic --set $$r; \
 	done
 	$(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape bspline2 --transfer xpic --set method.xpic_order=5
+	# The null-space filter (FLIP only) and cpGIMP, against the linear and uGIMP FLIP runs above and below.
+	$(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape linear --transfer flip --set method.null_space_filter=true
+	$(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape gimp --transfer flip
+	$(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape cpgimp --transfer flip
 
 fmt:
 	$(CARGO) fmt --all
