@@ -375,6 +375,12 @@ pub struct Method {
     /// J-bar by particle-grid averaging (Zhao, Jiang & Choo 2023), blend b
     /// in 0 ..= 1 (0 = off).
     pub j_bar: f64,
+    /// Whether the particle carries the averaged J of `cell_dilatation` /
+    /// `j_bar` to the next step (`true`, the default: J, F and V are
+    /// replaced) or keeps its own J and F, the average setting only this
+    /// step's pressure and volume (`false`): repeated replacement diffuses J
+    /// every step.
+    pub carry_averaged_j: bool,
     /// Pressure smoothing through the nodes (CB-Geo's option).
     pub pressure_smoothing: bool,
     /// The order m of `transfer = "xpic"` (1 = PIC).
@@ -401,6 +407,7 @@ impl Default for Method {
             f_reset: false,
             cell_dilatation: 0.0,
             j_bar: 0.0,
+            carry_averaged_j: true,
             pressure_smoothing: false,
             xpic_order: 2,
             null_space_filter: false,
@@ -512,6 +519,11 @@ impl SolverConfig {
             m.cell_dilatation == 0.0 || m.j_bar == 0.0,
             "method.j_bar",
             "cannot be combined with method.cell_dilatation (two averagings of J: choose one)",
+        )?;
+        check(
+            m.carry_averaged_j || m.cell_dilatation > 0.0 || m.j_bar > 0.0,
+            "method.carry_averaged_j",
+            "= false needs method.cell_dilatation > 0 or method.j_bar > 0 (there is no averaged J to keep apart)",
         )?;
         check(
             !m.null_space_filter || m.transfer == TransferKind::Flip,

@@ -29,6 +29,10 @@ pub struct Scratch {
     node_mass: Vec<f64>,
     /// Per particle: the averaged value.
     averaged: Vec<f64>,
+    /// Per particle: its own J and F while the averaged ones set the stress
+    /// (`method.carry_averaged_j = false`).
+    own_j: Vec<f64>,
+    own_f: Vec<Mat2>,
 }
 
 impl Scratch {
@@ -42,6 +46,8 @@ impl Scratch {
             node_sum: vec![0.0; nodes],
             node_mass: vec![0.0; nodes],
             averaged: vec![0.0; particles],
+            own_j: vec![0.0; particles],
+            own_f: vec![Mat2::zeros(); particles],
         }
     }
 }
@@ -218,4 +224,19 @@ pub fn reevaluate_eos(ps: &mut Particles, materials: &[Material]) {
         ps.wave_speed[p] = m.wave_speed_of(&state, j);
         ps.stored_energy[p] = ps.vol0[p] * state.energy;
     }
+}
+
+/// Keeps each particle's own J and F aside (`method.carry_averaged_j = false`).
+pub fn save_own(ps: &Particles, s: &mut Scratch) {
+    let n = ps.len();
+    s.own_j[..n].copy_from_slice(&ps.j);
+    s.own_f[..n].copy_from_slice(&ps.f);
+}
+
+/// Gives each particle its own J and F back; the pressure, stress and
+/// volume set from the averaged J stay for this step.
+pub fn restore_own(ps: &mut Particles, s: &Scratch) {
+    let n = ps.len();
+    ps.j.copy_from_slice(&s.own_j[..n]);
+    ps.f.copy_from_slice(&s.own_f[..n]);
 }

@@ -140,13 +140,20 @@ fn volumetric_remedies(s: &mut Solver) {
     use crate::remedy_volumetric as rv;
     let m = &s.cfg.method;
     let (ps, scratch) = (&mut s.particles, &mut s.volumetric);
+    let averaging = m.cell_dilatation > 0.0 || m.j_bar > 0.0;
+    if averaging && !m.carry_averaged_j {
+        rv::save_own(ps, scratch);
+    }
     if m.cell_dilatation > 0.0 {
         rv::cell_dilatation(ps, &s.grid, m.cell_dilatation, scratch);
     } else if m.j_bar > 0.0 {
         rv::j_bar(ps, &s.stencils, &s.shape, &s.grid, m.j_bar, scratch);
     }
-    if m.cell_dilatation > 0.0 || m.j_bar > 0.0 {
+    if averaging {
         rv::reevaluate_eos(ps, &s.cfg.scene.materials);
+        if !m.carry_averaged_j {
+            rv::restore_own(ps, scratch);
+        }
     }
     if m.pressure_smoothing {
         rv::smooth_pressure(ps, &s.stencils, &s.shape, &s.grid, scratch);

@@ -190,3 +190,41 @@ fn pressure_smoothing_conserves_mass_weighted_pressure_and_keeps_a_linear_field_
         eprintln!("{shape:?}: largest change at the block's edge {edge:.3} K a h");
     }
 }
+
+/// `carry_averaged_j = false`: the averaged J sets this step's pressure
+/// (and volume), while each particle keeps its own J and F.
+#[test]
+fn averaged_j_can_set_the_stress_without_being_carried() {
+    for (j_bar, cell) in [(1.0, 0.0), (0.0, 1.0)] {
+        let base = Method {
+            j_bar,
+            cell_dilatation: cell,
+            ..method(ShapeKind::Bspline2)
+        };
+        let (mut carried, j0) = disordered(base.clone(), 0.02);
+        let (mut own, _) = disordered(
+            Method {
+                carry_averaged_j: false,
+                ..base
+            },
+            0.02,
+        );
+        apply(&mut carried);
+        apply(&mut own);
+        let (c, o) = (carried.view(), own.view());
+        let f0: Vec<Mat2> = j0.iter().map(|j| Mat2::identity() * j.sqrt()).collect();
+        for p in 0..o.j.len() {
+            // The stress stage's own update (L = 0) rounds J = det F once.
+            assert!(
+                (o.j[p] - j0[p]).abs() < 1e-15,
+                "own J kept: {} vs {}",
+                o.j[p],
+                j0[p]
+            );
+            assert!((o.deformation[p] - f0[p]).norm() < 1e-15, "own F kept");
+            assert_eq!(o.pressure[p], c.pressure[p], "pressure from the average");
+            assert_eq!(o.volume[p], c.volume[p], "volume from the average");
+        }
+        assert!(c.j.iter().zip(&j0).filter(|(a, b)| a != b).count() > c.j.len() / 2);
+    }
+}
