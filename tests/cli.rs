@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::process::Command;
 use study::summary::{Status, Summary};
 
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> common::Scratch {
     common::scratch("cli", name)
 }
 

@@ -1,9 +1,11 @@
 //! Every plot kind rendered from small synthetic data: valid PNG/SVG/GIF of
 //! the expected size, PNGs not blank, SVGs carrying their axis labels as text.
 
+mod common;
+
 use plotters::style::RGBColor;
 use solver::Vec2;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use study::plot_case::{
     animate, FrontFigure, MapsFigure, Marker, Outline, PressureDepthFigure, Series,
     TimeseriesFigure,
@@ -16,11 +18,8 @@ use study::plot_matrix::{
 };
 use study::snapshot::Snapshot;
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("kick-plots-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn scratch(name: &str) -> common::Scratch {
+    common::scratch("plots", name)
 }
 
 /// Renders, then checks both files: PNG size and ink, SVG labels; returns

@@ -18,12 +18,31 @@ pub fn kick(args: &[&str]) -> Output {
         .expect("kick runs")
 }
 
-/// A fresh, empty folder for one test: `kick-PREFIX-PID-NAME` in the temp dir.
-pub fn scratch(prefix: &str, name: &str) -> PathBuf {
+/// A fresh, empty folder for one test: `kick-PREFIX-PID-NAME` in the temp
+/// dir, removed when the test passes (kept for inspection when it fails:
+/// each run leaves 100+ MB otherwise).
+pub struct Scratch(PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = PathBuf;
+    fn deref(&self) -> &PathBuf {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+pub fn scratch(prefix: &str, name: &str) -> Scratch {
     let dir = std::env::temp_dir().join(format!("kick-{prefix}-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    dir
+    Scratch(dir)
 }
 
 pub fn stderr(o: &Output) -> String {

@@ -381,6 +381,14 @@ pub struct Method {
     /// step's pressure and volume (`false`): repeated replacement diffuses J
     /// every step.
     pub carry_averaged_j: bool,
+    /// J-bar averages this step's volume ratio J_new / J_old instead of J
+    /// (the incremental form, as Coombs et al. 2018 average the incremental
+    /// dF): a field at rest is left alone.
+    pub average_increment: bool,
+    /// Artificial bulk viscosity b (0 = off): sigma += b rho0 c h tr(D) I,
+    /// its work counted as dissipated. Damps acoustic ringing; stable for
+    /// b < 1 / (2 cfl).
+    pub bulk_damping: f64,
     /// Pressure smoothing through the nodes (CB-Geo's option).
     pub pressure_smoothing: bool,
     /// The order m of `transfer = "xpic"` (1 = PIC).
@@ -408,6 +416,8 @@ impl Default for Method {
             cell_dilatation: 0.0,
             j_bar: 0.0,
             carry_averaged_j: true,
+            average_increment: false,
+            bulk_damping: 0.0,
             pressure_smoothing: false,
             xpic_order: 2,
             null_space_filter: false,
@@ -515,6 +525,7 @@ impl SolverConfig {
         within(m.cell_dilatation, 0.0, 1.0, "method.cell_dilatation")?;
         within(m.xpic_order as f64, 1.0, 16.0, "method.xpic_order")?;
         within(m.j_bar, 0.0, 1.0, "method.j_bar")?;
+        within(m.bulk_damping, 0.0, 0.5 / m.cfl, "method.bulk_damping")?;
         check(
             m.cell_dilatation == 0.0 || m.j_bar == 0.0,
             "method.j_bar",
@@ -524,6 +535,11 @@ impl SolverConfig {
             m.carry_averaged_j || m.cell_dilatation > 0.0 || m.j_bar > 0.0,
             "method.carry_averaged_j",
             "= false needs method.cell_dilatation > 0 or method.j_bar > 0 (there is no averaged J to keep apart)",
+        )?;
+        check(
+            !m.average_increment || (m.j_bar > 0.0 && m.carry_averaged_j),
+            "method.average_increment",
+            "needs method.j_bar > 0 with method.carry_averaged_j = true (it replaces J by J_old times the averaged ratio)",
         )?;
         check(
             !m.null_space_filter || m.transfer == TransferKind::Flip,

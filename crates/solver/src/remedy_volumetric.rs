@@ -33,6 +33,9 @@ pub struct Scratch {
     /// (`method.carry_averaged_j = false`).
     own_j: Vec<f64>,
     own_f: Vec<Mat2>,
+    /// Per particle: this step's volume ratio J_new / J_old
+    /// (`method.average_increment`).
+    ratio: Vec<f64>,
 }
 
 impl Scratch {
@@ -48,6 +51,7 @@ impl Scratch {
             averaged: vec![0.0; particles],
             own_j: vec![0.0; particles],
             own_f: vec![Mat2::zeros(); particles],
+            ratio: vec![0.0; particles],
         }
     }
 }
@@ -166,22 +170,40 @@ fn averaged(
     }
 }
 
-/// J-bar by particle-grid averaging with blend `b`. Skipped for the whole
-/// step when some J <= 0: averaging would hide the inversion.
+/// J-bar by particle-grid averaging with blend `b`: of J, or with
+/// `increment` of this step's J_new / J_old (then J_bar = J_old times the
+/// averaged ratio). Skipped for the whole step when some J <= 0: averaging
+/// would hide the inversion.
 pub fn j_bar(
     ps: &mut Particles,
     stencils: &[Stencil],
     shape: &Shape,
     grid: &Grid,
     b: f64,
+    increment: bool,
     s: &mut Scratch,
 ) {
     if ps.j.iter().any(|j| !(*j > 0.0 && j.is_finite())) {
         return;
     }
-    let j = std::mem::take(&mut ps.j);
-    averaged(ps, &j, stencils, shape, grid, s);
-    ps.j = j;
+    if increment {
+        // Average this step's volume ratio, not J (the J before the stress
+        // stage was saved by `save_own`): a state at rest is left alone.
+        let n = ps.len();
+        for p in 0..n {
+            s.ratio[p] = ps.j[p] / s.own_j[p];
+        }
+        let ratio = std::mem::take(&mut s.ratio);
+        averaged(ps, &ratio[..n], stencils, shape, grid, s);
+        s.ratio = ratio;
+        for p in 0..n {
+            s.averaged[p] *= s.own_j[p];
+        }
+    } else {
+        let j = std::mem::take(&mut ps.j);
+        averaged(ps, &j, stencils, shape, grid, s);
+        ps.j = j;
+    }
     for p in 0..ps.len() {
         let j_new = if b == 1.0 {
             s.averaged[p]

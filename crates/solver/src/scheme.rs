@@ -128,8 +128,13 @@ fn stress(s: &mut Solver, which: StressVelocity, clock: &mut Instant) {
         dt: s.dt,
         mls: s.cfg.method.force == ForceKind::Mls,
         f_reset: s.cfg.method.f_reset,
+        bulk_damping: s.cfg.method.bulk_damping,
         drop_inverted: s.cfg.scene.on_inversion == crate::config::OnLoss::Delete,
     };
+    if s.cfg.method.average_increment {
+        // J before this step's update: J-bar averages the increment.
+        crate::remedy_volumetric::save_own(&s.particles, &mut s.volumetric);
+    }
     s.dissipated += stage_stress::update(&inputs, &mut s.particles, &mut s.partials1);
     volumetric_remedies(s);
     lap(&mut s.times.stress, clock);
@@ -147,7 +152,16 @@ fn volumetric_remedies(s: &mut Solver) {
     if m.cell_dilatation > 0.0 {
         rv::cell_dilatation(ps, &s.grid, m.cell_dilatation, scratch);
     } else if m.j_bar > 0.0 {
-        rv::j_bar(ps, &s.stencils, &s.shape, &s.grid, m.j_bar, scratch);
+        let increment = m.average_increment;
+        rv::j_bar(
+            ps,
+            &s.stencils,
+            &s.shape,
+            &s.grid,
+            m.j_bar,
+            increment,
+            scratch,
+        );
     }
     if averaging {
         rv::reevaluate_eos(ps, &s.cfg.scene.materials);

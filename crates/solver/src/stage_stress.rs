@@ -23,6 +23,8 @@ pub struct Inputs<'a> {
     pub mls: bool,
     /// F <- J^(1/2) I after the update (`method.f_reset`).
     pub f_reset: bool,
+    /// Artificial bulk viscosity coefficient b (`method.bulk_damping`).
+    pub bulk_damping: f64,
     /// `scene.on_inversion = "delete"`: a particle that inverts here carries
     /// no stress (it is deleted at the end of the step; under USF its
     /// singular pressure would otherwise push its neighbours this step).
@@ -81,6 +83,7 @@ fn run<const W: usize>(
         dt,
         mls,
         f_reset,
+        bulk_damping,
         drop_inverted,
     } = *inputs;
     let nx = grid.dims[0];
@@ -152,6 +155,13 @@ fn run<const W: usize>(
                     stress[k] = visc.stress;
                     dev_rate[k] = visc.dev_rate;
                     acc += visc.power * vol[k] * dt;
+                    if bulk_damping > 0.0 {
+                        // The wave speed is the previous step's (the EOS runs below).
+                        let zeta = bulk_damping * m.rho0 * wave[k] * grid.h;
+                        let (s, power) = viscosity::bulk(zeta, &d);
+                        stress[k] += s;
+                        acc += power * vol[k] * dt;
+                    }
                 }
                 // The EOS over the chunk in one loop per material (vectorised).
                 let out = (&mut pressure[..], &mut wave[..], &mut stored[..]);

@@ -33,3 +33,13 @@ pub fn in_plane_dev_rate(d: &Mat2) -> f64 {
     let shear = 0.5 * (d[(0, 1)] + d[(1, 0)]);
     (2.0 * (half_diff * half_diff + shear * shear)).sqrt()
 }
+
+/// Artificial bulk viscosity (`method.bulk_damping = b`): sigma_q = zeta tr(D) I
+/// with zeta = b rho0 c h, the linear bulk viscosity of explicit codes. It
+/// damps acoustic ringing at a rate that vanishes as h -> 0. Returns the
+/// stress and the dissipated power per current volume, zeta tr(D)^2.
+#[inline]
+pub fn bulk(zeta: f64, d: &Mat2) -> (Mat2, f64) {
+    let tr = d.trace();
+    (Mat2::identity() * (zeta * tr), zeta * tr * tr)
+}

@@ -228,3 +228,28 @@ fn averaged_j_can_set_the_stress_without_being_carried() {
         assert!(c.j.iter().zip(&j0).filter(|(a, b)| a != b).count() > c.j.len() / 2);
     }
 }
+
+/// `average_increment`: J-bar of this step's ratio J_new / J_old leaves a
+/// field at rest alone, where J-bar of J smooths it (the zero grid velocity
+/// here makes every ratio 1).
+#[test]
+fn j_bar_of_the_increment_leaves_a_field_at_rest_alone() {
+    let (mut s, j0) = disordered(
+        Method {
+            j_bar: 1.0,
+            average_increment: true,
+            ..method(ShapeKind::Bspline2)
+        },
+        0.02,
+    );
+    apply(&mut s);
+    let v = s.view();
+    for p in 0..v.j.len() {
+        assert!(
+            (v.j[p] - j0[p]).abs() < 1e-15,
+            "{p}: {} vs {}",
+            v.j[p],
+            j0[p]
+        );
+    }
+}
