@@ -34,6 +34,7 @@ mod stage_sort;
 mod stage_stress;
 pub mod stage_times;
 pub mod timestep;
+mod transfer_serial;
 pub mod transfer_xpic;
 mod view;
 pub mod viscosity;

@@ -24,6 +24,7 @@
 use crate::grid::Grid;
 use crate::particles::{Particles, Vec2};
 use crate::shape::{Shape, Stencil};
+use crate::transfer_serial::{gather, scatter_mass_weighted};
 
 /// Conjugate-gradient stop: residual below this fraction of the right-hand side.
 pub const TOLERANCE: f64 = 1e-12;
@@ -58,52 +59,19 @@ impl Scratch {
     }
 }
 
-/// out_p = sum_i N_ip field_i.
-fn gather<const W: usize>(
+/// out_i = (M_C field)_i = sum_p m_p N_ip sum_j N_jp field_j, through the
+/// particles (`at_particles` is scratch).
+fn consistent_mass<const W: usize>(
     field: &[Vec2],
-    stencils: &[Stencil],
-    shape: &Shape,
-    nx: usize,
-    out: &mut [Vec2],
-) {
-    for (p, st) in stencils.iter().enumerate() {
-        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
-        let mut sum = Vec2::zeros();
-        for c in 0..W {
-            let row = st.node as usize + c * nx;
-            for a in 0..W {
-                sum += (wx[a] * wy[c]) * field[row + a];
-            }
-        }
-        out[p] = sum;
-    }
-}
-
-/// out_i = sum_p m_p N_ip q_p on the active nodes (S^T W q).
-fn scatter<const W: usize>(
-    q: &[Vec2],
-    mass: &[f64],
+    ps: &Particles,
     stencils: &[Stencil],
     shape: &Shape,
     grid: &Grid,
+    at_particles: &mut [Vec2],
     out: &mut [Vec2],
 ) {
-    let nx = grid.dims[0];
-    for &n in &grid.active {
-        out[n as usize] = Vec2::zeros();
-    }
-    for (p, st) in stencils.iter().enumerate() {
-        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
-        let mq = mass[p] * q[p];
-        for c in 0..W {
-            let row = st.node as usize + c * nx;
-            for a in 0..W {
-                out[row + a] += (wx[a] * wy[c]) * mq;
-            }
-        }
-    }
+    gather::<W>(field, stencils, shape, grid.dims[0], at_particles);
+    scatter_mass_weighted::<W>(at_particles, &ps.mass, stencils, shape, grid, out);
 }
 
 fn dot(grid: &Grid, a: &[Vec2], b: &[Vec2]) -> f64 {
@@ -132,21 +100,14 @@ fn run<const W: usize>(
         }
     };
     // b = S^T W v, kept in r; the start u = M_L^-1 b is PIC's answer.
-    scatter::<W>(&ps.v[..n], &ps.mass, stencils, shape, grid, &mut s.r);
+    scatter_mass_weighted::<W>(&ps.v[..n], &ps.mass, stencils, shape, grid, &mut s.r);
     let b_norm = dot(grid, &s.r, &s.r).sqrt();
     for &node in &grid.active {
         let node = node as usize;
         s.u[node] = precondition(s.r[node], node);
     }
-    gather::<W>(&s.u, stencils, shape, nx, &mut s.at_particles[..n]);
-    scatter::<W>(
-        &s.at_particles[..n],
-        &ps.mass,
-        stencils,
-        shape,
-        grid,
-        &mut s.md,
-    );
+    let at_particles = &mut s.at_particles[..n];
+    consistent_mass::<W>(&s.u, ps, stencils, shape, grid, at_particles, &mut s.md);
     for &node in &grid.active {
         let node = node as usize;
         s.r[node] -= s.md[node];
@@ -159,15 +120,8 @@ fn run<const W: usize>(
         .sum();
     let mut iterations = 0;
     while iterations < MAX_ITERATIONS && dot(grid, &s.r, &s.r).sqrt() > TOLERANCE * b_norm {
-        gather::<W>(&s.d, stencils, shape, nx, &mut s.at_particles[..n]);
-        scatter::<W>(
-            &s.at_particles[..n],
-            &ps.mass,
-            stencils,
-            shape,
-            grid,
-            &mut s.md,
-        );
+        let at_particles = &mut s.at_particles[..n];
+        consistent_mass::<W>(&s.d, ps, stencils, shape, grid, at_particles, &mut s.md);
         let dmd = dot(grid, &s.d, &s.md);
         if dmd.is_nan() || dmd <= 0.0 {
             break;

@@ -12,6 +12,7 @@
 use crate::grid::Grid;
 use crate::particles::{Particles, Vec2};
 use crate::shape::{Shape, Stencil};
+use crate::transfer_serial::{gather, scatter_mass_weighted};
 
 /// Grid and particle scratch, allocated once.
 #[derive(Clone, Debug, Default)]
@@ -35,28 +36,6 @@ impl Scratch {
     }
 }
 
-/// u_p = sum_i N_ip field_i for every particle.
-fn interpolate<const W: usize>(
-    field: &[Vec2],
-    stencils: &[Stencil],
-    shape: &Shape,
-    nx: usize,
-    out: &mut [Vec2],
-) {
-    for (p, st) in stencils.iter().enumerate() {
-        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
-        let mut sum = Vec2::zeros();
-        for c in 0..W {
-            let row = st.node as usize + c * nx;
-            for a in 0..W {
-                sum += (wx[a] * wy[c]) * field[row + a];
-            }
-        }
-        out[p] = sum;
-    }
-}
-
 /// field_i = sum_p m_p N_ip u_p / m_i (folded like momentum, ghosts refilled).
 fn project<const W: usize>(
     u: &[Vec2],
@@ -66,21 +45,7 @@ fn project<const W: usize>(
     grid: &Grid,
     out: &mut [Vec2],
 ) {
-    let nx = grid.dims[0];
-    for &n in &grid.active {
-        out[n as usize] = Vec2::zeros();
-    }
-    for (p, st) in stencils.iter().enumerate() {
-        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
-        let mu = ps.mass[p] * u[p];
-        for c in 0..W {
-            let row = st.node as usize + c * nx;
-            for a in 0..W {
-                out[row + a] += (wx[a] * wy[c]) * mu;
-            }
-        }
-    }
+    scatter_mass_weighted::<W>(u, &ps.mass, stencils, shape, grid, out);
     grid.fold(out);
     for &n in &grid.inside {
         let n = n as usize;
@@ -111,7 +76,7 @@ fn run<const W: usize>(
     for k in 2..=order {
         // C(m, k) / C(m, k - 1) = (m - k + 1) / k.
         let scale = (m - k as f64 + 1.0) / k as f64;
-        interpolate::<W>(
+        gather::<W>(
             &s.prev,
             stencils,
             shape,
@@ -134,7 +99,7 @@ fn run<const W: usize>(
         std::mem::swap(&mut s.prev, &mut s.next);
         sign = -sign;
     }
-    interpolate::<W>(&s.v_star, stencils, shape, nx, &mut ps.v[..n_particles]);
+    gather::<W>(&s.v_star, stencils, shape, nx, &mut ps.v[..n_particles]);
 }
 
 /// Sets every particle's velocity to S v* (G2P then adds FLIP's increment).

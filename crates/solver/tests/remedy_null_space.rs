@@ -40,24 +40,6 @@ fn solver_with(cfg: SolverConfig, v: impl Fn(usize, Vec2) -> Vec2) -> Solver {
     Solver::with_particles(cfg, ps)
 }
 
-/// The lattice checkerboard u_i = (-1)^(i + j) e_x interpolated with linear shapes.
-fn checkerboard(x: Vec2) -> Vec2 {
-    let (i, j) = ((x.x / H).floor(), (x.y / H).floor());
-    let (fx, fy) = (x.x / H - i, x.y / H - j);
-    let mut sum = 0.0;
-    for (a, wa) in [(0.0, 1.0 - fx), (1.0, fx)] {
-        for (b, wb) in [(0.0, 1.0 - fy), (1.0, fy)] {
-            let sign = if (i + a + j + b) as i64 % 2 == 0 {
-                1.0
-            } else {
-                -1.0
-            };
-            sum += wa * wb * sign;
-        }
-    }
-    Vec2::new(sum, 0.0)
-}
-
 /// A reproducible velocity in [-1, 1]^2 per particle.
 fn noise(p: usize) -> Vec2 {
     let mut z = (p as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
@@ -77,7 +59,7 @@ fn a_velocity_in_the_span_of_the_shapes_is_kept_where_pic_keeps_a_sixteenth() {
         (TransferKind::Pic, false, 1.0 / 16.0),
     ] {
         let cfg = config(ShapeKind::Linear, transfer, filter, 0.0);
-        let mut s = solver_with(cfg, |_, x| checkerboard(x));
+        let mut s = solver_with(cfg, |_, x| common::lattice_checkerboard(x, H));
         let before: Vec<Vec2> = s.view().v.to_vec();
         s.step().unwrap();
         for (p, v0) in before.iter().enumerate() {

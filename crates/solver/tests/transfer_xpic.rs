@@ -29,20 +29,7 @@ fn checkerboard(transfer: TransferKind, order: u32) -> Solver {
     };
     let mut ps = solver::scene::seed(&scene);
     for (x, v) in ps.x.iter().zip(ps.v.iter_mut()) {
-        let (i, j) = ((x.x / H).floor(), (x.y / H).floor());
-        let (fx, fy) = (x.x / H - i, x.y / H - j);
-        let mut sum = 0.0;
-        for (a, wa) in [(0.0, 1.0 - fx), (1.0, fx)] {
-            for (b, wb) in [(0.0, 1.0 - fy), (1.0, fy)] {
-                let sign = if (i + a + j + b) as i64 % 2 == 0 {
-                    1.0
-                } else {
-                    -1.0
-                };
-                sum += wa * wb * sign;
-            }
-        }
-        *v = Vec2::new(sum, 0.0);
+        *v = common::lattice_checkerboard(*x, H);
     }
     Solver::with_particles(cfg, ps)
 }

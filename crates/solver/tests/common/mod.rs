@@ -57,3 +57,22 @@ pub const SHAPES: [ShapeKind; 5] = [
 pub const TRANSFERS: [TransferKind; 3] =
     [TransferKind::Pic, TransferKind::Flip, TransferKind::Apic];
 pub const SCHEMES: [SchemeKind; 3] = [SchemeKind::Usf, SchemeKind::Usl, SchemeKind::Musl];
+
+/// The lattice checkerboard u_i = (-1)^(i + j) e_x on a grid of cell `h`,
+/// interpolated with linear shapes at `x`.
+pub fn lattice_checkerboard(x: Vec2, h: f64) -> Vec2 {
+    let (i, j) = ((x.x / h).floor(), (x.y / h).floor());
+    let (fx, fy) = (x.x / h - i, x.y / h - j);
+    let mut sum = 0.0;
+    for (a, wa) in [(0.0, 1.0 - fx), (1.0, fx)] {
+        for (b, wb) in [(0.0, 1.0 - fy), (1.0, fy)] {
+            let sign = if (i + a + j + b) as i64 % 2 == 0 {
+                1.0
+            } else {
+                -1.0
+            };
+            sum += wa * wb * sign;
+        }
+    }
+    Vec2::new(sum, 0.0)
+}
