@@ -277,6 +277,7 @@ impl Event {
             &mut e.evidence.advection_before,
             &mut e.evidence.critical_courant,
             &mut e.evidence.energy_floor,
+            &mut e.evidence.vertical_speed_bound,
             &mut e.evidence.quiescent_fraction,
             &mut e.evidence.deformed_fraction,
             &mut e.evidence.peak_dev_rate,
@@ -381,10 +382,15 @@ pub struct Evidence {
     /// quadratic, 1.9 cubic B-spline).
     pub critical_courant: f64,
     /// The floor of `Event::energy_injected`: `injection_floor_factor` x the dt-scaled noise floor
-    /// m g dt sqrt(2 g H) / 2 of the event's own mass m (its particle count
-    /// times the mean particle mass) at its last step: symplectic Euler adds
-    /// about that much where fluid of mass m decelerates.
+    /// m g dt min(2 V, sqrt(2 g H)) / 2 of the event's own mass m (its particle count
+    /// times the mean particle mass) at its last step, V = `vertical_speed_bound`:
+    /// symplectic Euler adds m g dt |dv_y| / 2 where fluid of mass m changes
+    /// its vertical velocity by dv_y, and |dv_y| <= 2 V.
     pub energy_floor: f64,
+    /// The largest particle |v_y| (m/s) anywhere from the step before onset to
+    /// the event's last step.
+    #[serde(default)]
+    pub vertical_speed_bound: f64,
     /// Hallmark evidence over the particles flagged at onset (docs/physics.md
     /// section 4b): the fraction quiet over `quiet_seconds` before their
     /// burst, and the fraction whose in-plane |dev D| peaked above
@@ -460,6 +466,7 @@ mod tests {
                 advection_before: 0.1,
                 critical_courant: 1.7,
                 energy_floor: 1e-4,
+                vertical_speed_bound: 0.3,
                 quiescent_fraction: 0.75,
                 deformed_fraction: 0.5,
                 peak_dev_rate: 80.0,

@@ -209,6 +209,8 @@ struct Scan {
     det_min: f64,
     /// Largest kinetic-energy gain 1/2 m (|v|^2 - |v_prev|^2), and its particle.
     gain_max: (f64, usize),
+    /// Largest vertical speed |v_y|.
+    max_vertical_speed: f64,
     /// Some candidate awaits its z score.
     need_z: bool,
 }
@@ -225,6 +227,7 @@ impl Scan {
             j_max: f64::NEG_INFINITY,
             det_min: f64::INFINITY,
             gain_max: (f64::NEG_INFINITY, 0),
+            max_vertical_speed: 0.0,
             need_z: false,
         }
     }
@@ -321,6 +324,9 @@ pub struct Monitor {
     front: Front,
     report: StepReport,
     prev_injected: f64,
+    /// Largest particle |v_y| at the previous observation (bounds the
+    /// explicit-stepping energy error of an event that opens now).
+    prev_vertical_speed: f64,
     events_dropped: u64,
     /// Courant and nodal advective numbers of the last steps (cause evidence).
     steps: StepHistory,
@@ -376,6 +382,7 @@ impl Monitor {
             front: Front::new(&geom),
             report: StepReport::default(),
             prev_injected: 0.0,
+            prev_vertical_speed: 0.0,
             events_dropped: 0,
             steps: StepHistory::default(),
             critical_courant: critical_courant(v.shape),
@@ -482,9 +489,7 @@ impl Monitor {
         if blow_out.is_some() {
             self.stopped(v);
         }
-        // The floor per kilogram (per metre of depth): injection_floor_factor g dt sqrt(2 g H) / 2.
-        let floor_per_kg = self.cfg.injection_floor_factor * floor / self.initial_mass;
-        self.track_injected_energy(v.step, injection.total, floor_per_kg);
+        self.track_injected_energy(v, g, injection.total, scan.max_vertical_speed);
         self.report = StepReport {
             step: v.step,
             energy_injected: injection.total,
@@ -548,6 +553,7 @@ impl Monitor {
             let ke_ref = h.ke_recent[p].max(0.5 * mass[p] * t.quiescent2);
             let ratio = s.ke_ratio(e, ke_ref, candidate);
             s.add(p, speed2, prev2, mass[p], jac[p]);
+            s.max_vertical_speed = s.max_vertical_speed.max(vel[p].y.abs());
             if t.det_apart {
                 s.det_min = s.det_min.min(def[p].determinant());
             }
@@ -707,10 +713,31 @@ impl Monitor {
 
     /// Energy injected while each event touched at this step is open (`total`
     /// is the injection so far), and the cause judged against the floor of
-    /// the event's mass.
-    fn track_injected_energy(&mut self, step: u64, total: f64, floor_per_kg: f64) {
+    /// the event's mass (docs/physics.md section 4b). Symplectic Euler under
+    /// gravity adds m g dt dv_y / 2 when a particle's vertical velocity
+    /// changes by dv_y, and |dv_y| <= 2 V with V the largest |v_y| of any
+    /// particle from the step before the event opened to now: the floor is
+    /// `injection_floor_factor` m g dt min(2 V, sqrt(2 g H)) / 2, the
+    /// free-fall speed over the box height H capping it as before.
+    fn track_injected_energy(&mut self, v: &StateView, g: f64, total: f64, vertical_speed: f64) {
+        let (step, time, merge) = (v.step, v.time, self.cfg.merge_seconds);
         let mean_mass = self.initial_mass / self.event_mark.len().max(1) as f64;
-        for e in self.events.iter_mut().filter(|e| e.last_step == step) {
+        let free_fall = (2.0 * g * self.geom.size.y).sqrt();
+        let per_kg_per_speed = self.cfg.injection_floor_factor * g * v.dt / 2.0;
+        let prev_speed = self.prev_vertical_speed;
+        for e in self.events.iter_mut() {
+            let live = e.last_step + 1 >= step || time - e.last_t <= merge;
+            if !live {
+                continue;
+            }
+            let bound = &mut e.evidence.vertical_speed_bound;
+            if e.first_step == step {
+                *bound = prev_speed;
+            }
+            *bound = bound.max(vertical_speed);
+            if e.last_step != step {
+                continue;
+            }
             if e.first_step == step {
                 e.injected_at_open = self.prev_injected;
             }
@@ -721,10 +748,12 @@ impl Monitor {
             } else {
                 e.n_particles as f64 * mean_mass
             };
-            e.evidence.energy_floor = floor_per_kg * mass;
+            let speed = (2.0 * e.evidence.vertical_speed_bound).min(free_fall);
+            e.evidence.energy_floor = per_kg_per_speed * speed * mass;
             e.classify();
         }
         self.prev_injected = total;
+        self.prev_vertical_speed = vertical_speed;
     }
 
     /// Over the active grid nodes: the smallest nodal mass over rho0 h^2 (0
@@ -951,6 +980,7 @@ impl Monitor {
                 advection_before,
                 critical_courant: self.critical_courant,
                 energy_floor: 0.0,
+                vertical_speed_bound: 0.0,
                 quiescent_fraction: fraction(c.quiescent),
                 deformed_fraction: fraction(c.deformed_rate),
                 peak_dev_rate: c.peak_rate,

@@ -8,7 +8,7 @@ use crate::Monitor;
 use bincode::Options;
 use solver::checkpoint::{unseal, CheckpointError, Reader, Writer};
 
-const MAGIC: &[u8; 8] = b"KICKMON5";
+const MAGIC: &[u8; 8] = b"KICKMON6";
 
 /// The events' encoding: bincode (little-endian, varint integers, f64 bits as
 /// they are) through `Event`'s serde derive, so the checkpoint and the summary
@@ -85,6 +85,7 @@ impl Monitor {
         w.u64(filled as u64);
         w.f64(self.transfer_loss);
         w.f64(self.prev_injected);
+        w.f64(self.prev_vertical_speed);
         w.u64(self.events_dropped);
         w.bytes(&encode_events(&self.events));
         w.bytes(
@@ -135,6 +136,7 @@ impl Monitor {
         self.energy.restore(minimum, &times, &recent, next, filled);
         self.transfer_loss = r.f64()?;
         self.prev_injected = r.f64()?;
+        self.prev_vertical_speed = r.f64()?;
         self.events_dropped = r.u64()?;
         let mut events = decode_events(r.bytes()?)?;
         let steps: crate::step_history::StepHistory = codec()
@@ -190,6 +192,7 @@ mod tests {
                 advection_before: -0.0,
                 critical_courant: 1.7,
                 energy_floor: 5e-324,
+                vertical_speed_bound: f64::MIN_POSITIVE,
                 quiescent_fraction: 1.0 / 3.0,
                 deformed_fraction: 0.0,
                 peak_dev_rate: f64::MAX,

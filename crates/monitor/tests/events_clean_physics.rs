@@ -54,6 +54,10 @@ fn a_falling_block_hitting_the_floor_is_an_impact() {
     let mut scene = Scene::dam_break(common::tait(1.5e6, 0.5));
     scene.bodies[0].rect = [0.3, 0.2, 0.5, 0.4];
     let events = events(scene, 0.5);
+    eprintln!(
+        "(first step, cause, Courant before, injected, floor): {:?}",
+        summary(&events)
+    );
     assert!(
         events.iter().all(|e| e.cause == Cause::Impact),
         "{:?}",
@@ -64,6 +68,10 @@ fn a_falling_block_hitting_the_floor_is_an_impact() {
 #[test]
 fn the_dam_break_to_one_second_has_no_kick() {
     let events = events(Scene::dam_break(common::tait(1.5e6, 0.5)), 1.0);
+    eprintln!(
+        "(first step, cause, Courant before, injected, floor): {:?}",
+        summary(&events)
+    );
     assert!(
         events.iter().all(|e| !e.is_kick()),
         "{:?}",
