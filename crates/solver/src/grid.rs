@@ -153,6 +153,12 @@ impl Grid {
     }
 
     #[inline]
+    /// The node (padded index) is in this step's active set.
+    pub fn is_active(&self, node: usize) -> bool {
+        let (i, j) = (node % self.dims[0], node / self.dims[0]);
+        self.active_bits[j * self.row_words + (i >> 6)] >> (i & 63) & 1 == 1
+    }
+
     pub fn index(&self, i: usize, j: usize) -> usize {
         i + j * self.dims[0]
     }

@@ -7,6 +7,7 @@
 
 pub mod checkpoint;
 pub mod config;
+pub mod drag;
 pub mod energy;
 pub mod eos;
 mod eos_linear;
@@ -15,6 +16,7 @@ pub mod eos_tait;
 pub mod grid;
 mod init_hydrostatic;
 mod measure;
+pub mod mixture;
 pub mod par;
 pub mod particles;
 pub mod remedy_null_space;
@@ -42,6 +44,7 @@ pub mod viscosity;
 pub use checkpoint::CheckpointError;
 pub use config::*;
 pub use energy::Energy;
+pub use mixture::Mixture;
 pub use particles::{Mat2, Vec2};
 pub use stage_cull::{CullReason, Culled, Losses};
 pub use stage_times::StageTimes;
@@ -292,6 +295,15 @@ impl Solver {
 
     /// Takes one step of a given size (relaxation and tests).
     pub fn step_with_dt(&mut self, dt: f64) -> Result<(), StepError> {
+        self.begin_step(dt)?;
+        self.finish_step();
+        Ok(())
+    }
+
+    /// The first half of a step of size `dt`: sort, then the scheme's stages
+    /// up to the grid update (the grid then holds v^{n+1}). A multiphase step
+    /// couples the phases' grids between this and `finish_step`.
+    pub(crate) fn begin_step(&mut self, dt: f64) -> Result<(), StepError> {
         if !(dt > 0.0 && dt.is_finite()) {
             return Err(StepError::BadTimeStep(dt));
         }
@@ -310,14 +322,21 @@ impl Solver {
             &mut self.bins,
         )?;
         stage_times::lap(&mut self.times.sort, &mut clock);
-        scheme::advance(self, &mut clock);
+        scheme::to_grid(self, &mut clock);
+        Ok(())
+    }
+
+    /// The second half of the step `begin_step` started: G2P (and the
+    /// stress under USL and MUSL), the clock, deletions and the measures.
+    pub(crate) fn finish_step(&mut self) {
+        let mut clock = std::time::Instant::now();
+        scheme::from_grid(self, &mut clock);
         self.step += 1;
-        self.time += dt;
+        self.time += self.dt;
         self.cull();
         self.measure();
         stage_times::lap(&mut self.times.other, &mut clock);
         self.times.steps += 1;
-        Ok(())
     }
 
     /// Deletes escaped or inverted particles when the scene asks for it.

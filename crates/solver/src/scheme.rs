@@ -38,7 +38,9 @@ enum StressVelocity {
     Updated,
 }
 
-pub fn advance(s: &mut Solver, clock: &mut Instant) {
+/// The stages of a step up to and including the grid update (v^{n+1} on the
+/// grid): a multiphase step couples the phases' grids here (`drag`).
+pub fn to_grid(s: &mut Solver, clock: &mut Instant) {
     match s.cfg.method.scheme {
         SchemeKind::Usf => {
             p2g(s, MASS_MOMENTUM, clock);
@@ -46,19 +48,24 @@ pub fn advance(s: &mut Solver, clock: &mut Instant) {
             stress(s, StressVelocity::Grid, clock);
             p2g(s, FORCE, clock);
             grid_update(s, clock);
-            g2p(s, clock);
         }
-        SchemeKind::Usl => {
+        SchemeKind::Usl | SchemeKind::Musl => {
             p2g(s, ALL, clock);
             grid_velocities(s, clock);
             grid_update(s, clock);
+        }
+    }
+}
+
+/// The stages after the grid update: G2P, then the stress under USL and MUSL.
+pub fn from_grid(s: &mut Solver, clock: &mut Instant) {
+    match s.cfg.method.scheme {
+        SchemeKind::Usf => g2p(s, clock),
+        SchemeKind::Usl => {
             g2p(s, clock);
             stress(s, StressVelocity::Updated, clock);
         }
         SchemeKind::Musl => {
-            p2g(s, ALL, clock);
-            grid_velocities(s, clock);
-            grid_update(s, clock);
             g2p(s, clock);
             // Re-project the updated particle velocities (weights of the step start).
             p2g(s, MOMENTUM, clock);

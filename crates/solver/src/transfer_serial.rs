@@ -1,5 +1,6 @@
 //! Serial particle-grid sums on raw nodes, in particle order (deterministic
-//! for any thread count), shared by XPIC and the null-space filter.
+//! for any thread count), shared by XPIC, the null-space filter and the
+//! multiphase drag.
 
 // The loops walk the weights and the stencil rows in step.
 #![allow(clippy::needless_range_loop)]
@@ -51,6 +52,31 @@ pub fn scatter_mass_weighted<const W: usize>(
             let row = st.node as usize + c * nx;
             for a in 0..W {
                 out[row + a] += (wx[a] * wy[c]) * mq;
+            }
+        }
+    }
+}
+
+/// out_i = sum_p N_ip q_p on the raw active nodes (no folds), e.g. the nodal
+/// volume sum_p N_ip V_p.
+pub fn scatter_scalar<const W: usize>(
+    q: &[f64],
+    stencils: &[Stencil],
+    shape: &Shape,
+    grid: &Grid,
+    out: &mut [f64],
+) {
+    let nx = grid.dims[0];
+    for &n in &grid.active {
+        out[n as usize] = 0.0;
+    }
+    for (p, st) in stencils.iter().enumerate() {
+        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
+        for c in 0..W {
+            let row = st.node as usize + c * nx;
+            for a in 0..W {
+                out[row + a] += (wx[a] * wy[c]) * q[p];
             }
         }
     }

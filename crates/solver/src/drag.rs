@@ -1,0 +1,173 @@
+//! Interaction (drag) between two phases' grid velocity fields
+//! (docs/physics.md section 6). Each phase is stepped to v* = v^{n+1} on its
+//! own grid; the drag then corrects v* at every node both phases occupy,
+//! keeping the node's total momentum m_a v_a + m_b v_b, so action equals
+//! reaction node by node. Only the relative velocity dv = v_b - v_a changes:
+//!
+//! - explicit: dv' = dv* - dt k dv^n (stable for dt < 2 / k);
+//! - implicit (backward Euler): dv' = dv* / (1 + dt k);
+//! - exponential: dv' = dv* exp(-dt k), the exact solution of the linear drag
+//!   over the step, stable at any dt like the implicit one;
+//!
+//! with k = B V_i (1/m_a + 1/m_b), B the drag coefficient per mixture volume
+//! and V_i = V_i^a + V_i^b the nodal volume sum_p N_ip V_p of both phases
+//! (folded like the masses, so a wall node looks like an interior one).
+
+use crate::grid::Grid;
+use crate::particles::Vec2;
+use crate::shape::{Shape, Stencil};
+use crate::transfer_serial::scatter_scalar;
+use crate::Solver;
+use serde::{Deserialize, Serialize};
+
+/// Which interaction model (the slides' list; more come with later slices).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DragModel {
+    /// chi_i = 1 where both phases have mass: f_i^a = -f_i^b = B V_i (v_i^b - v_i^a).
+    #[default]
+    BangBangNode,
+}
+
+/// How the nodal drag is integrated over a step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DragUpdate {
+    Explicit,
+    #[default]
+    Implicit,
+    Exponential,
+}
+
+/// The interaction between the two phases of a mixture.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Drag {
+    /// B = n^2 mu / k (kg m^-3 s^-1): drag force per mixture volume per unit
+    /// relative velocity.
+    pub coefficient: f64,
+    pub model: DragModel,
+    pub update: DragUpdate,
+}
+
+/// What one coupling did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Coupling {
+    /// Nodes both phases occupy.
+    pub nodes: usize,
+    /// Kinetic energy the drag took from the grid velocities v^{n+1}
+    /// (real particle masses, like the grid kinetic energy of P2G).
+    pub dissipated: f64,
+    /// Largest |m_a dv_a + m_b dv_b| over the coupled nodes relative to the
+    /// node's momentum m_a |v_a*| + m_b |v_b*| (action against reaction; round-off).
+    pub momentum_residual: f64,
+    /// The explicit update's stability limit min_i 2 / k_i (infinite without coupled nodes).
+    pub stable_dt: f64,
+}
+
+/// Nodal volumes per phase (full grid arrays, allocated once).
+#[derive(Clone, Debug, Default)]
+pub struct Scratch {
+    volume: [Vec<f64>; 2],
+}
+
+impl Scratch {
+    pub fn new(grid: &Grid) -> Self {
+        let n = grid.dims[0] * grid.dims[1];
+        Scratch {
+            volume: [vec![0.0; n], vec![0.0; n]],
+        }
+    }
+}
+
+/// V_i = sum_p N_ip V_p on the raw nodes, folded.
+fn nodal_volume(s: &Solver, out: &mut [f64]) {
+    fn run<const W: usize>(q: &[f64], st: &[Stencil], shape: &Shape, g: &Grid, out: &mut [f64]) {
+        scatter_scalar::<W>(q, st, shape, g, out);
+    }
+    let (q, st, shape, g) = (&s.particles.vol, &s.stencils, &s.shape, &s.grid);
+    match shape.width() {
+        2 => run::<2>(q, st, shape, g, out),
+        3 => run::<3>(q, st, shape, g, out),
+        _ => run::<4>(q, st, shape, g, out),
+    }
+    g.fold(out);
+}
+
+/// Corrects both phases' v^{n+1} (and the nodal accelerations) for the drag
+/// over a step of `dt`; both must have run `begin_step` with the same dt.
+pub fn couple(
+    a: &mut Solver,
+    b: &mut Solver,
+    drag: &Drag,
+    scratch: &mut Scratch,
+    dt: f64,
+) -> Coupling {
+    let [va, vb] = &mut scratch.volume;
+    nodal_volume(a, va);
+    nodal_volume(b, vb);
+    let mut out = Coupling {
+        stable_dt: f64::INFINITY,
+        ..Coupling::default()
+    };
+    let (ga, gb) = (&mut a.grid, &mut b.grid);
+    let before = grid_kinetic(ga) + grid_kinetic(gb);
+    for &n in &ga.inside {
+        let n = n as usize;
+        let (ma, mb) = (ga.mass[n], gb.mass[n]);
+        // chi_i: both phases at the node.
+        if !(gb.is_active(n) && ma > 0.0 && mb > 0.0) {
+            continue;
+        }
+        out.nodes += 1;
+        let k = drag.coefficient * (va[n] + vb[n]) * (1.0 / ma + 1.0 / mb);
+        out.stable_dt = out.stable_dt.min(2.0 / k);
+        let (sa, sb) = (ga.vel_new[n], gb.vel_new[n]);
+        let rel = sb - sa;
+        let rel_new = match drag.update {
+            DragUpdate::Explicit => rel - (dt * k) * (gb.vel[n] - ga.vel[n]),
+            DragUpdate::Implicit => rel / (1.0 + dt * k),
+            DragUpdate::Exponential => rel * (-dt * k).exp(),
+        };
+        let total = ma + mb;
+        let centre = (ma * sa + mb * sb) / total;
+        let (na, nb) = (
+            centre - (mb / total) * rel_new,
+            centre + (ma / total) * rel_new,
+        );
+        let (da, db) = (na - sa, nb - sb);
+        let scale = ma * sa.norm() + mb * sb.norm();
+        if scale > 0.0 {
+            let residual = (ma * da + mb * db).norm() / scale;
+            out.momentum_residual = out.momentum_residual.max(residual);
+        }
+        ga.vel_new[n] = na;
+        gb.vel_new[n] = nb;
+        ga.accel[n] += da / dt;
+        gb.accel[n] += db / dt;
+    }
+    for g in [&mut *ga, &mut *gb] {
+        refill(g);
+    }
+    out.dissipated = before - (grid_kinetic(ga) + grid_kinetic(gb));
+    out
+}
+
+/// sum over the active nodes (ghosts included: they carry the real
+/// particles' mass that lands beyond a wall or a periodic edge) of
+/// m_raw |v^{n+1}|^2 / 2.
+fn grid_kinetic(g: &Grid) -> f64 {
+    g.active
+        .iter()
+        .map(|&n| 0.5 * g.mass_raw[n as usize] * g.vel_new[n as usize].norm_squared())
+        .sum()
+}
+
+/// Ghost nodes take their partners' corrected values again.
+fn refill(g: &mut Grid) {
+    let mut vel_new: Vec<Vec2> = std::mem::take(&mut g.vel_new);
+    g.fill(&mut vel_new);
+    g.vel_new = vel_new;
+    let mut accel = std::mem::take(&mut g.accel);
+    g.fill(&mut accel);
+    g.accel = accel;
+}

@@ -1,0 +1,130 @@
+//! Two phases as interacting bodies ("multiple velocity fields",
+//! docs/physics.md section 6): each phase is a `Solver` with its own
+//! particles, material and grid over the same box, stepped by the same
+//! stages with one shared time step; between each phase's grid update and
+//! its G2P the drag couples the two grids (`drag::couple`). A single-phase
+//! run is a plain `Solver` and is untouched by this.
+
+use crate::drag::{self, Coupling, Drag, DragUpdate};
+use crate::{ConfigError, Energy, Solver, StepError, Vec2};
+
+pub struct Mixture {
+    phases: [Solver; 2],
+    drag: Drag,
+    scratch: drag::Scratch,
+    /// Kinetic energy the drag dissipated since t = 0.
+    drag_dissipated: f64,
+    last: Coupling,
+}
+
+impl Mixture {
+    /// Two phases over the same box and grid (`scene.origin`, `cell`, `size`,
+    /// `periodic` alike), both at t = 0.
+    pub fn new(phases: [Solver; 2], drag: Drag) -> Result<Self, ConfigError> {
+        let (a, b) = (&phases[0].cfg.scene, &phases[1].cfg.scene);
+        let same = a.origin == b.origin
+            && a.cell == b.cell
+            && a.size == b.size
+            && a.periodic == b.periodic
+            && a.no_slip == b.no_slip;
+        if !same {
+            return Err(ConfigError {
+                key: "scene".into(),
+                message: "the phases of a mixture need the same box, cell, periodic axes and walls"
+                    .into(),
+            });
+        }
+        if !(drag.coefficient >= 0.0 && drag.coefficient.is_finite()) {
+            return Err(ConfigError {
+                key: "drag.coefficient".into(),
+                message: format!("{} is not a finite number >= 0", drag.coefficient),
+            });
+        }
+        let scratch = drag::Scratch::new(&phases[0].grid);
+        Ok(Mixture {
+            phases,
+            drag,
+            scratch,
+            drag_dissipated: 0.0,
+            last: Coupling {
+                stable_dt: f64::INFINITY,
+                ..Coupling::default()
+            },
+        })
+    }
+
+    pub fn phase(&self, k: usize) -> &Solver {
+        &self.phases[k]
+    }
+
+    pub fn time(&self) -> f64 {
+        self.phases[0].time()
+    }
+
+    /// The phases' smallest step; under the explicit drag also below the
+    /// stability limit 2 / k of the last coupling (nodal masses and volumes
+    /// change little in a step), with the phases' CFL number as safety.
+    pub fn next_dt(&self) -> f64 {
+        let dt = self.phases[0].next_dt().min(self.phases[1].next_dt());
+        match self.drag.update {
+            DragUpdate::Explicit => dt.min(self.phases[0].cfg.method.cfl * self.last.stable_dt),
+            DragUpdate::Implicit | DragUpdate::Exponential => dt,
+        }
+    }
+
+    /// One step of `next_dt`, clamped to land on t_end.
+    pub fn step(&mut self) -> Result<(), StepError> {
+        let mut dt = self.next_dt();
+        let remaining = self.phases[0].cfg.scene.t_end - self.time();
+        if remaining > 0.0 && dt > remaining {
+            dt = remaining;
+        }
+        self.step_with_dt(dt)
+    }
+
+    /// One step of a given size: both phases to their grid update, the drag,
+    /// then both phases on from the grid.
+    pub fn step_with_dt(&mut self, dt: f64) -> Result<(), StepError> {
+        let [a, b] = &mut self.phases;
+        a.begin_step(dt)?;
+        b.begin_step(dt)?;
+        self.last = drag::couple(a, b, &self.drag, &mut self.scratch, dt);
+        self.drag_dissipated += self.last.dissipated;
+        a.finish_step();
+        b.finish_step();
+        Ok(())
+    }
+
+    /// What the last step's coupling did.
+    pub fn last_coupling(&self) -> Coupling {
+        self.last
+    }
+
+    /// Both phases' energies summed, the drag's dissipation added to `dissipated`.
+    pub fn energy(&self) -> Energy {
+        let (a, b) = (self.phases[0].energy(), self.phases[1].energy());
+        Energy {
+            kinetic: a.kinetic + b.kinetic,
+            gravitational: a.gravitational + b.gravitational,
+            stored: a.stored + b.stored,
+            dissipated: a.dissipated + b.dissipated + self.drag_dissipated,
+        }
+    }
+
+    pub fn drag_dissipated(&self) -> f64 {
+        self.drag_dissipated
+    }
+
+    /// Total particle momentum of both phases.
+    pub fn momentum(&self) -> Vec2 {
+        self.phases
+            .iter()
+            .map(|s| {
+                let p = &s.particles;
+                p.v.iter()
+                    .zip(&p.mass)
+                    .fold(Vec2::zeros(), |sum, (v, m)| sum + *m * v)
+            })
+            .fold(Vec2::zeros(), |a, b| a + b)
+    }
+}
