@@ -216,6 +216,22 @@ pub struct Body {
     /// Initial velocity (m/s).
     #[serde(default)]
     pub velocity: [f64; 2],
+    /// The share of the mixture's volume this body's phase takes (its volume
+    /// fraction n, 0 < n <= 1; docs/physics.md section 6): each particle
+    /// carries n times its lattice volume and mass, so rho0 stays the true
+    /// density and n rho0 is the partial one. 1 for a single phase.
+    #[serde(default = "Body::full", skip_serializing_if = "Body::is_full")]
+    pub fraction: f64,
+}
+
+impl Body {
+    fn full() -> f64 {
+        1.0
+    }
+
+    fn is_full(fraction: &f64) -> bool {
+        *fraction == 1.0
+    }
 }
 
 /// The `[scene]` table. Defaults: the dam-break tank of docs/physics.md section 1.
@@ -312,6 +328,7 @@ impl Scene {
                 rect: [0.0, 0.0, 0.2, 0.4],
                 material: material.name.clone(),
                 velocity: [0.0, 0.0],
+                fraction: 1.0,
             }],
             materials: vec![material],
             ..Scene::default()
@@ -643,6 +660,11 @@ impl SolverConfig {
                     && b.rect[3] <= s.origin[1] + s.size[1] + 1e-12,
                 &key,
                 "must lie inside the box",
+            )?;
+            check(
+                b.fraction > 0.0 && b.fraction <= 1.0,
+                &format!("scene.body[{i}].fraction"),
+                format!("{} is outside (0, 1]", b.fraction),
             )?;
             let names: Vec<&str> = s.materials.iter().map(|m| m.name.as_str()).collect();
             check(

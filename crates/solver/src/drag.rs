@@ -45,8 +45,31 @@ pub struct Drag {
     /// B = n^2 mu / k (kg m^-3 s^-1): drag force per mixture volume per unit
     /// relative velocity.
     pub coefficient: f64,
+    /// Kozeny-Carman: Some(n0) makes the coefficient that of porosity n0 and
+    /// scales it with the node's porosity n = V_i^b / V_i (phase b is the
+    /// fluid) as B(n) = n^2 mu / k(n), k(n) = k0 [n^3 / (1-n)^2] / [n0^3 / (1-n0)^2].
+    pub kozeny_carman: Option<f64>,
     pub model: DragModel,
     pub update: DragUpdate,
+}
+
+impl Drag {
+    /// B = n^2 mu / k for a fluid of viscosity mu (Pa s) through a skeleton of
+    /// permeability k (m^2) at porosity n.
+    pub fn from_permeability(viscosity: f64, permeability: f64, porosity: f64) -> f64 {
+        porosity * porosity * viscosity / permeability
+    }
+
+    /// The coefficient at a node of porosity n.
+    pub fn coefficient_at(&self, n: f64) -> f64 {
+        match self.kozeny_carman {
+            None => self.coefficient,
+            Some(n0) => {
+                let r = (1.0 - n) / (1.0 - n0);
+                self.coefficient * (n0 / n) * r * r
+            }
+        }
+    }
 }
 
 /// What one coupling did.
@@ -119,7 +142,8 @@ pub fn couple(
             continue;
         }
         out.nodes += 1;
-        let k = drag.coefficient * (va[n] + vb[n]) * (1.0 / ma + 1.0 / mb);
+        let volume = va[n] + vb[n];
+        let k = drag.coefficient_at(vb[n] / volume) * volume * (1.0 / ma + 1.0 / mb);
         out.stable_dt = out.stable_dt.min(2.0 / k);
         let (sa, sb) = (ga.vel_new[n], gb.vel_new[n]);
         let rel = sb - sa;

@@ -2,7 +2,8 @@
 //! docs/physics.md section 6): each phase is a `Solver` with its own
 //! particles, material and grid over the same box, stepped by the same
 //! stages with one shared time step; between each phase's grid update and
-//! its G2P the drag couples the two grids (`drag::couple`). A single-phase
+//! its G2P the drag couples the two grids (`drag::couple`). Phase 0 is the
+//! solid, phase 1 the fluid (its volume fraction is the porosity). A single-phase
 //! run is a plain `Solver` and is untouched by this.
 
 use crate::drag::{self, Coupling, Drag, DragUpdate};
@@ -39,6 +40,14 @@ impl Mixture {
                 key: "drag.coefficient".into(),
                 message: format!("{} is not a finite number >= 0", drag.coefficient),
             });
+        }
+        if let Some(n0) = drag.kozeny_carman {
+            if !(n0 > 0.0 && n0 < 1.0) {
+                return Err(ConfigError {
+                    key: "drag.kozeny_carman".into(),
+                    message: format!("reference porosity {n0} is outside (0, 1)"),
+                });
+            }
         }
         let scratch = drag::Scratch::new(&phases[0].grid);
         Ok(Mixture {

@@ -11,6 +11,9 @@ pub fn seed(scene: &Scene) -> Particles {
     for body in &scene.bodies {
         let material = scene.material_index(body).expect("validated");
         let mat = &scene.materials[material];
+        // The lattice volume l^2 and its mass, times the body's volume
+        // fraction (in the order the single-phase figures were computed in).
+        let (share, mass) = (l * l * body.fraction, mat.rho0 * l * l * body.fraction);
         let [x0, y0, x1, y1] = body.rect;
         // Lattice positions origin + (k + 1/2) l that fall inside the rectangle.
         let first = |lo: f64, o: f64| ((lo - o) / l - 0.5).ceil().max(0.0) as i64;
@@ -27,8 +30,8 @@ pub fn seed(scene: &Scene) -> Particles {
                         ps.push(
                             Vec2::new(x, y),
                             Vec2::from(body.velocity),
-                            mat.rho0 * l * l,
-                            l * l,
+                            mass,
+                            share,
                             material as u16,
                         );
                     }
@@ -47,14 +50,14 @@ pub fn seed(scene: &Scene) -> Particles {
                         ps.push(
                             Vec2::new(x, y),
                             Vec2::from(body.velocity),
-                            mat.rho0 * l * l,
-                            l * l,
+                            mass,
+                            share,
                             material as u16,
                         );
                         let q = ps.len() - 1;
                         ps.f[q] = Mat2::new(1.0, 0.0, 0.0, j);
                         ps.j[q] = j;
-                        ps.vol[q] = j * l * l;
+                        ps.vol[q] = j * l * l * body.fraction;
                         ps.pressure[q] = p;
                         ps.stress[q] = -p * Mat2::identity();
                     }

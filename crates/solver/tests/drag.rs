@@ -27,8 +27,8 @@ fn drag_coefficient() -> f64 {
     rs * rf / (TAU * (rs + rf))
 }
 
-/// One phase filling `rect` of a periodic, weightless 0.1 m box, its
-/// particles scaled to the volume fraction `n` at true density `rho`.
+/// One phase filling `rect` of a periodic, weightless 0.1 m box at volume
+/// fraction `n` (`scene.body.fraction`) and true density `rho`.
 fn phase(
     rect: [f64; 4],
     rho: f64,
@@ -40,11 +40,9 @@ fn phase(
     material.rho0 = rho;
     let mut scene = common::box_scene([0.1, 0.1], rect, material, 0.0);
     scene.periodic = [true, true];
+    scene.bodies[0].fraction = n;
     let mut ps = scene::seed(&scene);
     for p in 0..ps.len() {
-        ps.vol0[p] *= n;
-        ps.vol[p] *= n;
-        ps.mass[p] *= n;
         ps.v[p] = velocity(ps.x[p]);
     }
     Solver::with_particles(
@@ -63,11 +61,21 @@ fn uniform_mixture(update: DragUpdate, method: &Method) -> Mixture {
 
 /// The uniform mixture with tau scaled by `tau_scale`.
 fn uniform_mixture_tau(update: DragUpdate, method: &Method, tau_scale: f64) -> Mixture {
+    uniform_mixture_with(update, method, tau_scale, None)
+}
+
+fn uniform_mixture_with(
+    update: DragUpdate,
+    method: &Method,
+    tau_scale: f64,
+    kozeny_carman: Option<f64>,
+) -> Mixture {
     let full = [0.0, 0.0, 0.1, 0.1];
     let solid = phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
     let fluid = phase(full, RHO_F, N_F, method.clone(), |_| Vec2::new(DV0, 0.0));
     let drag = Drag {
         coefficient: drag_coefficient() / tau_scale,
+        kozeny_carman,
         model: DragModel::BangBangNode,
         update,
     };
@@ -204,6 +212,7 @@ fn drag_is_action_against_reaction_at_every_node() {
             });
             let drag = Drag {
                 coefficient: drag_coefficient(),
+                kozeny_carman: None,
                 model: DragModel::BangBangNode,
                 update,
             };
@@ -239,9 +248,78 @@ fn phases_over_different_grids_are_refused() {
     let b = common::solver(scene, method);
     let drag = Drag {
         coefficient: 1.0,
+        kozeny_carman: None,
         model: DragModel::BangBangNode,
         update: DragUpdate::Implicit,
     };
     let err = Mixture::new([a, b], drag).err().unwrap();
     assert_eq!(err.key, "scene");
+}
+
+/// Kozeny-Carman: at the reference porosity the coefficient is B0; at
+/// porosity 0.4 with n0 = 0.3 it is B0 (0.3 / 0.4) (0.6 / 0.7)^2, and the
+/// decay follows that tau. B = n^2 mu / k.
+#[test]
+fn kozeny_carman_scales_the_coefficient_with_the_nodal_porosity() {
+    let b = Drag::from_permeability(1e-3, 1e-10, 0.4);
+    assert!((b / 1.6e6 - 1.0).abs() < 1e-15, "{b}");
+    let method = common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usf);
+    for (n0, factor) in [(N_F, 1.0), (0.3, (0.3 / 0.4) * (0.6f64 / 0.7).powi(2))] {
+        let mut mix = uniform_mixture_with(DragUpdate::Exponential, &method, 1.0, Some(n0));
+        let dt = 0.1 * TAU;
+        for n in 1..=30 {
+            mix.step_with_dt(dt).unwrap();
+            let rel = mean_velocity(mix.phase(1)) - mean_velocity(mix.phase(0));
+            let expected = DV0 * (-(n as f64) * dt * factor / TAU).exp();
+            assert!(
+                (rel.x - expected).abs() < 1e-9 * DV0,
+                "n0 {n0}: {} against {expected}",
+                rel.x
+            );
+        }
+    }
+    let bad = Drag {
+        coefficient: 1.0,
+        kozeny_carman: Some(1.0),
+        model: DragModel::BangBangNode,
+        update: DragUpdate::Implicit,
+    };
+    let full = [0.0, 0.0, 0.1, 0.1];
+    let a = phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
+    let b = phase(full, RHO_F, N_F, method, |_| Vec2::zeros());
+    assert_eq!(
+        Mixture::new([a, b], bad).err().unwrap().key,
+        "drag.kozeny_carman"
+    );
+}
+
+/// A body's volume fraction scales its particles' mass and volume (and 1
+/// leaves them as they were); outside (0, 1] it is refused by key.
+#[test]
+fn body_fraction_scales_mass_and_volume() {
+    let full = [0.0, 0.0, 0.1, 0.1];
+    let mut material = Material::tait(1e5);
+    material.rho0 = RHO_F;
+    let mut scene = common::box_scene([0.1, 0.1], full, material, 9.81);
+    let one = scene::seed(&scene);
+    scene.bodies[0].fraction = N_F;
+    let part = scene::seed(&scene);
+    assert_eq!(one.len(), part.len());
+    for p in 0..one.len() {
+        assert_eq!(one.mass[p], 1000.0 * 0.005 * 0.005);
+        assert_eq!(part.mass[p], one.mass[p] * N_F);
+        assert_eq!(part.vol0[p], one.vol0[p] * N_F);
+    }
+    for bad in [0.0, -0.1, 1.5, f64::NAN] {
+        scene.bodies[0].fraction = bad;
+        let err = SolverConfig {
+            scene: scene.clone(),
+            method: Method::baseline(),
+            perturb: vec![],
+        }
+        .validate()
+        .err()
+        .unwrap();
+        assert_eq!(err.key, "scene.body[0].fraction", "{bad}");
+    }
 }

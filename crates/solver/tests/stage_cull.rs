@@ -15,6 +15,7 @@ fn thrown(on_escape: OnLoss) -> Solver {
         rect: [0.6, 0.6, 0.61, 0.61],
         material: String::new(),
         velocity: [1000.0, 0.0],
+        fraction: 1.0,
     });
     scene.on_escape = on_escape;
     let method = Method {

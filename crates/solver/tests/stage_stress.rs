@@ -221,6 +221,7 @@ fn uniform_deformation_gives_the_eos_pressure() {
                         rect: [k as f64 * strip, 0.0, (k + 1) as f64 * strip, size],
                         material: run_mats[k].name.clone(),
                         velocity: [0.0, 0.0],
+                        fraction: 1.0,
                     })
                     .collect();
                 scene.materials = run_mats.clone();

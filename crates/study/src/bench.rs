@@ -90,6 +90,7 @@ pub fn mpm88_sized(n_particles: usize, n_grid: usize) -> (SolverConfig, Particle
             rect: [0.2, 0.2, 0.6, 0.6],
             material: String::new(),
             velocity: [0.0, -1.0],
+            fraction: 1.0,
         }],
         materials: vec![mat],
         ..Scene::default()

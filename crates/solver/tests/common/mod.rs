@@ -32,6 +32,7 @@ pub fn box_scene(size: [f64; 2], rect: [f64; 4], material: Material, gravity: f6
             rect,
             material: String::new(),
             velocity: [0.0, 0.0],
+            fraction: 1.0,
         }],
         materials: vec![material],
         ..Scene::default()
