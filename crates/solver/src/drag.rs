@@ -6,8 +6,10 @@
 //!
 //! - explicit: dv' = dv* - dt k dv^n (stable for dt < 2 / k);
 //! - implicit (backward Euler): dv' = dv* / (1 + dt k);
-//! - exponential: dv' = dv* exp(-dt k), the exact solution of the linear drag
-//!   over the step, stable at any dt like the implicit one;
+//! - exponential: dv' = dv^n exp(-dt k) + (dv* - dv^n) (1 - exp(-dt k)) / (dt k),
+//!   the exact solution of d(dv)/dt = a - k dv with the other forces'
+//!   a = (dv* - dv^n) / dt held over the step (pure decay: dv^n exp(-dt k)),
+//!   stable at any dt like the implicit one;
 //!
 //! with k = B V_i (1/m_a + 1/m_b), B the drag coefficient per mixture volume
 //! and V_i = V_i^a + V_i^b the nodal volume sum_p N_ip V_p of both phases
@@ -118,12 +120,15 @@ fn nodal_volume(s: &Solver, out: &mut [f64]) {
 
 /// Corrects both phases' v^{n+1} (and the nodal accelerations) for the drag
 /// over a step of `dt`; both must have run `begin_step` with the same dt.
+/// With `fixed_a` phase a is a fixed skeleton: its grid velocities are held
+/// at zero (infinite mass in the drag) and only b's velocity changes.
 pub fn couple(
     a: &mut Solver,
     b: &mut Solver,
     drag: &Drag,
     scratch: &mut Scratch,
     dt: f64,
+    fixed_a: bool,
 ) -> Coupling {
     let [va, vb] = &mut scratch.volume;
     nodal_volume(a, va);
@@ -133,6 +138,14 @@ pub fn couple(
         ..Coupling::default()
     };
     let (ga, gb) = (&mut a.grid, &mut b.grid);
+    if fixed_a {
+        for &n in &ga.active {
+            let n = n as usize;
+            ga.vel[n] = Vec2::zeros();
+            ga.vel_new[n] = Vec2::zeros();
+            ga.accel[n] = Vec2::zeros();
+        }
+    }
     let before = grid_kinetic(ga) + grid_kinetic(gb);
     for &n in &ga.inside {
         let n = n as usize;
@@ -142,25 +155,35 @@ pub fn couple(
             continue;
         }
         out.nodes += 1;
+        let (inv_a, inv_b) = (if fixed_a { 0.0 } else { 1.0 / ma }, 1.0 / mb);
         let volume = va[n] + vb[n];
-        let k = drag.coefficient_at(vb[n] / volume) * volume * (1.0 / ma + 1.0 / mb);
+        let k = drag.coefficient_at(vb[n] / volume) * volume * (inv_a + inv_b);
         out.stable_dt = out.stable_dt.min(2.0 / k);
         let (sa, sb) = (ga.vel_new[n], gb.vel_new[n]);
         let rel = sb - sa;
         let rel_new = match drag.update {
             DragUpdate::Explicit => rel - (dt * k) * (gb.vel[n] - ga.vel[n]),
             DragUpdate::Implicit => rel / (1.0 + dt * k),
-            DragUpdate::Exponential => rel * (-dt * k).exp(),
+            DragUpdate::Exponential => {
+                // Exact for d(dv)/dt = a - k dv with the other forces' a =
+                // (dv* - dv^n) / dt held over the step.
+                let x = dt * k;
+                let start = gb.vel[n] - ga.vel[n];
+                let forced = if x > 0.0 { -(-x).exp_m1() / x } else { 1.0 };
+                start * (-x).exp() + (rel - start) * forced
+            }
         };
-        let total = ma + mb;
-        let centre = (ma * sa + mb * sb) / total;
+        // The centre of mass keeps its velocity; each phase takes the share
+        // of the relative change its inverse mass gives it.
+        let inv = inv_a + inv_b;
+        let centre = (inv_b * sa + inv_a * sb) / inv;
         let (na, nb) = (
-            centre - (mb / total) * rel_new,
-            centre + (ma / total) * rel_new,
+            centre - (inv_a / inv) * rel_new,
+            centre + (inv_b / inv) * rel_new,
         );
         let (da, db) = (na - sa, nb - sb);
         let scale = ma * sa.norm() + mb * sb.norm();
-        if scale > 0.0 {
+        if scale > 0.0 && !fixed_a {
             let residual = (ma * da + mb * db).norm() / scale;
             out.momentum_residual = out.momentum_residual.max(residual);
         }

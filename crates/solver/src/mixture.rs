@@ -16,6 +16,8 @@ pub struct Mixture {
     /// Kinetic energy the drag dissipated since t = 0.
     drag_dissipated: f64,
     last: Coupling,
+    /// The solid is a fixed skeleton (its grid velocity held at zero).
+    fixed_solid: bool,
 }
 
 impl Mixture {
@@ -55,11 +57,20 @@ impl Mixture {
             drag,
             scratch,
             drag_dissipated: 0.0,
+            fixed_solid: false,
             last: Coupling {
                 stable_dt: f64::INFINITY,
                 ..Coupling::default()
             },
         })
+    }
+
+    /// Holds the solid (phase 0) as a fixed porous skeleton: its grid
+    /// velocity is zero every step, so its particles stay where they are,
+    /// and the fluid's drag acts against it as against an infinite mass.
+    pub fn fix_solid(mut self) -> Self {
+        self.fixed_solid = true;
+        self
     }
 
     pub fn phase(&self, k: usize) -> &Solver {
@@ -97,7 +108,7 @@ impl Mixture {
         let [a, b] = &mut self.phases;
         a.begin_step(dt)?;
         b.begin_step(dt)?;
-        self.last = drag::couple(a, b, &self.drag, &mut self.scratch, dt);
+        self.last = drag::couple(a, b, &self.drag, &mut self.scratch, dt, self.fixed_solid);
         self.drag_dissipated += self.last.dissipated;
         a.finish_step();
         b.finish_step();

@@ -8,7 +8,8 @@
 //! update's (1 - dt/tau)^n, with tau = rs rf / [B (rs + rf)]; total momentum
 //! is kept and the kinetic energy lost is the drag's dissipation. In a
 //! non-uniform mixture the drag is action against reaction at every node and
-//! total momentum is kept to round-off.
+//! total momentum is kept to round-off. Fluid falling under gravity through
+//! a fixed skeleton reaches Darcy's flux q = k rho_f g / mu.
 
 use solver::drag::{Drag, DragModel, DragUpdate};
 use solver::*;
@@ -36,9 +37,20 @@ fn phase(
     method: Method,
     velocity: impl Fn(Vec2) -> Vec2,
 ) -> Solver {
+    phase_under_gravity(rect, rho, n, method, velocity, 0.0)
+}
+
+fn phase_under_gravity(
+    rect: [f64; 4],
+    rho: f64,
+    n: f64,
+    method: Method,
+    velocity: impl Fn(Vec2) -> Vec2,
+    gravity: f64,
+) -> Solver {
     let mut material = Material::tait(1e5);
     material.rho0 = rho;
-    let mut scene = common::box_scene([0.1, 0.1], rect, material, 0.0);
+    let mut scene = common::box_scene([0.1, 0.1], rect, material, gravity);
     scene.periodic = [true, true];
     scene.bodies[0].fraction = n;
     let mut ps = scene::seed(&scene);
@@ -321,5 +333,41 @@ fn body_fraction_scales_mass_and_volume() {
         .err()
         .unwrap();
         assert_eq!(err.key, "scene.body[0].fraction", "{bad}");
+    }
+}
+
+/// Darcy under gravity: fluid (n = 0.4) falling through a fixed skeleton in a
+/// periodic box reaches the steady flux q = n v_f = k rho_f g / mu (unit
+/// hydraulic gradient) with B = n^2 mu / k; the skeleton does not move.
+#[test]
+fn fluid_through_a_fixed_skeleton_reaches_darcy_flux() {
+    let (mu, k) = (1e-3, 1e-9);
+    let g = 9.81;
+    let full = [0.0, 0.0, 0.1, 0.1];
+    for method in methods() {
+        for update in [DragUpdate::Implicit, DragUpdate::Exponential] {
+            let solid = phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
+            let fluid = phase_under_gravity(full, RHO_F, N_F, method.clone(), |_| Vec2::zeros(), g);
+            let drag = Drag {
+                coefficient: Drag::from_permeability(mu, k, N_F),
+                kozeny_carman: None,
+                model: DragModel::BangBangNode,
+                update,
+            };
+            let mut mix = Mixture::new([solid, fluid], drag).unwrap().fix_solid();
+            let x0: Vec<Vec2> = mix.phase(0).view().x.to_vec();
+            // tau = n rho_f / B = 0.0025 s: 40 tau.
+            for _ in 0..1000 {
+                mix.step_with_dt(1e-4).unwrap();
+            }
+            let q = N_F * mean_velocity(mix.phase(1)).y;
+            let darcy = -k * RHO_F * g / mu;
+            assert!(
+                (q / darcy - 1.0).abs() < 1e-9,
+                "{update:?}: q {q} against {darcy}"
+            );
+            assert_eq!(mix.phase(0).view().x, &x0[..], "the skeleton stays");
+            assert!(mix.drag_dissipated() > 0.0);
+        }
     }
 }
