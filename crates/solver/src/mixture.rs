@@ -6,8 +6,11 @@
 //! solid, phase 1 the fluid (its volume fraction is the porosity). A single-phase
 //! run is a plain `Solver` and is untouched by this.
 
+use crate::checkpoint::{unseal, CheckpointError, Reader, Writer};
 use crate::drag::{self, Coupling, Drag, DragUpdate};
 use crate::{ConfigError, Energy, Solver, StepError, Vec2};
+
+const MAGIC: &[u8; 8] = b"KICKMIX1";
 
 pub struct Mixture {
     phases: [Solver; 2],
@@ -133,6 +136,44 @@ impl Mixture {
 
     pub fn drag_dissipated(&self) -> f64 {
         self.drag_dissipated
+    }
+
+    /// 64-bit hash of both phases' particle states.
+    pub fn state_hash(&self) -> u64 {
+        let mut h = crate::checkpoint::Hasher::default();
+        for s in &self.phases {
+            h.word(s.state_hash());
+        }
+        h.finish()
+    }
+
+    /// Both phases' checkpoints and the mixture's own state (the drag's
+    /// dissipation and the last coupling's explicit limit, which sets the
+    /// next step), sealed with a checksum.
+    pub fn checkpoint(&self) -> Vec<u8> {
+        let mut w = Writer(MAGIC.to_vec());
+        for s in &self.phases {
+            w.bytes(&s.checkpoint());
+        }
+        w.f64(self.drag_dissipated);
+        w.f64(self.last.stable_dt);
+        w.seal()
+    }
+
+    /// Restores a checkpoint of a mixture built from the same configurations.
+    pub fn restore(&mut self, bytes: &[u8]) -> Result<(), CheckpointError> {
+        let mut r = Reader(unseal(bytes, MAGIC)?);
+        let (a, b) = (r.bytes()?, r.bytes()?);
+        let (dissipated, stable_dt) = (r.f64()?, r.f64()?);
+        r.finish()?;
+        self.phases[0].restore(a)?;
+        self.phases[1].restore(b)?;
+        self.drag_dissipated = dissipated;
+        self.last = Coupling {
+            stable_dt,
+            ..Coupling::default()
+        };
+        Ok(())
     }
 
     /// Total particle momentum of both phases.

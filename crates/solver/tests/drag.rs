@@ -28,45 +28,6 @@ fn drag_coefficient() -> f64 {
     rs * rf / (TAU * (rs + rf))
 }
 
-/// One phase filling `rect` of a periodic, weightless 0.1 m box at volume
-/// fraction `n` (`scene.body.fraction`) and true density `rho`.
-fn phase(
-    rect: [f64; 4],
-    rho: f64,
-    n: f64,
-    method: Method,
-    velocity: impl Fn(Vec2) -> Vec2,
-) -> Solver {
-    phase_under_gravity(rect, rho, n, method, velocity, 0.0)
-}
-
-fn phase_under_gravity(
-    rect: [f64; 4],
-    rho: f64,
-    n: f64,
-    method: Method,
-    velocity: impl Fn(Vec2) -> Vec2,
-    gravity: f64,
-) -> Solver {
-    let mut material = Material::tait(1e5);
-    material.rho0 = rho;
-    let mut scene = common::box_scene([0.1, 0.1], rect, material, gravity);
-    scene.periodic = [true, true];
-    scene.bodies[0].fraction = n;
-    let mut ps = scene::seed(&scene);
-    for p in 0..ps.len() {
-        ps.v[p] = velocity(ps.x[p]);
-    }
-    Solver::with_particles(
-        SolverConfig {
-            scene,
-            method,
-            perturb: vec![],
-        },
-        ps,
-    )
-}
-
 fn uniform_mixture(update: DragUpdate, method: &Method) -> Mixture {
     uniform_mixture_tau(update, method, 1.0)
 }
@@ -83,8 +44,8 @@ fn uniform_mixture_with(
     kozeny_carman: Option<f64>,
 ) -> Mixture {
     let full = [0.0, 0.0, 0.1, 0.1];
-    let solid = phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
-    let fluid = phase(full, RHO_F, N_F, method.clone(), |_| Vec2::new(DV0, 0.0));
+    let solid = common::phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
+    let fluid = common::phase(full, RHO_F, N_F, method.clone(), |_| Vec2::new(DV0, 0.0));
     let drag = Drag {
         coefficient: drag_coefficient() / tau_scale,
         kozeny_carman,
@@ -216,10 +177,10 @@ fn drag_is_action_against_reaction_at_every_node() {
             DragUpdate::Implicit,
             DragUpdate::Exponential,
         ] {
-            let solid = phase([0.02, 0.02, 0.07, 0.06], RHO_S, N_S, method.clone(), |x| {
+            let solid = common::phase([0.02, 0.02, 0.07, 0.06], RHO_S, N_S, method.clone(), |x| {
                 Vec2::new(0.05 * (60.0 * x.y).sin(), -0.02)
             });
-            let fluid = phase([0.04, 0.03, 0.09, 0.08], RHO_F, N_F, method.clone(), |x| {
+            let fluid = common::phase([0.04, 0.03, 0.09, 0.08], RHO_F, N_F, method.clone(), |x| {
                 Vec2::new(0.2 + 0.1 * (50.0 * x.y).cos(), 0.1 * (40.0 * x.x).sin())
             });
             let drag = Drag {
@@ -251,7 +212,7 @@ fn drag_is_action_against_reaction_at_every_node() {
 #[test]
 fn phases_over_different_grids_are_refused() {
     let method = common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usf);
-    let a = phase([0.0, 0.0, 0.1, 0.1], RHO_S, N_S, method.clone(), |_| {
+    let a = common::phase([0.0, 0.0, 0.1, 0.1], RHO_S, N_S, method.clone(), |_| {
         Vec2::zeros()
     });
     let mut material = Material::tait(1e5);
@@ -297,8 +258,8 @@ fn kozeny_carman_scales_the_coefficient_with_the_nodal_porosity() {
         update: DragUpdate::Implicit,
     };
     let full = [0.0, 0.0, 0.1, 0.1];
-    let a = phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
-    let b = phase(full, RHO_F, N_F, method, |_| Vec2::zeros());
+    let a = common::phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
+    let b = common::phase(full, RHO_F, N_F, method, |_| Vec2::zeros());
     assert_eq!(
         Mixture::new([a, b], bad).err().unwrap().key,
         "drag.kozeny_carman"
@@ -346,8 +307,9 @@ fn fluid_through_a_fixed_skeleton_reaches_darcy_flux() {
     let full = [0.0, 0.0, 0.1, 0.1];
     for method in methods() {
         for update in [DragUpdate::Implicit, DragUpdate::Exponential] {
-            let solid = phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
-            let fluid = phase_under_gravity(full, RHO_F, N_F, method.clone(), |_| Vec2::zeros(), g);
+            let solid = common::phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
+            let fluid =
+                common::phase_under_gravity(full, RHO_F, N_F, method.clone(), |_| Vec2::zeros(), g);
             let drag = Drag {
                 coefficient: Drag::from_permeability(mu, k, N_F),
                 kozeny_carman: None,

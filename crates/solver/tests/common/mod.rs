@@ -77,3 +77,44 @@ pub fn lattice_checkerboard(x: Vec2, h: f64) -> Vec2 {
     }
     Vec2::new(sum, 0.0)
 }
+
+/// One phase of a mixture: `rect` of a periodic, weightless 0.1 m box
+/// (h = 1 cm, Tait K = 0.1 MPa) at volume fraction `n`
+/// (`scene.body.fraction`) and true density `rho`.
+pub fn phase(
+    rect: [f64; 4],
+    rho: f64,
+    n: f64,
+    method: Method,
+    velocity: impl Fn(Vec2) -> Vec2,
+) -> Solver {
+    phase_under_gravity(rect, rho, n, method, velocity, 0.0)
+}
+
+/// The same under gravity (periodic in y too: the phase falls through the box).
+pub fn phase_under_gravity(
+    rect: [f64; 4],
+    rho: f64,
+    n: f64,
+    method: Method,
+    velocity: impl Fn(Vec2) -> Vec2,
+    gravity: f64,
+) -> Solver {
+    let mut material = Material::tait(1e5);
+    material.rho0 = rho;
+    let mut scene = box_scene([0.1, 0.1], rect, material, gravity);
+    scene.periodic = [true, true];
+    scene.bodies[0].fraction = n;
+    let mut ps = scene::seed(&scene);
+    for p in 0..ps.len() {
+        ps.v[p] = velocity(ps.x[p]);
+    }
+    Solver::with_particles(
+        SolverConfig {
+            scene,
+            method,
+            perturb: vec![],
+        },
+        ps,
+    )
+}
