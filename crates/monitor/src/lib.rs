@@ -357,19 +357,33 @@ pub fn critical_courant(shape: solver::ShapeKind) -> f64 {
 
 const UNLABELLED: u32 = u32::MAX;
 
+/// Relative round-off of the energy sums (O(1e-16) per term over up to 1e6
+/// particles, with margin): a rise below this times the energies' magnitude
+/// is not an injection.
+pub const ROUND_OFF: f64 = 1e-12;
+
 impl Monitor {
-    /// A monitor for the state `v` (the solver at t = 0 or a restart).
+    /// A monitor for the state `v` (the solver at t = 0 or a restart, which
+    /// then restores the monitor's state).
     pub fn new(cfg: MonitorConfig, v: &StateView) -> Self {
         let geom = Geometry::from_scene(v.scene);
         let n = v.x.len();
         let cells = geom.cell_count();
+        let mut history = ParticleHistory::new(n);
+        // A body with an initial velocity is moving, not spiking, at step 1.
+        let (quiet2, quiet_rate) = (cfg.quiet_speed * cfg.quiet_speed, cfg.quiet_rate);
+        for p in 0..n {
+            let (speed2, rate) = (v.v[p].norm_squared(), v.dev_rate[p]);
+            let active = speed2 > quiet2 || rate > quiet_rate;
+            history.start(p, v.time, 0.5 * v.mass[p] * speed2, active, rate);
+        }
         Monitor {
             accel: vec![0.0; n],
             accel_step: None,
             flagged: Vec::with_capacity(n),
             bins: CellBins::new(&geom, n),
             stats: WindowStats::new(&geom, n),
-            history: ParticleHistory::new(n),
+            history,
             energy: EnergyBudget::new(v.energy.total(), v.time, cfg.injection_seconds),
             cell_label: vec![UNLABELLED; cells],
             touched: Vec::with_capacity(cells),
@@ -489,7 +503,10 @@ impl Monitor {
         if blow_out.is_some() {
             self.stopped(v);
         }
-        self.track_injected_energy(v, g, injection.total, scan.max_vertical_speed);
+        let e = &v.energy;
+        let energy_scale =
+            e.kinetic.abs() + e.gravitational.abs() + e.stored.abs() + e.dissipated.abs();
+        self.track_injected_energy(v, g, injection.total, scan.max_vertical_speed, energy_scale);
         self.report = StepReport {
             step: v.step,
             energy_injected: injection.total,
@@ -718,8 +735,17 @@ impl Monitor {
     /// changes by dv_y, and |dv_y| <= 2 V with V the largest |v_y| of any
     /// particle from the step before the event opened to now: the floor is
     /// `injection_floor_factor` m g dt min(2 V, sqrt(2 g H)) / 2, the
-    /// free-fall speed over the box height H capping it as before.
-    fn track_injected_energy(&mut self, v: &StateView, g: f64, total: f64, vertical_speed: f64) {
+    /// free-fall speed over the box height H capping it as before; plus the
+    /// sums' round-off, `ROUND_OFF` times the energies' magnitude (without
+    /// vertical motion the first term vanishes).
+    fn track_injected_energy(
+        &mut self,
+        v: &StateView,
+        g: f64,
+        total: f64,
+        vertical_speed: f64,
+        energy_scale: f64,
+    ) {
         let (step, time, merge) = (v.step, v.time, self.cfg.merge_seconds);
         let mean_mass = self.initial_mass / self.event_mark.len().max(1) as f64;
         let free_fall = (2.0 * g * self.geom.size.y).sqrt();
@@ -749,7 +775,7 @@ impl Monitor {
                 e.n_particles as f64 * mean_mass
             };
             let speed = (2.0 * e.evidence.vertical_speed_bound).min(free_fall);
-            e.evidence.energy_floor = per_kg_per_speed * speed * mass;
+            e.evidence.energy_floor = per_kg_per_speed * speed * mass + ROUND_OFF * energy_scale;
             e.classify();
         }
         self.prev_injected = total;

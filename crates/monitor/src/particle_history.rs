@@ -49,6 +49,23 @@ impl ParticleHistory {
         }
     }
 
+    /// The state at the first observation (t = `t0`): each particle's kinetic
+    /// energy `e` starts its history, and one already active (a body given
+    /// an initial velocity) is active since t0 with no quiet spell before
+    /// it: nothing is known of the time before t0.
+    pub fn start(&mut self, p: usize, t0: f64, e: f64, active: bool, rate: f64) {
+        self.ke_recent[p] = e;
+        if active {
+            self.last_active[p] = t0;
+            self.active_since[p] = t0;
+            self.quiet_before[p] = 0.0;
+        }
+        if rate > 0.0 {
+            self.peak_rate[p] = rate;
+            self.peak_rate_t[p] = t0;
+        }
+    }
+
     /// Records particle `p` at time `t`; `prev_t` is the time of the previous
     /// observation (an active particle then has `last_active == prev_t`).
     #[inline(always)]

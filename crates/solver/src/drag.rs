@@ -80,7 +80,8 @@ pub struct Coupling {
     /// Nodes both phases occupy.
     pub nodes: usize,
     /// Kinetic energy the drag took from the grid velocities v^{n+1}
-    /// (real particle masses, like the grid kinetic energy of P2G).
+    /// (real particle masses, like the grid kinetic energy of P2G): the sum
+    /// of what it took from each phase, which each phase's `dissipated` counts.
     pub dissipated: f64,
     /// Largest |m_a dv_a + m_b dv_b| over the coupled nodes relative to the
     /// node's momentum m_a |v_a*| + m_b |v_b*| (action against reaction; round-off).
@@ -146,7 +147,7 @@ pub fn couple(
             ga.accel[n] = Vec2::zeros();
         }
     }
-    let before = grid_kinetic(ga) + grid_kinetic(gb);
+    let before = [grid_kinetic(ga), grid_kinetic(gb)];
     for &n in &ga.inside {
         let n = n as usize;
         let (ma, mb) = (ga.mass[n], gb.mass[n]);
@@ -195,7 +196,12 @@ pub fn couple(
     for g in [&mut *ga, &mut *gb] {
         refill(g);
     }
-    out.dissipated = before - (grid_kinetic(ga) + grid_kinetic(gb));
+    // Each phase's budget counts what the drag took from it (negative when
+    // it gained), so each closes alone and their sum is the dissipation.
+    let lost = [before[0] - grid_kinetic(ga), before[1] - grid_kinetic(gb)];
+    a.dissipated += lost[0];
+    b.dissipated += lost[1];
+    out.dissipated = lost[0] + lost[1];
     out
 }
 

@@ -123,14 +123,17 @@ impl Mixture {
         self.last
     }
 
-    /// Both phases' energies summed, the drag's dissipation added to `dissipated`.
+    /// Both phases' energies summed. Each phase's `dissipated` holds the
+    /// kinetic energy the drag took from it (so each phase's budget closes
+    /// alone, and a monitor can watch each); the sum holds the drag's
+    /// dissipation.
     pub fn energy(&self) -> Energy {
         let (a, b) = (self.phases[0].energy(), self.phases[1].energy());
         Energy {
             kinetic: a.kinetic + b.kinetic,
             gravitational: a.gravitational + b.gravitational,
             stored: a.stored + b.stored,
-            dissipated: a.dissipated + b.dissipated + self.drag_dissipated,
+            dissipated: a.dissipated + b.dissipated,
         }
     }
 

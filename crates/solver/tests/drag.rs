@@ -75,6 +75,7 @@ fn decay(update: DragUpdate, ratio: f64, law: impl Fn(f64) -> f64, tol: f64) {
         let mut mix = uniform_mixture(update, &method);
         let p0 = mix.momentum();
         let e0 = mix.energy().total();
+        let phase_e0 = [0, 1].map(|k| mix.phase(k).energy().total());
         let dt = ratio * TAU;
         let steps = (3.0 / ratio).ceil() as usize;
         for n in 1..=steps {
@@ -94,6 +95,14 @@ fn decay(update: DragUpdate, ratio: f64, law: impl Fn(f64) -> f64, tol: f64) {
             );
             let de = (mix.energy().total() - e0).abs() / e0;
             assert!(de < 1e-9, "{update:?} dt/tau {ratio}: energy off by {de}");
+            // Each phase's budget closes alone (the drag's exchange counted in it).
+            for k in 0..2 {
+                let dk = (mix.phase(k).energy().total() - phase_e0[k]).abs() / e0;
+                assert!(
+                    dk < 1e-9,
+                    "{update:?} dt/tau {ratio}: phase {k} off by {dk}"
+                );
+            }
         }
         assert!(mix.drag_dissipated() > 0.0);
         assert_eq!(
