@@ -96,8 +96,8 @@ fn decay(update: DragUpdate, ratio: f64, law: impl Fn(f64) -> f64, tol: f64) {
             let de = (mix.energy().total() - e0).abs() / e0;
             assert!(de < 1e-9, "{update:?} dt/tau {ratio}: energy off by {de}");
             // Each phase's budget closes alone (the drag's exchange counted in it).
-            for k in 0..2 {
-                let dk = (mix.phase(k).energy().total() - phase_e0[k]).abs() / e0;
+            for (k, e0k) in phase_e0.iter().enumerate() {
+                let dk = (mix.phase(k).energy().total() - e0k).abs() / e0;
                 assert!(
                     dk < 1e-9,
                     "{update:?} dt/tau {ratio}: phase {k} off by {dk}"
