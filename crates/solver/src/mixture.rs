@@ -55,7 +55,7 @@ impl Mixture {
             }
         }
         let scratch = drag::Scratch::new(&phases[0].grid);
-        Ok(Mixture {
+        let mut mixture = Mixture {
             phases,
             drag,
             scratch,
@@ -65,7 +65,22 @@ impl Mixture {
                 stable_dt: f64::INFINITY,
                 ..Coupling::default()
             },
-        })
+        };
+        if drag.update == DragUpdate::Explicit {
+            mixture.last.stable_dt = mixture.probe_stable_dt();
+        }
+        Ok(mixture)
+    }
+
+    /// The explicit limit of the initial state, so that the first step obeys
+    /// it too: a coupling of copies of the phases (once, at set-up).
+    fn probe_stable_dt(&mut self) -> f64 {
+        let dt = self.phases[0].next_dt().min(self.phases[1].next_dt());
+        let [mut a, mut b] = self.phases.clone();
+        if a.begin_step(dt).is_err() || b.begin_step(dt).is_err() {
+            return f64::INFINITY;
+        }
+        drag::couple(&mut a, &mut b, &self.drag, &mut self.scratch, dt, false).stable_dt
     }
 
     /// Holds the solid (phase 0) as a fixed porous skeleton: its grid
@@ -85,8 +100,9 @@ impl Mixture {
     }
 
     /// The phases' smallest step; under the explicit drag also below the
-    /// stability limit 2 / k of the last coupling (nodal masses and volumes
-    /// change little in a step), with the phases' CFL number as safety.
+    /// stability limit 2 / k of the last coupling (of the initial state at
+    /// the first step; nodal masses and volumes change little in a step),
+    /// with the phases' CFL number as safety.
     pub fn next_dt(&self) -> f64 {
         let dt = self.phases[0].next_dt().min(self.phases[1].next_dt());
         match self.drag.update {
