@@ -54,7 +54,8 @@ def main(out):
                 times.append(e["t"])
                 if e["evidence"]["energy_floor"] > 0 and e["cause"] == "injection":
                     ratios.append(e["energy_injected"] / e["evidence"]["energy_floor"])
-                courants.append(e["evidence"]["courant_before"])
+                if e["cause"] == "injection":
+                    courants.append(e["evidence"]["courant_before"])
                 anomaly = e["quiescent_before"] and "strain_rate" in e["deformed_by"]
                 n_hall += anomaly
             n_runs += len(runs)
@@ -72,7 +73,7 @@ def main(out):
         r = sorted(ratios)
         print(f"injection first kicks, energy rise / floor: median {statistics.median(r):.3g}, min {r[0]:.3g}, max {r[-1]:.3g}")
     if courants:
-        print(f"Courant before the first kick: median {statistics.median(courants):.3g}, max {max(courants):.3g}")
+        print(f"Courant before the first kick (injections): median {statistics.median(courants):.3g}, max {max(courants):.3g}")
     anomalies = [(s["case"], e["id"], e["t"]) for s in rows for e in s["events"]
                  if e["cause"] in KICK and e["quiescent_before"] and "strain_rate" in e["deformed_by"]]
     print("anomalies proper (kick with the hallmark):", len(anomalies), anomalies[:10])
@@ -81,6 +82,11 @@ def main(out):
     for e in events:
         by[e["cause"]] += 1
     print("all events by cause:", dict(by))
+    # Injections within 1e-9 J/m of their floor: a label a change of the
+    # floor's round-off term (1e-12 of the energies) could flip.
+    near = [e for e in events if e["cause"] == "injection"
+            and e["energy_injected"] - e["evidence"]["energy_floor"] < 1e-9]
+    print("injection events within 1e-9 J/m of their floor:", len(near))
     walls = [s["wall_s"] for s in rows]
     print(f"run time: {sum(walls):.0f} s in all, longest {max(walls):.0f} s; steps {sum(s['steps'] for s in rows)}")
 
