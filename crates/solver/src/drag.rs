@@ -17,7 +17,6 @@
 
 use crate::grid::Grid;
 use crate::particles::Vec2;
-use crate::shape::{Shape, Stencil};
 use crate::transfer_serial::scatter_scalar;
 use crate::Solver;
 use serde::{Deserialize, Serialize};
@@ -107,14 +106,11 @@ impl Scratch {
 
 /// V_i = sum_p N_ip V_p on the raw nodes, folded.
 fn nodal_volume(s: &Solver, out: &mut [f64]) {
-    fn run<const W: usize>(q: &[f64], st: &[Stencil], shape: &Shape, g: &Grid, out: &mut [f64]) {
-        scatter_scalar::<W>(q, st, shape, g, out);
-    }
     let (q, st, shape, g) = (&s.particles.vol, &s.stencils, &s.shape, &s.grid);
     match shape.width() {
-        2 => run::<2>(q, st, shape, g, out),
-        3 => run::<3>(q, st, shape, g, out),
-        _ => run::<4>(q, st, shape, g, out),
+        2 => scatter_scalar::<2>(q, st, shape, g, out),
+        3 => scatter_scalar::<3>(q, st, shape, g, out),
+        _ => scatter_scalar::<4>(q, st, shape, g, out),
     }
     g.fold(out);
 }

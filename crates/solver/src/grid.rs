@@ -152,13 +152,14 @@ impl Grid {
         self.no_slip[axis][usize::from(i > PAD)]
     }
 
-    #[inline]
     /// The node (padded index) is in this step's active set.
+    #[inline]
     pub fn is_active(&self, node: usize) -> bool {
         let (i, j) = (node % self.dims[0], node / self.dims[0]);
         self.active_bits[j * self.row_words + (i >> 6)] >> (i & 63) & 1 == 1
     }
 
+    #[inline]
     pub fn index(&self, i: usize, j: usize) -> usize {
         i + j * self.dims[0]
     }
