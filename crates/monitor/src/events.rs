@@ -239,6 +239,10 @@ pub struct Event {
     /// Filled in by the study runner.
     pub state_hash: Option<String>,
     pub checkpoint: Option<String>,
+    /// The mixture phase it happened in (`solid` or `fluid`); None for one
+    /// phase. Filled in by the study runner.
+    #[serde(default)]
+    pub phase: Option<String>,
     /// Energy injected before the event opened (monitor bookkeeping, kept out
     /// of the summary; the monitor's checkpoint stores it beside the events).
     #[serde(skip)]
@@ -478,6 +482,7 @@ mod tests {
             outcome: Outcome::Recovered,
             state_hash: Some("00ff".into()),
             checkpoint: None,
+            phase: None,
             injected_at_open: 0.0,
         }
     }

@@ -1018,6 +1018,7 @@ impl Monitor {
             outcome: Outcome::Recovered,
             state_hash: None,
             checkpoint: None,
+            phase: None,
             injected_at_open: self.prev_injected,
         };
         event.classify();

@@ -8,7 +8,7 @@ use crate::Monitor;
 use bincode::Options;
 use solver::checkpoint::{unseal, CheckpointError, Reader, Writer};
 
-const MAGIC: &[u8; 8] = b"KICKMON6";
+const MAGIC: &[u8; 8] = b"KICKMON7";
 
 /// The events' encoding: bincode (little-endian, varint integers, f64 bits as
 /// they are) through `Event`'s serde derive, so the checkpoint and the summary
@@ -204,6 +204,7 @@ mod tests {
             outcome: crate::events::Outcome::NonFinite,
             state_hash: None,
             checkpoint: Some("ckpt_000004.bin".into()),
+            phase: Some("fluid".into()),
             injected_at_open: 0.0,
         }
     }

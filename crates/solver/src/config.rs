@@ -222,6 +222,34 @@ pub struct Body {
     /// density and n rho0 is the partial one. 1 for a single phase.
     #[serde(default = "Body::full", skip_serializing_if = "Body::is_full")]
     pub fraction: f64,
+    /// Which phase of a mixture the body belongs to (studies with a `[drag]`
+    /// table); None in a single-phase scene.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phase: Option<Phase>,
+}
+
+/// The two phases of a mixture (docs/physics.md section 6): the solid
+/// skeleton is phase 0, the pore fluid phase 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Phase {
+    Solid,
+    Fluid,
+}
+
+impl Phase {
+    pub const ALL: [Phase; 2] = [Phase::Solid, Phase::Fluid];
+
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Solid => "solid",
+            Phase::Fluid => "fluid",
+        }
+    }
 }
 
 impl Body {
@@ -329,6 +357,7 @@ impl Scene {
                 material: material.name.clone(),
                 velocity: [0.0, 0.0],
                 fraction: 1.0,
+                phase: None,
             }],
             materials: vec![material],
             ..Scene::default()

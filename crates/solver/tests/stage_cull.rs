@@ -16,6 +16,7 @@ fn thrown(on_escape: OnLoss) -> Solver {
         material: String::new(),
         velocity: [1000.0, 0.0],
         fraction: 1.0,
+        phase: None,
     });
     scene.on_escape = on_escape;
     let method = Method {

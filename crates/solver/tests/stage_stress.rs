@@ -222,6 +222,7 @@ fn uniform_deformation_gives_the_eos_pressure() {
                         material: run_mats[k].name.clone(),
                         velocity: [0.0, 0.0],
                         fraction: 1.0,
+                        phase: None,
                     })
                     .collect();
                 scene.materials = run_mats.clone();

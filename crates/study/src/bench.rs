@@ -91,6 +91,7 @@ pub fn mpm88_sized(n_particles: usize, n_grid: usize) -> (SolverConfig, Particle
             material: String::new(),
             velocity: [0.0, -1.0],
             fraction: 1.0,
+            phase: None,
         }],
         materials: vec![mat],
         ..Scene::default()

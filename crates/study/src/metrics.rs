@@ -279,6 +279,7 @@ pub fn summarise(
         particles_inverted: 0,
         mass_lost_fraction: 0.0,
         t_first_loss: None,
+        ..Metrics::default()
     }
 }
 

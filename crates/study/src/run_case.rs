@@ -6,9 +6,10 @@
 use crate::case_checkpoint;
 use crate::metrics;
 use crate::output_files::write_atomic;
+use crate::run_mixture;
 use crate::snapshot::Snapshot;
 use crate::study_file::Case;
-use crate::summary::{Metrics, Status, Summary, SCHEMA_VERSION};
+use crate::summary::{Metrics, PhaseSummary, Status, Summary, SCHEMA_VERSION};
 use crate::tables;
 use crate::timeseries::{Peaks, Timeseries};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -122,7 +123,10 @@ pub fn run_case(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<S
     )?;
     let started = Instant::now();
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        with_threads(opts.threads, || simulate(case, dir, opts))
+        with_threads(opts.threads, || match case.mixture {
+            Some(_) => run_mixture::simulate(case, dir, opts),
+            None => simulate(case, dir, opts),
+        })
     }));
     let wall_s = started.elapsed().as_secs_f64();
     let run = match outcome {
@@ -152,6 +156,7 @@ pub fn run_case(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<S
         final_state_hash: format!("{:016x}", run.final_hash),
         events: run.events,
         metrics: run.metrics,
+        phases: run.phases,
     };
     summary.write(dir)?;
     Ok(summary)
@@ -186,19 +191,21 @@ pub fn panic_message(panic: Box<dyn std::any::Any + Send>) -> String {
         .unwrap_or_else(|| "panic".into())
 }
 
-struct Simulated {
-    status: Status,
-    reason: String,
-    steps: u64,
-    t_end: f64,
-    particles: usize,
-    final_hash: u64,
-    events: Vec<Event>,
-    metrics: Metrics,
+/// What a simulation produced, for its summary.
+pub(crate) struct Simulated {
+    pub status: Status,
+    pub reason: String,
+    pub steps: u64,
+    pub t_end: f64,
+    pub particles: usize,
+    pub final_hash: u64,
+    pub events: Vec<Event>,
+    pub metrics: Metrics,
+    pub phases: Vec<PhaseSummary>,
 }
 
 impl Simulated {
-    fn failed(reason: String) -> Self {
+    pub(crate) fn failed(reason: String) -> Self {
         Simulated {
             status: Status::Failed,
             reason,
@@ -208,6 +215,7 @@ impl Simulated {
             final_hash: 0,
             events: vec![],
             metrics: Metrics::default(),
+            phases: vec![],
         }
     }
 }
@@ -461,6 +469,7 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
         final_hash: d.solver.state_hash(),
         metrics,
         events,
+        phases: vec![],
     })
 }
 

@@ -7,7 +7,8 @@
 use indexmap::IndexMap;
 use monitor::MonitorConfig;
 use serde::{Deserialize, Serialize};
-use solver::{Material, Method, Perturb, Scene, SolverConfig};
+use solver::drag::{Drag, DragModel, DragUpdate};
+use solver::{Material, Method, Perturb, Phase, Scene, SolverConfig};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use toml::{Table, Value};
@@ -98,6 +99,35 @@ struct StudyDoc {
     output: Output,
     #[serde(default)]
     perturb: Vec<Perturb>,
+    drag: Option<DragTable>,
+}
+
+/// The `[drag]` table: the scene is a two-phase mixture (docs/physics.md
+/// section 6) whose bodies each name their `phase`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DragTable {
+    /// B (kg m^-3 s^-1), the drag per mixture volume per unit relative velocity.
+    coefficient: Option<f64>,
+    /// Or the skeleton's permeability k (m^2): B = n^2 mu / k with the fluid
+    /// material's viscosity mu and the fluid bodies' fraction n.
+    permeability: Option<f64>,
+    /// Kozeny-Carman scaling of B with the nodal porosity, from this reference porosity.
+    kozeny_carman: Option<f64>,
+    #[serde(default)]
+    model: DragModel,
+    #[serde(default)]
+    update: DragUpdate,
+    /// The solid is a fixed skeleton (its grid velocity held at zero).
+    #[serde(default)]
+    fixed_solid: bool,
+}
+
+/// A mixture case's interaction: the resolved `[drag]` table.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MixtureSpec {
+    pub drag: Drag,
+    pub fixed_solid: bool,
 }
 
 /// One expanded case of a study.
@@ -111,6 +141,21 @@ pub struct Case {
     pub table: Table,
     pub solver: SolverConfig,
     pub output: Output,
+    /// Some for a two-phase mixture: then `solver` holds every body and
+    /// `phase_configs` splits them.
+    pub mixture: Option<MixtureSpec>,
+}
+
+impl Case {
+    /// Each phase's solver configuration (solid, fluid): the scene with only
+    /// that phase's bodies.
+    pub fn phase_configs(&self) -> [SolverConfig; 2] {
+        Phase::ALL.map(|phase| {
+            let mut cfg = self.solver.clone();
+            cfg.scene.bodies.retain(|b| b.phase == Some(phase));
+            cfg
+        })
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -253,6 +298,18 @@ fn case(name: String, table: Table) -> Result<Case, KeyError> {
         .validate()
         .map_err(|(k, m)| (format!("monitor.{k}"), m))?;
     doc.output.validate()?;
+    let mixture = match doc.drag {
+        Some(drag) => Some(mixture_spec(&drag, &solver)?),
+        None => {
+            if let Some(i) = solver.scene.bodies.iter().position(|b| b.phase.is_some()) {
+                return Err((
+                    format!("scene.body[{i}].phase"),
+                    "needs a [drag] table (a mixture); leave it out for one phase".into(),
+                ));
+            }
+            None
+        }
+    };
     let mut params = flatten(&table);
     // Every method key appears in every case, defaults included.
     if let Ok(Value::Table(m)) = Value::try_from(&solver.method) {
@@ -267,6 +324,121 @@ fn case(name: String, table: Table) -> Result<Case, KeyError> {
         table,
         solver,
         output: doc.output,
+        mixture,
+    })
+}
+
+/// Checks a mixture's bodies and resolves its `[drag]` table.
+fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, KeyError> {
+    let bodies = &solver.scene.bodies;
+    if let Some(i) = bodies.iter().position(|b| b.phase.is_none()) {
+        return Err((
+            format!("scene.body[{i}].phase"),
+            "is required in a mixture (allowed: solid | fluid)".into(),
+        ));
+    }
+    for phase in Phase::ALL {
+        if !bodies.iter().any(|b| b.phase == Some(phase)) {
+            return Err((
+                "scene.body".into(),
+                format!(
+                    "a mixture needs a body of each phase: none is {}",
+                    phase.name()
+                ),
+            ));
+        }
+    }
+    if !solver.perturb.is_empty() {
+        return Err((
+            "perturb".into(),
+            "is not available in a mixture yet (allowed: single-phase scenes)".into(),
+        ));
+    }
+    // Overlapping bodies of the two phases share the volume: n_s + n_f <= 1.
+    for (i, a) in bodies.iter().enumerate() {
+        for (j, b) in bodies.iter().enumerate().skip(i + 1) {
+            let overlap = a.rect[0] < b.rect[2]
+                && b.rect[0] < a.rect[2]
+                && a.rect[1] < b.rect[3]
+                && b.rect[1] < a.rect[3];
+            if overlap && a.phase != b.phase {
+                if a.fraction + b.fraction > 1.0 + 1e-12 {
+                    return Err((
+                        format!("scene.body[{j}].fraction"),
+                        format!(
+                            "{} with body {i}'s {} over the same ground exceeds 1 (allowed: n_s + n_f <= 1)",
+                            b.fraction, a.fraction
+                        ),
+                    ));
+                }
+            } else if overlap {
+                return Err((
+                    format!("scene.body[{j}].rect"),
+                    format!("overlaps body {i} of the same phase (allowed: one body per phase and place)"),
+                ));
+            }
+        }
+    }
+    let positive = |key: &str, v: f64| {
+        if v > 0.0 && v.is_finite() {
+            Ok(v)
+        } else {
+            Err((
+                key.to_string(),
+                format!("{v} is out of range (allowed: finite > 0)"),
+            ))
+        }
+    };
+    let coefficient = match (t.coefficient, t.permeability) {
+        (Some(b), None) => {
+            if b >= 0.0 && b.is_finite() {
+                b
+            } else {
+                return Err((
+                    "drag.coefficient".into(),
+                    format!("{b} is out of range (allowed: finite >= 0 kg m^-3 s^-1)"),
+                ));
+            }
+        }
+        (None, Some(k)) => {
+            let k = positive("drag.permeability", k)?;
+            let fluid = bodies
+                .iter()
+                .find(|b| b.phase == Some(Phase::Fluid))
+                .expect("checked above");
+            let material = solver.scene.material_index(fluid).expect("validated");
+            let mu = solver.scene.materials[material].viscosity;
+            if mu <= 0.0 {
+                return Err((
+                    format!("materials.{}.viscosity", solver.scene.materials[material].name),
+                    format!("{mu}: drag.permeability needs the fluid's viscosity > 0 (or give drag.coefficient)"),
+                ));
+            }
+            Drag::from_permeability(mu, k, fluid.fraction)
+        }
+        _ => {
+            return Err((
+                "drag".into(),
+                "give exactly one of `coefficient` (kg m^-3 s^-1) and `permeability` (m^2)".into(),
+            ))
+        }
+    };
+    if let Some(n0) = t.kozeny_carman {
+        if !(n0 > 0.0 && n0 < 1.0) {
+            return Err((
+                "drag.kozeny_carman".into(),
+                format!("{n0} is out of range (allowed: a reference porosity in (0, 1))"),
+            ));
+        }
+    }
+    Ok(MixtureSpec {
+        drag: Drag {
+            coefficient,
+            kozeny_carman: t.kozeny_carman,
+            model: t.model,
+            update: t.update,
+        },
+        fixed_solid: t.fixed_solid,
     })
 }
 
@@ -380,6 +552,7 @@ fn name_part(key: &str, v: &Value) -> String {
     match (last, v) {
         ("K", Value::Float(_) | Value::Integer(_)) => format!("K{}", si_pascal(as_f64(v))),
         ("viscosity", _) => format!("mu{}", as_f64(v)),
+        ("coefficient", Value::Float(_) | Value::Integer(_)) => format!("B{:e}", as_f64(v)),
         ("cell", Value::Float(_)) => format!("h{}cm", 100.0 * as_f64(v)),
         ("no_slip", Value::Array(walls)) if walls.is_empty() => "slip".into(),
         ("no_slip", Value::Array(walls)) => {
@@ -491,6 +664,7 @@ mod tests {
             "power-g7"
         );
         assert_eq!(name_part("method.cfl", &toml("0.1")), "cfl0.1");
+        assert_eq!(name_part("drag.coefficient", &toml("3.2e5")), "B3.2e5");
         assert_eq!(name_part("method", &toml("{}")), "base");
         assert_eq!(name_part("scene.cell", &toml("0.005")), "h0.5cm");
         assert_eq!(name_part("scene.no_slip", &toml("[]")), "slip");
@@ -532,6 +706,82 @@ mod tests {
         let e = load(&path, &[]).unwrap_err();
         assert_eq!(e.key, "matrix.ensemble", "{e}");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    const MIXTURE: &str = "[scene]\nbox = [0.1, 0.1]\ncell = 0.01\nperiodic = [true, true]\n\
+        [[scene.body]]\nrect = [0.0, 0.0, 0.1, 0.1]\nmaterial = \"skeleton\"\nphase = \"solid\"\nfraction = 0.6\n\
+        [[scene.body]]\nrect = [0.0, 0.0, 0.1, 0.1]\nmaterial = \"water\"\nphase = \"fluid\"\nfraction = 0.4\n\
+        [materials.skeleton]\nK = 1e6\nshear_modulus = 3e5\n[materials.water]\nK = 1e5\nviscosity = 1e-3\n\
+        [drag]\ncoefficient = 1e5\n";
+
+    fn mixture_case(text: &str) -> Result<Case, KeyError> {
+        case("c".into(), text.parse().unwrap())
+    }
+
+    #[test]
+    fn a_drag_table_makes_a_mixture_split_by_phase() {
+        let c = mixture_case(MIXTURE).unwrap();
+        let spec = c.mixture.expect("a mixture");
+        assert_eq!(spec.drag.coefficient, 1e5);
+        assert_eq!(spec.drag.update, DragUpdate::Implicit);
+        assert!(!spec.fixed_solid);
+        let [solid, fluid] = c.phase_configs();
+        assert_eq!(solid.scene.bodies.len(), 1);
+        assert_eq!(solid.scene.bodies[0].material, "skeleton");
+        assert_eq!(fluid.scene.bodies[0].fraction, 0.4);
+        // B = n^2 mu / k from the fluid's viscosity and fraction.
+        let c =
+            mixture_case(&MIXTURE.replace("coefficient = 1e5", "permeability = 1e-10")).unwrap();
+        let b = c.mixture.unwrap().drag.coefficient;
+        assert!((b / (0.16 * 1e-3 / 1e-10) - 1.0).abs() < 1e-12, "{b}");
+    }
+
+    #[test]
+    fn bad_mixtures_name_the_key_and_what_is_allowed() {
+        let bad = |text: &str| mixture_case(text).expect_err("refused");
+        let (k, m) = bad(&MIXTURE.replace("[drag]\ncoefficient = 1e5\n", ""));
+        assert_eq!(k, "scene.body[0].phase");
+        assert!(m.contains("[drag]"), "{m}");
+        let (k, m) = bad(&MIXTURE.replace("phase = \"fluid\"\n", ""));
+        assert_eq!(k, "scene.body[1].phase");
+        assert!(m.contains("solid | fluid"), "{m}");
+        let (k, m) = bad(&MIXTURE.replace("phase = \"fluid\"", "phase = \"solid\""));
+        assert_eq!(k, "scene.body");
+        assert!(m.contains("none is fluid"), "{m}");
+        let (k, m) = bad(&MIXTURE.replace("phase = \"fluid\"", "phase = \"gas\""));
+        assert_eq!(k, "scene.body[1].phase");
+        assert!(m.contains("solid | fluid"), "{m}");
+        let (k, m) = bad(&MIXTURE.replace("fraction = 0.4", "fraction = 0.5"));
+        assert_eq!(k, "scene.body[1].fraction");
+        assert!(m.contains("n_s + n_f <= 1"), "{m}");
+        let (k, m) = bad(&MIXTURE.replace(
+            "coefficient = 1e5",
+            "coefficient = 1e5\npermeability = 1e-10",
+        ));
+        assert_eq!(k, "drag");
+        assert!(m.contains("exactly one"), "{m}");
+        let (k, _) = bad(&MIXTURE.replace("coefficient = 1e5", "coefficient = -1.0"));
+        assert_eq!(k, "drag.coefficient");
+        let (k, m) = bad(&MIXTURE
+            .replace("coefficient = 1e5", "permeability = 1e-10")
+            .replace("viscosity = 1e-3", "viscosity = 0.0"));
+        assert_eq!(k, "materials.water.viscosity");
+        assert!(m.contains("permeability"), "{m}");
+        let (k, _) = bad(&MIXTURE.replace(
+            "coefficient = 1e5",
+            "coefficient = 1e5\nkozeny_carman = 1.5",
+        ));
+        assert_eq!(k, "drag.kozeny_carman");
+        let (k, m) = bad(&MIXTURE.replace("coefficient = 1e5", "coefficient = 1e5\nspeed = 3"));
+        assert_eq!(k, "drag.speed");
+        assert!(
+            m.contains("unknown key") && m.contains("fixed_solid"),
+            "{m}"
+        );
+        let (k, m) =
+            bad(&MIXTURE.replace("coefficient = 1e5", "coefficient = 1e5\nupdate = \"rk4\""));
+        assert_eq!(k, "drag.update");
+        assert!(m.contains("explicit | implicit | exponential"), "{m}");
     }
 
     #[test]

@@ -91,6 +91,39 @@ pub struct Metrics {
     pub particles_inverted: u64,
     pub mass_lost_fraction: f64,
     pub t_first_loss: Option<f64>,
+    /// Mixtures (docs/physics.md section 6). In a uniform periodic mixture
+    /// without gravity (the drag-decay scene): the largest |dv(t) - dv0
+    /// exp(-t/tau)| over the run relative to |dv0|, dv the difference of the
+    /// phases' mean velocities; the same against the update's own discrete
+    /// law (explicit prod(1 - dt/tau), implicit prod 1/(1 + dt/tau),
+    /// exponential exp(-t/tau)); and the first step's dt/tau.
+    #[serde(default)]
+    pub drag_decay_rel_error: Option<f64>,
+    #[serde(default)]
+    pub drag_decay_discrete_rel_error: Option<f64>,
+    #[serde(default)]
+    pub drag_dt_over_tau: Option<f64>,
+    /// Kinetic energy the drag dissipated over the run (J/m).
+    #[serde(default)]
+    pub drag_dissipated: Option<f64>,
+    /// Largest rise of the mixture's total energy (both phases, drag
+    /// dissipation included) above its value at t = 0 (J/m): must stay at round-off.
+    #[serde(default)]
+    pub mixture_energy_growth: Option<f64>,
+    /// Largest |P(t) - P(0)| of both phases' momentum over the run, relative
+    /// to sum m |v| at t = 0 (periodic scenes without gravity only).
+    #[serde(default)]
+    pub momentum_drift_rel: Option<f64>,
+}
+
+/// One phase of a mixture: its particles, events and figures alone.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PhaseSummary {
+    /// `solid` or `fluid`.
+    pub phase: String,
+    pub particles: usize,
+    pub n_events: usize,
+    pub metrics: Metrics,
 }
 
 /// Events of one cause.
@@ -122,6 +155,11 @@ pub struct Summary {
     pub final_state_hash: String,
     pub events: Vec<Event>,
     pub metrics: Metrics,
+    /// A mixture's phases (solid, fluid); empty for one phase. Then
+    /// `metrics` holds the fluid's field figures, the counts of both
+    /// phases' events and the mixture's own figures.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub phases: Vec<PhaseSummary>,
 }
 
 impl Summary {
@@ -205,6 +243,7 @@ mod tests {
             final_state_hash: "0".into(),
             events: vec![event],
             metrics: Metrics::default(),
+            phases: vec![],
         };
         summary.write(&dir).unwrap();
         let back = Summary::read(&dir).unwrap();

@@ -46,8 +46,33 @@ pub fn write_frame(df: &mut DataFrame, dir: &Path, stem: &str, csv: bool) -> std
 }
 
 pub fn write_timeseries(ts: &Timeseries, dir: &Path, csv: bool) -> std::io::Result<()> {
+    write_timeseries_as(ts, dir, "timeseries", csv)
+}
+
+/// The timeseries as `stem`.parquet (a mixture writes one per phase).
+pub fn write_timeseries_as(
+    ts: &Timeseries,
+    dir: &Path,
+    stem: &str,
+    csv: bool,
+) -> std::io::Result<()> {
     let mut df = timeseries_frame(ts).map_err(io)?;
-    write_frame(&mut df, dir, "timeseries", csv)
+    write_frame(&mut df, dir, stem, csv)
+}
+
+/// Named f64 columns (same length) as `stem`.parquet.
+pub fn write_columns(
+    columns: &[(&str, &[f64])],
+    dir: &Path,
+    stem: &str,
+    csv: bool,
+) -> std::io::Result<()> {
+    let cols = columns
+        .iter()
+        .map(|(name, v)| Column::new((*name).into(), nullable(v)))
+        .collect();
+    let mut df = DataFrame::new(cols).map_err(io)?;
+    write_frame(&mut df, dir, stem, csv)
 }
 
 /// A column of JSON values typed by what it holds: numbers as f64, strings,

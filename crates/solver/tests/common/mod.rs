@@ -33,6 +33,7 @@ pub fn box_scene(size: [f64; 2], rect: [f64; 4], material: Material, gravity: f6
             material: String::new(),
             velocity: [0.0, 0.0],
             fraction: 1.0,
+            phase: None,
         }],
         materials: vec![material],
         ..Scene::default()

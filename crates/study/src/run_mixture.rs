@@ -1,0 +1,454 @@
+//! A mixture case end to end (docs/physics.md section 6): the two phases
+//! stepped together by `solver::Mixture`, each watched by its own monitor
+//! (events carry their phase), one timeseries per phase (`timeseries.parquet`
+//! the fluid's, `timeseries_solid.parquet` the solid's), the mixture's own
+//! rows in `mixture.parquet` (relative velocity, drag dissipation, total
+//! energy and momentum), VTK files per phase and the summary with each
+//! phase's figures. Checkpoints and `kick reproduce` are single-phase only
+//! so far.
+
+use crate::metrics;
+use crate::output_files::write_atomic;
+use crate::run_case::{RunOptions, Simulated};
+use crate::snapshot::Snapshot;
+use crate::study_file::{Case, MixtureSpec};
+use crate::summary::{Metrics, PhaseSummary, Status};
+use crate::tables;
+use crate::timeseries::{Peaks, Timeseries};
+use indicatif::ProgressBar;
+use monitor::{Event, Monitor, StepReport};
+use solver::drag::DragUpdate;
+use solver::{Mixture, Phase, Scene, Solver, StateView, Vec2};
+use std::path::Path;
+
+/// One phase's monitor and the timeseries it feeds.
+struct PhaseWatch {
+    phase: Phase,
+    monitor: Monitor,
+    series: Timeseries,
+    peaks: Peaks,
+}
+
+impl PhaseWatch {
+    /// Observes the phase's last step; the monitor's blow-out reason, if any.
+    fn observe(&mut self, v: &StateView, hash: u64) -> Option<String> {
+        self.monitor.observe(v);
+        let report = self.monitor.report();
+        self.peaks.add(report);
+        let opened = report.events_opened;
+        let blow_out = report.blow_out.clone();
+        let n = self.monitor.events().len();
+        let hash = format!("{hash:016x}");
+        for e in &mut self.monitor.events_mut()[n - opened..] {
+            e.phase = Some(self.phase.name().into());
+            e.state_hash = Some(hash.clone());
+        }
+        blow_out
+    }
+
+    fn push_row(&mut self, v: &StateView, event_row: bool) {
+        if self.series.last_step() == Some(v.step) {
+            return;
+        }
+        let fields = self.monitor.field_metrics(v);
+        let report = if v.step == 0 || self.monitor.report().step != v.step {
+            StepReport::of_state(v)
+        } else {
+            self.monitor.report().clone()
+        };
+        self.series.push(&report, &self.peaks, &fields, event_row);
+        self.peaks = Peaks::default();
+    }
+}
+
+/// Mass-weighted mean particle velocity of a phase.
+fn mean_velocity(s: &Solver) -> Vec2 {
+    let p = s.view();
+    let (mut mv, mut m) = (Vec2::zeros(), 0.0);
+    for (v, mass) in p.v.iter().zip(p.mass) {
+        mv += *mass * v;
+        m += mass;
+    }
+    if m > 0.0 {
+        mv / m
+    } else {
+        Vec2::zeros()
+    }
+}
+
+fn momentum_and_scale(s: &Solver) -> (Vec2, f64) {
+    let p = s.view();
+    p.v.iter()
+        .zip(p.mass)
+        .fold((Vec2::zeros(), 0.0), |(sum, scale), (v, m)| {
+            (sum + *m * v, scale + m * v.norm())
+        })
+}
+
+/// The drag-decay scene: periodic in x and y, no gravity, every body
+/// covering the whole box (a uniform mixture). Then dv = v_f - v_s decays as
+/// dv0 exp(-t/tau), tau = rs rf / [B (rs + rf)] with the partial densities
+/// rs = n_s rho_s, rf = n_f rho_f (tau = rf / B over a fixed skeleton).
+fn decay_time(scene: &Scene, spec: &MixtureSpec) -> Option<f64> {
+    let covers = |r: &[f64; 4]| {
+        let tol = 1e-12 * scene.size[0].max(scene.size[1]);
+        (r[0] - scene.origin[0]).abs() <= tol
+            && (r[1] - scene.origin[1]).abs() <= tol
+            && (r[2] - scene.origin[0] - scene.size[0]).abs() <= tol
+            && (r[3] - scene.origin[1] - scene.size[1]).abs() <= tol
+    };
+    let uniform = scene.periodic == [true, true]
+        && scene.gravity == 0.0
+        && scene.bodies.iter().all(|b| covers(&b.rect));
+    if !uniform {
+        return None;
+    }
+    let [rs, rf] = Phase::ALL.map(|phase| {
+        let b = scene.bodies.iter().find(|b| b.phase == Some(phase));
+        b.map_or(0.0, |b| {
+            let m = scene.material_index(b).expect("validated");
+            b.fraction * scene.materials[m].rho0
+        })
+    });
+    let fraction = |phase| {
+        scene
+            .bodies
+            .iter()
+            .find(|b| b.phase == Some(phase))
+            .map_or(0.0, |b| b.fraction)
+    };
+    let (ns, nf) = (fraction(Phase::Solid), fraction(Phase::Fluid));
+    let b = spec.drag.coefficient_at(nf / (ns + nf));
+    if b <= 0.0 {
+        return None;
+    }
+    Some(if spec.fixed_solid {
+        rf / b
+    } else {
+        rs * rf / (b * (rs + rf))
+    })
+}
+
+/// The relative velocity against the exact decay and the update's own law.
+struct DecayCheck {
+    tau: f64,
+    dv0: Vec2,
+    update: DragUpdate,
+    /// The update's discrete decay factor so far.
+    discrete: f64,
+    max_error: f64,
+    max_discrete_error: f64,
+    first_ratio: Option<f64>,
+}
+
+impl DecayCheck {
+    fn new(tau: f64, dv0: Vec2, update: DragUpdate) -> Option<Self> {
+        (dv0.norm() > 0.0).then_some(DecayCheck {
+            tau,
+            dv0,
+            update,
+            discrete: 1.0,
+            max_error: 0.0,
+            max_discrete_error: 0.0,
+            first_ratio: None,
+        })
+    }
+
+    fn exact(&self, t: f64) -> Vec2 {
+        self.dv0 * (-t / self.tau).exp()
+    }
+
+    fn after_step(&mut self, dt: f64, t: f64, dv: Vec2) {
+        let r = dt / self.tau;
+        self.first_ratio.get_or_insert(r);
+        self.discrete *= match self.update {
+            DragUpdate::Explicit => 1.0 - r,
+            DragUpdate::Implicit => 1.0 / (1.0 + r),
+            DragUpdate::Exponential => (-r).exp(),
+        };
+        let scale = self.dv0.norm();
+        self.max_error = self.max_error.max((dv - self.exact(t)).norm() / scale);
+        self.max_discrete_error = self
+            .max_discrete_error
+            .max((dv - self.dv0 * self.discrete).norm() / scale);
+    }
+}
+
+/// The mixture's own rows (`mixture.parquet`).
+#[derive(Default)]
+struct MixtureRows {
+    step: Vec<f64>,
+    t: Vec<f64>,
+    dt: Vec<f64>,
+    dv_x: Vec<f64>,
+    dv_y: Vec<f64>,
+    dv_exact_x: Vec<f64>,
+    dv_exact_y: Vec<f64>,
+    drag_dissipated: Vec<f64>,
+    drag_nodes: Vec<f64>,
+    drag_stable_dt: Vec<f64>,
+    e_total: Vec<f64>,
+    momentum_x: Vec<f64>,
+    momentum_y: Vec<f64>,
+}
+
+impl MixtureRows {
+    fn push(&mut self, mix: &Mixture, dv: Vec2, exact: Option<Vec2>, e_total: f64) {
+        let c = mix.last_coupling();
+        let p = mix.momentum();
+        let exact = exact.unwrap_or(Vec2::new(f64::NAN, f64::NAN));
+        let s = mix.phase(0);
+        self.step.push(s.step_count() as f64);
+        self.t.push(mix.time());
+        self.dt.push(s.view().dt);
+        self.dv_x.push(dv.x);
+        self.dv_y.push(dv.y);
+        self.dv_exact_x.push(exact.x);
+        self.dv_exact_y.push(exact.y);
+        self.drag_dissipated.push(mix.drag_dissipated());
+        self.drag_nodes.push(c.nodes as f64);
+        self.drag_stable_dt.push(c.stable_dt);
+        self.e_total.push(e_total);
+        self.momentum_x.push(p.x);
+        self.momentum_y.push(p.y);
+    }
+
+    fn write(&self, dir: &Path, csv: bool) -> std::io::Result<()> {
+        tables::write_columns(
+            &[
+                ("step", &self.step),
+                ("t", &self.t),
+                ("dt", &self.dt),
+                ("dv_x", &self.dv_x),
+                ("dv_y", &self.dv_y),
+                ("dv_exact_x", &self.dv_exact_x),
+                ("dv_exact_y", &self.dv_exact_y),
+                ("drag_dissipated", &self.drag_dissipated),
+                ("drag_nodes", &self.drag_nodes),
+                ("drag_stable_dt", &self.drag_stable_dt),
+                ("e_total", &self.e_total),
+                ("momentum_x", &self.momentum_x),
+                ("momentum_y", &self.momentum_y),
+            ],
+            dir,
+            "mixture",
+            csv,
+        )
+    }
+}
+
+fn write_vtk(dir: &Path, mix: &Mixture) -> std::io::Result<()> {
+    for phase in Phase::ALL {
+        let v = mix.phase(phase.index()).view();
+        write_atomic(
+            &dir.join(format!("{}_{:09}.vtk", phase.name(), v.step)),
+            &Snapshot::of(&v).vtk(),
+        )?;
+    }
+    Ok(())
+}
+
+fn build(case: &Case, spec: &MixtureSpec) -> Result<Mixture, String> {
+    let [solid, fluid] = case.phase_configs();
+    let phases = [solid, fluid].map(Solver::new);
+    let [solid, fluid] = phases;
+    let solid = solid.map_err(|e| format!("setup (solid): {e}"))?;
+    let fluid = fluid.map_err(|e| format!("setup (fluid): {e}"))?;
+    let mix = Mixture::new([solid, fluid], spec.drag).map_err(|e| format!("setup: {e}"))?;
+    Ok(if spec.fixed_solid {
+        mix.fix_solid()
+    } else {
+        mix
+    })
+}
+
+pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simulated> {
+    let spec = case.mixture.expect("a mixture case");
+    let mut mix = match build(case, &spec) {
+        Ok(m) => m,
+        Err(reason) => return Ok(Simulated::failed(reason)),
+    };
+    let mut watches = Phase::ALL.map(|phase| PhaseWatch {
+        phase,
+        monitor: Monitor::new(case.monitor.clone(), &mix.phase(phase.index()).view()),
+        series: Timeseries::new(),
+        peaks: Peaks::default(),
+    });
+    let scene = &case.solver.scene;
+    let t_end = scene.t_end;
+    let expected_steps = (t_end / mix.next_dt()).ceil().max(1.0) as u64;
+    let row_every = (expected_steps / case.output.timeseries_rows).max(1);
+    let bar = opts.bar.clone().unwrap_or_else(ProgressBar::hidden);
+    bar.set_length(1000);
+    bar.set_prefix(case.name.clone());
+    let particles_dir = dir.join("particles");
+    let mut vtk_times = case.output.vtk_times.clone();
+    vtk_times.sort_by(f64::total_cmp);
+    let mut next_vtk = 0;
+
+    let relative = |m: &Mixture| mean_velocity(m.phase(1)) - mean_velocity(m.phase(0));
+    let mut decay = decay_time(scene, &spec)
+        .and_then(|tau| DecayCheck::new(tau, relative(&mix), spec.drag.update));
+    let conserves_momentum =
+        scene.periodic == [true, true] && scene.gravity == 0.0 && !spec.fixed_solid;
+    let (p0, p_scale) = {
+        let (a, b) = (
+            momentum_and_scale(mix.phase(0)),
+            momentum_and_scale(mix.phase(1)),
+        );
+        (a.0 + b.0, a.1 + b.1)
+    };
+    let mut momentum_drift: f64 = 0.0;
+    let total_energy = |m: &Mixture| m.energy().total();
+    let e0 = total_energy(&mix);
+    let mut energy_growth: f64 = 0.0;
+    let mut rows = MixtureRows::default();
+
+    let push_rows = |mix: &Mixture,
+                     watches: &mut [PhaseWatch; 2],
+                     rows: &mut MixtureRows,
+                     decay: &Option<DecayCheck>,
+                     event_row: bool| {
+        for w in watches.iter_mut() {
+            w.push_row(&mix.phase(w.phase.index()).view(), event_row);
+        }
+        if rows.step.last() != Some(&(mix.phase(0).step_count() as f64)) {
+            let exact = decay.as_ref().map(|d| d.exact(mix.time()));
+            rows.push(mix, relative(mix), exact, total_energy(mix));
+        }
+    };
+
+    while next_vtk < vtk_times.len() && vtk_times[next_vtk] <= mix.time() {
+        write_vtk(&particles_dir, &mix)?;
+        next_vtk += 1;
+    }
+    push_rows(&mix, &mut watches, &mut rows, &decay, false);
+    let (status, reason) = loop {
+        if mix.phase(0).finished() {
+            break (Status::Completed, String::new());
+        }
+        let stop = mix
+            .step()
+            .err()
+            .map(|e| format!("step {}: {e}", mix.phase(0).step_count() + 1));
+        let step = mix.phase(0).step_count();
+        let mut opened = 0;
+        let mut stop = stop;
+        if stop.is_none() {
+            let hash = mix.state_hash();
+            for w in watches.iter_mut() {
+                let before = w.monitor.events().len();
+                if let Some(r) = w.observe(&mix.phase(w.phase.index()).view(), hash) {
+                    stop.get_or_insert(format!("{} phase, step {step}: {r}", w.phase.name()));
+                }
+                opened += w.monitor.events().len() - before;
+            }
+            let dt = mix.phase(0).view().dt;
+            if let Some(d) = decay.as_mut() {
+                d.after_step(dt, mix.time(), relative(&mix));
+            }
+            if conserves_momentum && p_scale > 0.0 {
+                let (a, b) = (
+                    momentum_and_scale(mix.phase(0)),
+                    momentum_and_scale(mix.phase(1)),
+                );
+                momentum_drift = momentum_drift.max((a.0 + b.0 - p0).norm() / p_scale);
+            }
+            energy_growth = energy_growth.max(total_energy(&mix) - e0);
+        }
+        let regular = step % row_every == 0;
+        if regular || opened > 0 || stop.is_some() {
+            push_rows(
+                &mix,
+                &mut watches,
+                &mut rows,
+                &decay,
+                !regular || stop.is_some(),
+            );
+            let t = mix.time();
+            bar.set_position((1000.0 * t / t_end) as u64);
+            let events: usize = watches.iter().map(|w| w.monitor.events().len()).sum();
+            bar.set_message(format!("t = {t:.3} s, {events} events"));
+        }
+        if let Some(reason) = stop {
+            break (Status::BlewUp, reason);
+        }
+        while next_vtk < vtk_times.len() && vtk_times[next_vtk] <= mix.time() {
+            write_vtk(&particles_dir, &mix)?;
+            next_vtk += 1;
+        }
+    };
+    push_rows(
+        &mix,
+        &mut watches,
+        &mut rows,
+        &decay,
+        status != Status::Completed,
+    );
+    write_vtk(&particles_dir, &mix)?;
+    let completed = status == Status::Completed;
+    let mut events: Vec<Event> = vec![];
+    let mut phases = vec![];
+    let mut initial_mass = 0.0;
+    for w in &watches {
+        let s = mix.phase(w.phase.index());
+        let stem = match w.phase {
+            Phase::Fluid => "timeseries".to_string(),
+            Phase::Solid => "timeseries_solid".to_string(),
+        };
+        tables::write_timeseries_as(&w.series, dir, &stem, opts.csv)?;
+        let own = w.monitor.events().to_vec();
+        let mut m = metrics::summarise(&w.series, &own, None, completed);
+        m.events_dropped = w.monitor.events_dropped();
+        fill_losses(&mut m, s, w.monitor.initial_mass());
+        initial_mass += w.monitor.initial_mass();
+        phases.push(PhaseSummary {
+            phase: w.phase.name().into(),
+            particles: s.initial_particle_count(),
+            n_events: own.len(),
+            metrics: m,
+        });
+        events.extend(own);
+    }
+    rows.write(dir, opts.csv)?;
+    events.sort_by(|a, b| a.t.total_cmp(&b.t));
+    let fluid = &watches[Phase::Fluid.index()];
+    let mut metrics = metrics::summarise(&fluid.series, &events, None, completed);
+    metrics.events_dropped = phases.iter().map(|p| p.metrics.events_dropped).sum();
+    let lost = |f: fn(&Metrics) -> u64| phases.iter().map(|p| f(&p.metrics)).sum::<u64>();
+    metrics.particles_escaped = lost(|m| m.particles_escaped);
+    metrics.particles_inverted = lost(|m| m.particles_inverted);
+    let lost_mass: f64 = (0..2).map(|k| mix.phase(k).losses().mass()).sum();
+    metrics.mass_lost_fraction = lost_mass / initial_mass;
+    metrics.t_first_loss = phases
+        .iter()
+        .filter_map(|p| p.metrics.t_first_loss)
+        .reduce(f64::min);
+    if let Some(d) = &decay {
+        metrics.drag_decay_rel_error = Some(d.max_error);
+        metrics.drag_decay_discrete_rel_error = Some(d.max_discrete_error);
+        metrics.drag_dt_over_tau = d.first_ratio;
+    }
+    metrics.drag_dissipated = Some(mix.drag_dissipated());
+    metrics.mixture_energy_growth = Some(energy_growth);
+    metrics.momentum_drift_rel = (conserves_momentum && p_scale > 0.0).then_some(momentum_drift);
+    Ok(Simulated {
+        status,
+        reason,
+        steps: mix.phase(0).step_count(),
+        t_end: mix.time(),
+        particles: phases.iter().map(|p| p.particles).sum(),
+        final_hash: mix.state_hash(),
+        events,
+        metrics,
+        phases,
+    })
+}
+
+fn fill_losses(m: &mut Metrics, s: &Solver, initial_mass: f64) {
+    let losses = s.losses();
+    m.particles_escaped = losses.escaped;
+    m.particles_inverted = losses.inverted;
+    m.mass_lost_fraction = losses.mass() / initial_mass;
+    m.t_first_loss = losses.t_first;
+}

@@ -1,0 +1,185 @@
+//! End-to-end tests of mixture cases (docs/physics.md section 6) through the
+//! `kick` binary: the drag-decay study against its exact solution, every
+//! phase watched and written, and the report's multiphase section.
+
+mod common;
+
+use common::{kick, stderr};
+use study::summary::{Status, Summary};
+
+fn scratch(name: &str) -> common::Scratch {
+    common::scratch("mixture", name)
+}
+
+#[test]
+fn drag_decay_study_meets_the_exact_and_discrete_decay() {
+    let out = scratch("decay");
+    let o = kick(&[
+        "matrix",
+        "studies/drag_decay.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "--jobs",
+        "2",
+        "--threads",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut seen = 0;
+    for update in ["explicit", "implicit", "exponential"] {
+        for b in ["3.2e4", "3.2e5", "3.2e6", "3.2e7"] {
+            let dir = out.join(format!("{update}_B{b}"));
+            let s = Summary::read(&dir).unwrap();
+            let m = &s.metrics;
+            let name = &s.case;
+            assert_eq!(s.status, Status::Completed, "{name}");
+            assert_eq!(s.phases.len(), 2, "{name}");
+            assert_eq!(s.phases[0].phase, "solid");
+            assert_eq!(s.phases[1].particles, 400, "{name}");
+            assert!(s.events.is_empty(), "{name}: {:?}", s.events);
+            let ratio = m.drag_dt_over_tau.unwrap();
+            let exact = m.drag_decay_rel_error.unwrap();
+            let own = m.drag_decay_discrete_rel_error.unwrap();
+            // Each update follows its own law to round-off at any dt.
+            assert!(own < 1e-12, "{name}: {own}");
+            match update {
+                // Exact at any dt/tau (up to 9 here).
+                "exponential" => assert!(exact < 1e-12, "{name}: {exact}"),
+                // Below the explicit limit 2 tau (held at 0.4 tau by the CFL number).
+                "explicit" => assert!(ratio <= 0.4 + 1e-12, "{name}: {ratio}"),
+                _ => {}
+            }
+            // Within 1 % of dv0 at the stated small dt/tau.
+            if ratio < 0.01 {
+                assert!(exact < 0.01, "{name}: {exact} at dt/tau {ratio}");
+            }
+            // The drag conserves momentum and never adds energy.
+            assert!(m.momentum_drift_rel.unwrap() < 1e-12, "{name}");
+            let dissipated = m.drag_dissipated.unwrap();
+            assert!(dissipated > 0.0, "{name}");
+            assert!(
+                m.mixture_energy_growth.unwrap() <= 1e-12 * dissipated,
+                "{name}: {:?}",
+                m.mixture_energy_growth
+            );
+            for f in [
+                "timeseries.parquet",
+                "timeseries_solid.parquet",
+                "mixture.parquet",
+            ] {
+                assert!(dir.join(f).exists(), "{name}: {f}");
+            }
+            let step = s.steps;
+            for phase in ["solid", "fluid"] {
+                let vtk = dir.join("particles").join(format!("{phase}_{step:09}.vtk"));
+                assert!(vtk.exists(), "{}", vtk.display());
+            }
+            seen += 1;
+        }
+    }
+    assert_eq!(seen, 12);
+    // The explicit and implicit updates are first order: off by more than 1 %
+    // once dt/tau nears 1 (0.4 and 0.87 here).
+    let worst = |update: &str| {
+        Summary::read(&out.join(format!("{update}_B3.2e6")))
+            .unwrap()
+            .metrics
+            .drag_decay_rel_error
+            .unwrap()
+    };
+    assert!(worst("explicit") > 0.05 && worst("implicit") > 0.05);
+    let o = kick(&["report", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let page = std::fs::read_to_string(out.join("report").join("index.html")).unwrap();
+    assert!(page.contains("Multiphase: drag between the phases"));
+    assert!(out.join("report").join("drag_decay.png").exists());
+}
+
+const DROP: &str = r#"
+[scene]
+box = [0.1, 0.1]
+cell = 0.005
+ppc = 2
+t_end = 0.05
+gravity = 9.81
+
+[[scene.body]]
+rect = [0.03, 0.02, 0.07, 0.06]
+material = "skeleton"
+phase = "solid"
+fraction = 0.6
+velocity = [0.0, -2.0]
+
+[[scene.body]]
+rect = [0.03, 0.02, 0.07, 0.06]
+material = "water"
+phase = "fluid"
+fraction = 0.4
+velocity = [0.0, -2.0]
+
+[materials.skeleton]
+rho0 = 2650.0
+eos = "tait"
+K = 1e6
+shear_modulus = 3e5
+
+[materials.water]
+rho0 = 1000.0
+eos = "tait"
+K = 1e5
+viscosity = 1e-3
+
+[method]
+shape = "bspline2"
+transfer = "apic"
+scheme = "usl"
+
+[drag]
+permeability = 1e-9
+
+[output]
+checkpoint_every = 0
+"#;
+
+/// A saturated block dropped on the floor at 2 m/s: each phase's monitor
+/// calls its impact `impact`, and the events say which phase.
+#[test]
+fn a_dropped_mixture_logs_each_phase_impact_with_its_phase() {
+    let dir = scratch("drop");
+    let path = dir.join("drop.toml");
+    std::fs::write(&path, DROP).unwrap();
+    let o = kick(&[
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = Summary::read(&dir.join("drop")).unwrap();
+    assert_eq!(s.status, Status::Completed);
+    assert_eq!(s.particles, 512);
+    for (k, phase) in ["solid", "fluid"].into_iter().enumerate() {
+        let p = &s.phases[k];
+        assert_eq!(p.phase, phase);
+        let own: Vec<_> = s
+            .events
+            .iter()
+            .filter(|e| e.phase.as_deref() == Some(phase))
+            .collect();
+        assert!(!own.is_empty(), "{phase}: no event");
+        assert_eq!(own.len(), p.n_events);
+        assert!(
+            own.iter().all(|e| e.cause == monitor::Cause::Impact),
+            "{phase}: {:?}",
+            own.iter().map(|e| e.cause).collect::<Vec<_>>()
+        );
+    }
+    assert_eq!(
+        s.events.len(),
+        s.phases.iter().map(|p| p.n_events).sum::<usize>()
+    );
+    // Gravity and walls: no decay figure, no momentum figure; the budget still closes.
+    let m = &s.metrics;
+    assert!(m.drag_decay_rel_error.is_none() && m.momentum_drift_rel.is_none());
+    assert!(m.drag_dissipated.unwrap() > 0.0);
+}
