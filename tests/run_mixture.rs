@@ -183,3 +183,46 @@ fn a_dropped_mixture_logs_each_phase_impact_with_its_phase() {
     assert!(m.drag_decay_rel_error.is_none() && m.momentum_drift_rel.is_none());
     assert!(m.drag_dissipated.unwrap() > 0.0);
 }
+
+/// Steady Darcy flow through a fixed layer, driven by gravity in a box
+/// periodic along it: the layer's pressure drop is mu q L / k for the flux q
+/// measured, p is linear inside, and q approaches the flux that carries the
+/// column's weight as h shrinks (the node-based drag's layer is about a
+/// cell longer than L).
+#[test]
+fn darcy_column_meets_the_pressure_drop_and_converges_in_flux() {
+    let out = scratch("darcy");
+    let o = kick(&[
+        "matrix",
+        "studies/darcy.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "--jobs",
+        "2",
+        "--threads",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for update in ["implicit", "exponential"] {
+        let mut flux_errors = vec![];
+        for h in ["1cm", "0.5cm", "0.25cm"] {
+            let s = Summary::read(&out.join(format!("{update}_h{h}"))).unwrap();
+            let m = &s.metrics;
+            let name = &s.case;
+            assert_eq!(s.status, Status::Completed, "{name}");
+            // No energy events: periodic along gravity, the budget rule is off.
+            assert!(s.events.is_empty(), "{name}: {:?}", s.events);
+            assert!(m.mixture_energy_growth.is_none());
+            assert_eq!(m.energy_injected_max.unwrap_or(0.0), 0.0, "{name}");
+            let dp = m.darcy_dp_rel_error.unwrap();
+            assert!(dp < 0.02, "{name}: pressure drop off by {dp}");
+            let lin = m.darcy_linearity.unwrap();
+            assert!(lin < 0.02, "{name}: p departs from a line by {lin}");
+            flux_errors.push(m.darcy_flux_rel_error.unwrap());
+        }
+        assert!(
+            flux_errors.windows(2).all(|w| w[1] < w[0]),
+            "{update}: {flux_errors:?}"
+        );
+    }
+}

@@ -483,7 +483,14 @@ impl Monitor {
         } else {
             self.transfer_loss
         };
-        let injection = self.energy.observe(v.time, v.energy.total() + loss);
+        let mut injection = self.energy.observe(v.time, v.energy.total() + loss);
+        // Periodic along gravity, a particle that wraps jumps by m g H in
+        // potential energy: the budget is undefined there, so its rule is off.
+        let budget_defined = !(v.scene.periodic[1] && g > 0.0);
+        if !budget_defined {
+            injection.total = 0.0;
+            injection.window = 0.0;
+        }
         let floor =
             solver::energy::injection_noise_floor(self.initial_mass, g, self.geom.size.y, dt);
         let (min_node_mass_ratio, max_node_a, max_node_speed) = self.grid_figures(v);
@@ -507,10 +514,11 @@ impl Monitor {
         let energy_scale =
             e.kinetic.abs() + e.gravitational.abs() + e.stored.abs() + e.dissipated.abs();
         self.track_injected_energy(v, g, injection.total, scan.max_vertical_speed, energy_scale);
+        let undefined = |x: f64| if budget_defined { x } else { f64::NAN };
         self.report = StepReport {
             step: v.step,
-            energy_injected: injection.total,
-            injection_window: injection.window,
+            energy_injected: undefined(injection.total),
+            injection_window: undefined(injection.window),
             injection_floor: floor,
             transfer_loss: self.transfer_loss,
             max_accel_g: scan.max_a2.sqrt() / g,

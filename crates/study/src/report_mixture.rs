@@ -26,7 +26,11 @@ pub fn mixture_section(m: &Matrix, out: &Path, page: &mut Page) -> Res {
          |dv0|, over the whole run; uniform periodic scenes only), the first step's dt/tau, \
          the kinetic energy the drag dissipated, the largest rise of the total energy above \
          its start (drag dissipation counted) and of the momentum (relative to sum m|v| at \
-         t = 0; periodic scenes without gravity), and each phase's events.",
+         t = 0; periodic scenes without gravity); in the Darcy column (a fixed layer in a \
+         box periodic along gravity, at t_end) the error of the layer's pressure drop against \
+         mu q L / k from the fitted gradients, the largest departure of its row-averaged \
+         pressure from a line (over the drop), the measured flux q and its error against the \
+         flux that carries the column's weight; and each phase's events.",
     );
     let opt = |v: Option<f64>| Cell::Num(v.map_or("-".into(), short));
     let param = |r: &crate::report_matrix::Row, key: &str| {
@@ -49,6 +53,10 @@ pub fn mixture_section(m: &Matrix, out: &Path, page: &mut Page) -> Res {
         "dissipated (J/m)",
         "energy growth (J/m)",
         "momentum drift",
+        "Darcy drop error",
+        "Darcy p linearity",
+        "Darcy flux q (m/s)",
+        "q error",
         "events solid / fluid",
     ]
     .map(String::from)
@@ -76,6 +84,10 @@ pub fn mixture_section(m: &Matrix, out: &Path, page: &mut Page) -> Res {
                     opt(mx.drag_dissipated),
                     opt(mx.mixture_energy_growth),
                     opt(mx.momentum_drift_rel),
+                    opt(mx.darcy_dp_rel_error),
+                    opt(mx.darcy_linearity),
+                    opt(mx.darcy_flux),
+                    opt(mx.darcy_flux_rel_error),
                     Cell::Num(events),
                 ],
             )

@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 
 type Figure = fn(&Row) -> Option<f64>;
 
-const FIGURES: [(&str, Figure); 3] = [
+const FIGURES: [(&str, Figure); 5] = [
     ("surge front, early shifted RMS (Z)", |r| {
         r.summary.metrics.front_rms_error_early_shifted
     }),
@@ -20,6 +20,12 @@ const FIGURES: [(&str, Figure); 3] = [
     }),
     ("late hydrostatic departure (rel. RMS)", |r| {
         r.summary.metrics.hydro_rel_rms_late
+    }),
+    ("Darcy flux against rho g H n^2 / (B L) (rel.)", |r| {
+        r.summary.metrics.darcy_flux_rel_error
+    }),
+    ("Darcy pressure drop against mu q L / k (rel.)", |r| {
+        r.summary.metrics.darcy_dp_rel_error
     }),
 ];
 

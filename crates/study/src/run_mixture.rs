@@ -129,6 +129,109 @@ fn decay_time(scene: &Scene, spec: &MixtureSpec) -> Option<f64> {
     })
 }
 
+/// The Darcy column: a fixed skeleton layer spanning the box's width in a
+/// box periodic in x and y, under gravity. Returns the layer's [y0, y1].
+fn darcy_layer(scene: &Scene, spec: &MixtureSpec) -> Option<[f64; 2]> {
+    let solids: Vec<_> = scene
+        .bodies
+        .iter()
+        .filter(|b| b.phase == Some(Phase::Solid))
+        .collect();
+    let tol = 1e-12 * scene.size[0];
+    let spans = |r: &[f64; 4]| {
+        (r[0] - scene.origin[0]).abs() <= tol
+            && (r[2] - scene.origin[0] - scene.size[0]).abs() <= tol
+    };
+    let [layer] = solids.as_slice() else {
+        return None;
+    };
+    (spec.fixed_solid
+        && scene.periodic == [true, true]
+        && scene.gravity > 0.0
+        && spans(&layer.rect))
+    .then_some([layer.rect[1], layer.rect[3]])
+}
+
+/// Least-squares slope and intercept of y against x.
+fn line_fit(points: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let n = points.len() as f64;
+    if points.len() < 2 {
+        return None;
+    }
+    let (mx, my) = points
+        .iter()
+        .fold((0.0, 0.0), |(a, b), p| (a + p.0 / n, b + p.1 / n));
+    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(a, b), p| {
+        (a + (p.0 - mx) * (p.1 - my), b + (p.0 - mx) * (p.0 - mx))
+    });
+    (sxx > 0.0).then(|| (sxy / sxx, my - sxy / sxx * mx))
+}
+
+/// Darcy's figures from the fluid's state: (relative error of the layer's
+/// pressure drop against mu q L / k = B q L / n^2, linearity of p inside the
+/// layer relative to that drop, the flux q). Rows of one cell; the layer's
+/// gradient from rows at least one cell inside its faces, the free fluid's
+/// from rows at least two cells away from them.
+fn darcy_figures(v: &StateView, layer: [f64; 2], b: f64, n: f64) -> Option<(f64, f64, f64)> {
+    let h = v.scene.cell;
+    let (y_lo, height) = (v.scene.origin[1], v.scene.size[1]);
+    let rows = (height / h).round() as usize;
+    let mut sum = vec![(0.0, 0.0, 0usize); rows];
+    for ((x, p), vel) in v.x.iter().zip(v.pressure).zip(v.v) {
+        let r = (((x.y - y_lo) / h).floor().max(0.0) as usize).min(rows - 1);
+        sum[r].0 += p;
+        sum[r].1 += vel.y;
+        sum[r].2 += 1;
+    }
+    let [y0, y1] = layer;
+    let row = |r: usize| {
+        let (lo, hi) = (y_lo + r as f64 * h, y_lo + (r + 1) as f64 * h);
+        let (p, vy, c) = sum[r];
+        (lo, hi, p / c.max(1) as f64, vy / c.max(1) as f64, c)
+    };
+    let eps = 1e-9 * h;
+    let inside: Vec<_> = (0..rows)
+        .map(row)
+        .filter(|&(lo, hi, _, _, c)| c > 0 && lo >= y0 + h - eps && hi <= y1 - h + eps)
+        .collect();
+    let far = |lo: f64, hi: f64| hi <= y0 - 2.0 * h + eps || lo >= y1 + 2.0 * h - eps;
+    let above: Vec<(f64, f64)> = (0..rows)
+        .map(row)
+        .filter(|&(lo, hi, _, _, c)| c > 0 && far(lo, hi) && lo >= y1)
+        .map(|(lo, hi, p, _, _)| (0.5 * (lo + hi), p))
+        .collect();
+    let below: Vec<(f64, f64)> = (0..rows)
+        .map(row)
+        .filter(|&(lo, hi, _, _, c)| c > 0 && far(lo, hi) && hi <= y0)
+        .map(|(lo, hi, p, _, _)| (0.5 * (lo + hi), p))
+        .collect();
+    let pts: Vec<(f64, f64)> = inside
+        .iter()
+        .map(|&(lo, hi, p, _, _)| (0.5 * (lo + hi), p))
+        .collect();
+    let (s_in, a_in) = line_fit(&pts)?;
+    let outside: Vec<(f64, usize)> = [&above, &below]
+        .iter()
+        .filter_map(|pts| line_fit(pts).map(|(s, _)| (s, pts.len())))
+        .collect();
+    let weight: usize = outside.iter().map(|o| o.1).sum();
+    if weight == 0 {
+        return None;
+    }
+    let s_out = outside.iter().map(|o| o.0 * o.1 as f64).sum::<f64>() / weight as f64;
+    // Darcy flux (downward positive): n times the fluid's speed in the layer.
+    let q = -n * inside.iter().map(|r| r.3).sum::<f64>() / inside.len() as f64;
+    let expected = b * q / (n * n);
+    let error = ((s_in - s_out) - expected).abs() / expected.abs();
+    let drop = expected.abs() * (y1 - y0);
+    let linearity = pts
+        .iter()
+        .map(|&(y, p)| (p - (a_in + s_in * y)).abs())
+        .fold(0.0, f64::max)
+        / drop;
+    Some((error, linearity, q))
+}
+
 /// The relative velocity against the exact decay and the update's own law.
 struct DecayCheck {
     tau: f64,
@@ -429,8 +532,28 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
         metrics.drag_decay_discrete_rel_error = Some(d.max_discrete_error);
         metrics.drag_dt_over_tau = d.first_ratio;
     }
+    if let Some(layer) = darcy_layer(scene, &spec) {
+        let n = scene
+            .bodies
+            .iter()
+            .find(|b| b.phase == Some(Phase::Fluid))
+            .map_or(1.0, |b| b.fraction);
+        let b = spec.drag.coefficient_at(n);
+        if let Some((error, linearity, q)) = darcy_figures(&mix.phase(1).view(), layer, b, n) {
+            metrics.darcy_dp_rel_error = Some(error);
+            metrics.darcy_linearity = Some(linearity);
+            metrics.darcy_flux = Some(q);
+            // The column's weight balances the layer's drop: q = rho g H n^2 / (B L).
+            let fluid = mix.phase(1).view();
+            let rho = fluid.materials[fluid.material[0] as usize].rho0;
+            let ideal = rho * scene.gravity * scene.size[1] * n * n / (b * (layer[1] - layer[0]));
+            metrics.darcy_flux_rel_error = Some((q - ideal).abs() / ideal);
+        }
+    }
     metrics.drag_dissipated = Some(mix.drag_dissipated());
-    metrics.mixture_energy_growth = Some(energy_growth);
+    // Periodic along gravity, the potential energy jumps as particles wrap.
+    let budget_defined = !(scene.periodic[1] && scene.gravity > 0.0);
+    metrics.mixture_energy_growth = budget_defined.then_some(energy_growth);
     metrics.momentum_drift_rel = (conserves_momentum && p_scale > 0.0).then_some(momentum_drift);
     Ok(Simulated {
         status,
