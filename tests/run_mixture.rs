@@ -226,3 +226,51 @@ fn darcy_column_meets_the_pressure_drop_and_converges_in_flux() {
         );
     }
 }
+
+/// The interaction models under refinement (a fixed layer, its faces half
+/// way between nodes, in fluid moving along it): every model's error falls
+/// with h, the smooth-fraction and particle-based models beat the
+/// node-based bang-bang at every h, and the observed orders are written.
+#[test]
+fn drag_convergence_writes_each_models_observed_order() {
+    let out = scratch("convergence");
+    let o = kick(&[
+        "matrix",
+        "studies/drag_convergence.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "--jobs",
+        "2",
+        "--threads",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cells = ["2cm", "0.6666666666666667cm", "0.2222222222222222cm"];
+    let errors = |model: &str| -> Vec<f64> {
+        cells
+            .iter()
+            .map(|h| {
+                let s = Summary::read(&out.join(format!("{model}_h{h}"))).unwrap();
+                assert_eq!(s.status, Status::Completed, "{}", s.case);
+                s.metrics.drag_layer_error.unwrap()
+            })
+            .collect()
+    };
+    let node = errors("bang_bang_node");
+    for model in ["bang_bang_node", "bang_bang_particle", "svf_node"] {
+        let e = errors(model);
+        assert!(e.windows(2).all(|w| w[1] < w[0]), "{model}: {e:?}");
+        if model != "bang_bang_node" {
+            assert!(e.iter().zip(&node).all(|(a, b)| a < b), "{model}: {e:?}");
+        }
+    }
+    let orders: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("observed_order.json")).unwrap()).unwrap();
+    let orders = orders.as_array().unwrap();
+    assert_eq!(orders.len(), 3, "{orders:?}");
+    for o in orders {
+        assert_eq!(o["figure"], "drag_layer_error");
+        let p = o["observed_order"].as_f64().unwrap();
+        assert!(p > 0.5, "{o}");
+    }
+}

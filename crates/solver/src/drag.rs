@@ -21,13 +21,24 @@ use crate::transfer_serial::scatter_scalar;
 use crate::Solver;
 use serde::{Deserialize, Serialize};
 
-/// Which interaction model (the slides' list; more come with later slices).
+/// Which interaction model (the slides' list; SVF particle-based and
+/// SVF-capped are not built yet).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum DragModel {
     /// chi_i = 1 where both phases have mass: f_i^a = -f_i^b = B V_i (v_i^b - v_i^a).
     #[default]
     BangBangNode,
+    /// Each particle inside the other phase (every node of its stencil
+    /// carries that phase) feels f_p = B V_p^mix (v^other(x_p) - v_p), spread
+    /// by N_ip; the nodal equilibrium correction then makes f_i^a = -f_i^b.
+    /// Explicit update only.
+    BangBangParticle,
+    /// Smooth volume fractions at the node: the drag acts on the volume both
+    /// phases share there, V_i^cap phi_i^a phi_i^b, with phi_i = min(1,
+    /// sum_p N_ip V_p / n_p / V_i^cap) the share of the node's support a
+    /// phase's bodies cover and V_i^cap = h^2; no chi_i.
+    SvfNode,
 }
 
 /// How the nodal drag is integrated over a step.
@@ -89,10 +100,15 @@ pub struct Coupling {
     pub stable_dt: f64,
 }
 
-/// Nodal volumes per phase (full grid arrays, allocated once).
+/// Per-phase nodal volumes, presences and particle-drag forces (full grid
+/// arrays, allocated once) and per-particle values (grown when the particle
+/// count grows).
 #[derive(Clone, Debug, Default)]
 pub struct Scratch {
-    volume: [Vec<f64>; 2],
+    pub(crate) volume: [Vec<f64>; 2],
+    pub(crate) presence: [Vec<f64>; 2],
+    pub(crate) force: [Vec<Vec2>; 2],
+    pub(crate) per_particle: Vec<f64>,
 }
 
 impl Scratch {
@@ -100,8 +116,32 @@ impl Scratch {
         let n = grid.dims[0] * grid.dims[1];
         Scratch {
             volume: [vec![0.0; n], vec![0.0; n]],
+            presence: [vec![0.0; n], vec![0.0; n]],
+            force: [vec![Vec2::zeros(); n], vec![Vec2::zeros(); n]],
+            per_particle: vec![],
         }
     }
+}
+
+/// A particle's mixture volume V_p / n_p (its lattice cell, deformed): the
+/// volume its body covers whatever its phase's fraction.
+pub(crate) fn mixture_volume(s: &Solver, p: usize) -> f64 {
+    let l = s.grid.h / s.cfg.scene.ppc as f64;
+    s.particles.vol[p] / s.particles.vol0[p] * l * l
+}
+
+/// sum_p N_ip V_p / n_p on the raw nodes, folded: the volume the phase's
+/// bodies cover in each node's support.
+fn nodal_presence(s: &Solver, per_particle: &mut Vec<f64>, out: &mut [f64]) {
+    per_particle.clear();
+    per_particle.extend((0..s.particles.len()).map(|p| mixture_volume(s, p)));
+    let (st, shape, g) = (&s.stencils, &s.shape, &s.grid);
+    match shape.width() {
+        2 => scatter_scalar::<2>(per_particle, st, shape, g, out),
+        3 => scatter_scalar::<3>(per_particle, st, shape, g, out),
+        _ => scatter_scalar::<4>(per_particle, st, shape, g, out),
+    }
+    g.fold(out);
 }
 
 /// V_i = sum_p N_ip V_p on the raw nodes, folded.
@@ -127,15 +167,22 @@ pub fn couple(
     dt: f64,
     fixed_a: bool,
 ) -> Coupling {
-    let [va, vb] = &mut scratch.volume;
-    nodal_volume(a, va);
-    nodal_volume(b, vb);
+    {
+        let [va, vb] = &mut scratch.volume;
+        nodal_volume(a, va);
+        nodal_volume(b, vb);
+    }
+    if drag.model == DragModel::SvfNode {
+        let [pa, pb] = &mut scratch.presence;
+        nodal_presence(a, &mut scratch.per_particle, pa);
+        nodal_presence(b, &mut scratch.per_particle, pb);
+    }
     let mut out = Coupling {
         stable_dt: f64::INFINITY,
         ..Coupling::default()
     };
-    let (ga, gb) = (&mut a.grid, &mut b.grid);
     if fixed_a {
+        let ga = &mut a.grid;
         for &n in &ga.active {
             let n = n as usize;
             ga.vel[n] = Vec2::zeros();
@@ -143,7 +190,40 @@ pub fn couple(
             ga.accel[n] = Vec2::zeros();
         }
     }
-    let before = [grid_kinetic(ga), grid_kinetic(gb)];
+    let before = [grid_kinetic(&a.grid), grid_kinetic(&b.grid)];
+    if drag.model == DragModel::BangBangParticle {
+        crate::drag_particle::couple(a, b, drag, scratch, dt, fixed_a, &mut out);
+    } else {
+        couple_nodes(a, b, drag, scratch, dt, fixed_a, &mut out);
+    }
+    let (ga, gb) = (&mut a.grid, &mut b.grid);
+    for g in [&mut *ga, &mut *gb] {
+        refill(g);
+    }
+    // Each phase's budget counts what the drag took from it (negative when
+    // it gained), so each closes alone and their sum is the dissipation.
+    let lost = [before[0] - grid_kinetic(ga), before[1] - grid_kinetic(gb)];
+    a.dissipated += lost[0];
+    b.dissipated += lost[1];
+    out.dissipated = lost[0] + lost[1];
+    out
+}
+
+/// The node-based models (bang-bang, SVF): one relative-velocity update per
+/// node both phases occupy.
+fn couple_nodes(
+    a: &mut Solver,
+    b: &mut Solver,
+    drag: &Drag,
+    scratch: &Scratch,
+    dt: f64,
+    fixed_a: bool,
+    out: &mut Coupling,
+) {
+    let [va, vb] = &scratch.volume;
+    let [pa, pb] = &scratch.presence;
+    let capacity = a.grid.h * a.grid.h;
+    let (ga, gb) = (&mut a.grid, &mut b.grid);
     for &n in &ga.inside {
         let n = n as usize;
         let (ma, mb) = (ga.mass[n], gb.mass[n]);
@@ -154,7 +234,13 @@ pub fn couple(
         out.nodes += 1;
         let (inv_a, inv_b) = (if fixed_a { 0.0 } else { 1.0 / ma }, 1.0 / mb);
         let volume = va[n] + vb[n];
-        let k = drag.coefficient_at(vb[n] / volume) * volume * (inv_a + inv_b);
+        let shared = match drag.model {
+            DragModel::SvfNode => {
+                capacity * (pa[n] / capacity).min(1.0) * (pb[n] / capacity).min(1.0)
+            }
+            _ => volume,
+        };
+        let k = drag.coefficient_at(vb[n] / volume) * shared * (inv_a + inv_b);
         out.stable_dt = out.stable_dt.min(2.0 / k);
         let (sa, sb) = (ga.vel_new[n], gb.vel_new[n]);
         let rel = sb - sa;
@@ -189,16 +275,6 @@ pub fn couple(
         ga.accel[n] += da / dt;
         gb.accel[n] += db / dt;
     }
-    for g in [&mut *ga, &mut *gb] {
-        refill(g);
-    }
-    // Each phase's budget counts what the drag took from it (negative when
-    // it gained), so each closes alone and their sum is the dissipation.
-    let lost = [before[0] - grid_kinetic(ga), before[1] - grid_kinetic(gb)];
-    a.dissipated += lost[0];
-    b.dissipated += lost[1];
-    out.dissipated = lost[0] + lost[1];
-    out
 }
 
 /// sum over the active nodes (ghosts included: they carry the real

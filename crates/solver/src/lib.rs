@@ -8,6 +8,7 @@
 pub mod checkpoint;
 pub mod config;
 pub mod drag;
+mod drag_particle;
 pub mod energy;
 pub mod eos;
 mod eos_linear;

@@ -7,7 +7,7 @@
 //! run is a plain `Solver` and is untouched by this.
 
 use crate::checkpoint::{unseal, CheckpointError, Reader, Writer};
-use crate::drag::{self, Coupling, Drag, DragUpdate};
+use crate::drag::{self, Coupling, Drag, DragModel, DragUpdate};
 use crate::{ConfigError, Energy, Solver, StepError, Vec2};
 
 const MAGIC: &[u8; 8] = b"KICKMIX1";
@@ -44,6 +44,15 @@ impl Mixture {
             return Err(ConfigError {
                 key: "drag.coefficient".into(),
                 message: format!("{} is not a finite number >= 0", drag.coefficient),
+            });
+        }
+        if drag.model == DragModel::BangBangParticle && drag.update != DragUpdate::Explicit {
+            return Err(ConfigError {
+                key: "drag.update".into(),
+                message: format!(
+                    "{:?} with the particle-based model (allowed: explicit)",
+                    drag.update
+                ),
             });
         }
         if let Some(n0) = drag.kozeny_carman {

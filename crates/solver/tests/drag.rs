@@ -43,13 +43,29 @@ fn uniform_mixture_with(
     tau_scale: f64,
     kozeny_carman: Option<f64>,
 ) -> Mixture {
+    uniform_mixture_of(
+        DragModel::BangBangNode,
+        update,
+        method,
+        tau_scale,
+        kozeny_carman,
+    )
+}
+
+fn uniform_mixture_of(
+    model: DragModel,
+    update: DragUpdate,
+    method: &Method,
+    tau_scale: f64,
+    kozeny_carman: Option<f64>,
+) -> Mixture {
     let full = [0.0, 0.0, 0.1, 0.1];
     let solid = common::phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
     let fluid = common::phase(full, RHO_F, N_F, method.clone(), |_| Vec2::new(DV0, 0.0));
     let drag = Drag {
         coefficient: drag_coefficient() / tau_scale,
         kozeny_carman,
-        model: DragModel::BangBangNode,
+        model,
         update,
     };
     Mixture::new([solid, fluid], drag).unwrap()
@@ -71,8 +87,12 @@ fn methods() -> Vec<Method> {
 /// Runs to 3 tau at dt = ratio tau, checking every step against `law(n)`
 /// (the relative velocity over dv0) within `tol`, momentum and energy.
 fn decay(update: DragUpdate, ratio: f64, law: impl Fn(f64) -> f64, tol: f64) {
+    decay_of(DragModel::BangBangNode, update, ratio, law, tol)
+}
+
+fn decay_of(model: DragModel, update: DragUpdate, ratio: f64, law: impl Fn(f64) -> f64, tol: f64) {
     for method in methods() {
-        let mut mix = uniform_mixture(update, &method);
+        let mut mix = uniform_mixture_of(model, update, &method, 1.0, None);
         let p0 = mix.momentum();
         let e0 = mix.energy().total();
         let phase_e0 = [0, 1].map(|k| mix.phase(k).energy().total());
@@ -182,12 +202,17 @@ fn explicit_drag_beyond_two_tau_grows_and_the_time_step_stays_below_it() {
 /// total momentum of both phases is kept.
 #[test]
 fn drag_is_action_against_reaction_at_every_node() {
+    let cases = [
+        (DragModel::BangBangNode, DragUpdate::Explicit),
+        (DragModel::BangBangNode, DragUpdate::Implicit),
+        (DragModel::BangBangNode, DragUpdate::Exponential),
+        (DragModel::SvfNode, DragUpdate::Explicit),
+        (DragModel::SvfNode, DragUpdate::Implicit),
+        (DragModel::SvfNode, DragUpdate::Exponential),
+        (DragModel::BangBangParticle, DragUpdate::Explicit),
+    ];
     for method in methods() {
-        for update in [
-            DragUpdate::Explicit,
-            DragUpdate::Implicit,
-            DragUpdate::Exponential,
-        ] {
+        for (model, update) in cases {
             let solid = common::phase([0.02, 0.02, 0.07, 0.06], RHO_S, N_S, method.clone(), |x| {
                 Vec2::new(0.05 * (60.0 * x.y).sin(), -0.02)
             });
@@ -197,7 +222,7 @@ fn drag_is_action_against_reaction_at_every_node() {
             let drag = Drag {
                 coefficient: drag_coefficient(),
                 kozeny_carman: None,
-                model: DragModel::BangBangNode,
+                model,
                 update,
             };
             let mut mix = Mixture::new([solid, fluid], drag).unwrap();
@@ -207,7 +232,7 @@ fn drag_is_action_against_reaction_at_every_node() {
                 mix.step_with_dt(dt).unwrap();
                 let c = mix.last_coupling();
                 assert!(c.nodes > 0);
-                assert!(c.momentum_residual < 1e-14, "{update:?}: {c:?}");
+                assert!(c.momentum_residual < 1e-14, "{model:?} {update:?}: {c:?}");
             }
             let dp = (mix.momentum() - p0).norm() / p0.norm();
             assert!(
@@ -215,8 +240,58 @@ fn drag_is_action_against_reaction_at_every_node() {
                 "{update:?} {:?}: momentum moved by {dp}",
                 method.shape
             );
-            assert!(mix.drag_dissipated() > 0.0, "{update:?}");
+            assert!(mix.drag_dissipated() > 0.0, "{model:?} {update:?}");
         }
+    }
+}
+
+/// In the uniform mixture every node is shared whole, so the SVF and
+/// particle-based models follow their update's law like the node-based one
+/// (the particle-based one's particles carry the grid's velocity there).
+#[test]
+fn every_model_follows_its_update_law_in_the_uniform_mixture() {
+    for ratio in [0.1, 1.0] {
+        decay_of(
+            DragModel::SvfNode,
+            DragUpdate::Exponential,
+            ratio,
+            |n| (-n * ratio).exp(),
+            1e-9,
+        );
+        decay_of(
+            DragModel::SvfNode,
+            DragUpdate::Implicit,
+            ratio,
+            |n| (1.0 + ratio).powf(-n),
+            1e-9,
+        );
+    }
+    for ratio in [0.01, 0.1, 1.5] {
+        decay_of(
+            DragModel::BangBangParticle,
+            DragUpdate::Explicit,
+            ratio,
+            |n| (1.0 - ratio).powf(n),
+            1e-9,
+        );
+    }
+}
+
+#[test]
+fn the_particle_based_model_is_explicit_only() {
+    let method = common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usf);
+    let full = [0.0, 0.0, 0.1, 0.1];
+    for update in [DragUpdate::Implicit, DragUpdate::Exponential] {
+        let solid = common::phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
+        let fluid = common::phase(full, RHO_F, N_F, method.clone(), |_| Vec2::zeros());
+        let drag = Drag {
+            coefficient: drag_coefficient(),
+            kozeny_carman: None,
+            model: DragModel::BangBangParticle,
+            update,
+        };
+        let e = Mixture::new([solid, fluid], drag).err().expect("refused");
+        assert_eq!(e.key, "drag.update", "{e:?}");
     }
 }
 

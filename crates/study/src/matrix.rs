@@ -4,11 +4,12 @@
 
 use crate::output_files::{relative_path, write_atomic};
 use crate::run_case::{progress_style, run_case, RunOptions};
-use crate::study_file::{Case, Study};
+use crate::study_file::{Case, Study, ENSEMBLE_KEYS};
 use crate::summary::{Status, Summary};
 use crate::tables::{self, SummaryRow};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use serde_json::json;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -164,6 +165,7 @@ pub fn run_matrix(study: &Study, opts: &MatrixOptions) -> std::io::Result<Matrix
         })
         .collect();
     tables::write_summary(&rows, &opts.out)?;
+    write_observed_orders(&rows, &opts.out)?;
     let wall_s = started.elapsed().as_secs_f64();
     manifest("finished", wall_s)?;
     Ok(MatrixResult {
@@ -201,6 +203,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> std::io::Result<Vec<SummaryRow>> {
         }
     }
     tables::write_summary(&rows, out)?;
+    write_observed_orders(&rows, out)?;
     let m = json!({
         "state": "merged",
         "merged_from": dirs.iter().map(|d| d.display().to_string()).collect::<Vec<_>>(),
@@ -211,6 +214,77 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> std::io::Result<Vec<SummaryRow>> {
         serde_json::to_string_pretty(&m)?.as_bytes(),
     )?;
     Ok(rows)
+}
+
+/// A figure of a case's summary.
+type Figure = fn(&Summary) -> Option<f64>;
+
+/// Figures whose observed order of convergence under `scene.cell` a
+/// matrix reports (those that go to zero with h).
+const CONVERGING: [(&str, Figure); 3] = [
+    ("drag_layer_error", |s| s.metrics.drag_layer_error),
+    ("darcy_flux_rel_error", |s| s.metrics.darcy_flux_rel_error),
+    ("darcy_dp_rel_error", |s| s.metrics.darcy_dp_rel_error),
+];
+
+/// For a matrix with a `scene.cell` axis: per case (every other parameter
+/// fixed, ensemble members pooled by their median) and figure, the errors
+/// against h and the observed order (least-squares slope of ln error
+/// against ln h), as OUT/observed_order.json; nothing without such rows.
+pub fn write_observed_orders(rows: &[SummaryRow], out: &Path) -> std::io::Result<()> {
+    // A case is named by the parameters that vary across the matrix.
+    let varies = |k: &str| {
+        let mut values = rows.iter().map(|r| r.summary.params.get(k));
+        let first = values.next().flatten();
+        values.any(|v| v != first)
+    };
+    let key = |s: &Summary| -> String {
+        s.params
+            .iter()
+            .filter(|(k, _)| {
+                k.as_str() != "scene.cell" && !ENSEMBLE_KEYS.contains(&k.as_str()) && varies(k)
+            })
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let cell = |s: &Summary| s.params.get("scene.cell").and_then(|v| v.as_f64());
+    let mut entries = vec![];
+    for (figure, of) in CONVERGING {
+        let mut groups: BTreeMap<String, BTreeMap<u64, Vec<f64>>> = BTreeMap::new();
+        for r in rows {
+            let (Some(h), Some(e)) = (cell(&r.summary), of(&r.summary)) else {
+                continue;
+            };
+            groups
+                .entry(key(&r.summary))
+                .or_default()
+                .entry(h.to_bits())
+                .or_default()
+                .push(e);
+        }
+        for (case, by_h) in groups {
+            if by_h.len() < 2 {
+                continue;
+            }
+            let h: Vec<f64> = by_h.keys().map(|b| f64::from_bits(*b)).collect();
+            let error: Vec<f64> = by_h
+                .values()
+                .map(|v| crate::report_matrix::median(v).unwrap_or(f64::NAN))
+                .collect();
+            let order = crate::metrics::observed_order(&h, &error);
+            entries.push(json!({
+                "case": case, "figure": figure, "h": h, "error": error, "observed_order": order,
+            }));
+        }
+    }
+    if entries.is_empty() {
+        return Ok(());
+    }
+    write_atomic(
+        &out.join("observed_order.json"),
+        serde_json::to_string_pretty(&entries)?.as_bytes(),
+    )
 }
 
 /// The one-paragraph matrix summary printed at the end.

@@ -94,6 +94,7 @@ pub fn mixture_section(m: &Matrix, out: &Path, page: &mut Page) -> Res {
         })
         .collect();
     page.table("mixture", &headers, &table);
+    convergence_figure(&rows, out, page)?;
     // Decay error against dt/tau, a line per update.
     let mut lines: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
     for r in &rows {
@@ -130,6 +131,62 @@ pub fn mixture_section(m: &Matrix, out: &Path, page: &mut Page) -> Res {
         &render(&fig, out, "drag_decay")?,
         "Decay error against dt/tau, one line per drag update (the explicit update's step is \
          held below 0.4 tau)",
+    );
+    Ok(())
+}
+
+/// The fixed layer's error against h, a line per interaction model, with
+/// each model's observed order in its legend.
+fn convergence_figure(rows: &[&crate::report_matrix::Row], out: &Path, page: &mut Page) -> Res {
+    let mut lines: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
+    for r in rows {
+        let s = &r.summary;
+        let h = s.params.get("scene.cell").and_then(|v| v.as_f64());
+        if let (Some(h), Some(e)) = (h, s.metrics.drag_layer_error) {
+            let model = s
+                .params
+                .get("drag.model")
+                .and_then(|v| v.as_str())
+                .unwrap_or("bang_bang_node");
+            let update = s
+                .params
+                .get("drag.update")
+                .and_then(|v| v.as_str())
+                .unwrap_or("implicit");
+            lines
+                .entry(format!("{model} ({update})"))
+                .or_default()
+                .push((h, e));
+        }
+    }
+    lines.retain(|_, pts| pts.len() >= 2);
+    if lines.is_empty() {
+        return Ok(());
+    }
+    let mut named = vec![];
+    for (name, mut pts) in lines {
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let (h, e): (Vec<f64>, Vec<f64>) = pts.iter().copied().unzip();
+        let order =
+            crate::metrics::observed_order(&h, &e).map_or("-".into(), |p| format!("{p:.2}"));
+        named.push((format!("{name}: order {order}"), pts));
+    }
+    let y_max = named
+        .iter()
+        .flat_map(|(_, p)| p.iter().map(|q| q.1))
+        .fold(0.0_f64, f64::max);
+    let fig = LinesFigure {
+        title: "Interaction models under refinement: fixed layer in moving fluid".into(),
+        x_label: "cell size h (m)".into(),
+        y_label: "max fluid velocity error / (|u0| L / H)".into(),
+        lines: named,
+        spread: vec![],
+        x_log: true,
+        y_max,
+    };
+    page.figure(
+        &render(&fig, out, "drag_convergence")?,
+        "Each interaction model's error against h and its observed order (least-squares slope of ln error against ln h)",
     );
     Ok(())
 }

@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 
 type Figure = fn(&Row) -> Option<f64>;
 
-const FIGURES: [(&str, Figure); 5] = [
+const FIGURES: [(&str, Figure); 6] = [
     ("surge front, early shifted RMS (Z)", |r| {
         r.summary.metrics.front_rms_error_early_shifted
     }),
@@ -24,6 +24,10 @@ const FIGURES: [(&str, Figure); 5] = [
     ("Darcy flux against rho g H n^2 / (B L) (rel.)", |r| {
         r.summary.metrics.darcy_flux_rel_error
     }),
+    (
+        "fixed layer: fluid velocity error against the update's law (rel.)",
+        |r| r.summary.metrics.drag_layer_error,
+    ),
     ("Darcy pressure drop against mu q L / k (rel.)", |r| {
         r.summary.metrics.darcy_dp_rel_error
     }),

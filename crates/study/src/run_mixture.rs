@@ -129,9 +129,14 @@ fn decay_time(scene: &Scene, spec: &MixtureSpec) -> Option<f64> {
     })
 }
 
-/// The Darcy column: a fixed skeleton layer spanning the box's width in a
-/// box periodic in x and y, under gravity. Returns the layer's [y0, y1].
+/// The Darcy column: a fixed layer (below) under gravity.
 fn darcy_layer(scene: &Scene, spec: &MixtureSpec) -> Option<[f64; 2]> {
+    fixed_layer(scene, spec).filter(|_| scene.gravity > 0.0)
+}
+
+/// A fixed skeleton layer spanning the box's width in a box periodic in x
+/// and y. Returns the layer's [y0, y1].
+fn fixed_layer(scene: &Scene, spec: &MixtureSpec) -> Option<[f64; 2]> {
     let solids: Vec<_> = scene
         .bodies
         .iter()
@@ -145,11 +150,57 @@ fn darcy_layer(scene: &Scene, spec: &MixtureSpec) -> Option<[f64; 2]> {
     let [layer] = solids.as_slice() else {
         return None;
     };
-    (spec.fixed_solid
-        && scene.periodic == [true, true]
-        && scene.gravity > 0.0
-        && spans(&layer.rect))
-    .then_some([layer.rect[1], layer.rect[3]])
+    (spec.fixed_solid && scene.periodic == [true, true] && spans(&layer.rect))
+        .then_some([layer.rect[1], layer.rect[3]])
+}
+
+/// The drag-convergence scene: a fixed layer without gravity in a fluid
+/// filling the box, moving along the layer. The fluid inside the layer
+/// decays by the update's own law (exp(-t/tau) exponential, prod(1 -
+/// dt/tau) explicit, prod 1/(1 + dt/tau) implicit; tau = n rho_f / B), the
+/// rest keeps its speed: u(t) = u0 [s law(t) + 1 - s], s = L / H. The error
+/// is |u - u(t)| / (|u0| s), its largest over the run: what the
+/// interaction model's treatment of the layer's faces costs.
+struct LayerCheck {
+    u0: Vec2,
+    share: f64,
+    tau: f64,
+    update: DragUpdate,
+    law: f64,
+    max_error: f64,
+}
+
+impl LayerCheck {
+    fn new(scene: &Scene, spec: &MixtureSpec, u0: Vec2) -> Option<Self> {
+        let layer = fixed_layer(scene, spec).filter(|_| scene.gravity == 0.0)?;
+        let fluid = scene
+            .bodies
+            .iter()
+            .find(|b| b.phase == Some(Phase::Fluid))?;
+        let rho = scene.materials[scene.material_index(fluid)?].rho0;
+        let n = fluid.fraction;
+        let b = spec.drag.coefficient_at(n);
+        (u0.norm() > 0.0 && b > 0.0).then(|| LayerCheck {
+            u0,
+            share: (layer[1] - layer[0]) / scene.size[1],
+            tau: n * rho / b,
+            update: spec.drag.update,
+            law: 1.0,
+            max_error: 0.0,
+        })
+    }
+
+    fn after_step(&mut self, dt: f64, u: Vec2) {
+        let r = dt / self.tau;
+        self.law *= match self.update {
+            DragUpdate::Explicit => 1.0 - r,
+            DragUpdate::Implicit => 1.0 / (1.0 + r),
+            DragUpdate::Exponential => (-r).exp(),
+        };
+        let expected = self.u0 * (self.share * self.law + 1.0 - self.share);
+        let error = (u - expected).norm() / (self.u0.norm() * self.share);
+        self.max_error = self.max_error.max(error);
+    }
 }
 
 /// Least-squares slope and intercept of y against x.
@@ -392,6 +443,7 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
     let relative = |m: &Mixture| mean_velocity(m.phase(1)) - mean_velocity(m.phase(0));
     let mut decay = decay_time(scene, &spec)
         .and_then(|tau| DecayCheck::new(tau, relative(&mix), spec.drag.update));
+    let mut layer = LayerCheck::new(scene, &spec, mean_velocity(mix.phase(1)));
     let conserves_momentum =
         scene.periodic == [true, true] && scene.gravity == 0.0 && !spec.fixed_solid;
     let (p0, p_scale) = {
@@ -449,6 +501,9 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
             let dt = mix.phase(0).view().dt;
             if let Some(d) = decay.as_mut() {
                 d.after_step(dt, mix.time(), relative(&mix));
+            }
+            if let Some(l) = layer.as_mut() {
+                l.after_step(dt, mean_velocity(mix.phase(1)));
             }
             if conserves_momentum && p_scale > 0.0 {
                 let (a, b) = (
@@ -532,6 +587,7 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
         metrics.drag_decay_discrete_rel_error = Some(d.max_discrete_error);
         metrics.drag_dt_over_tau = d.first_ratio;
     }
+    metrics.drag_layer_error = layer.map(|l| l.max_error);
     if let Some(layer) = darcy_layer(scene, &spec) {
         let n = scene
             .bodies

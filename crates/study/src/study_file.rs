@@ -423,6 +423,12 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
             ))
         }
     };
+    if t.model == DragModel::BangBangParticle && t.update != DragUpdate::Explicit {
+        return Err((
+            "drag.update".into(),
+            "the particle-based model is explicit (allowed: explicit)".into(),
+        ));
+    }
     if let Some(n0) = t.kozeny_carman {
         if !(n0 > 0.0 && n0 < 1.0) {
             return Err((

@@ -119,6 +119,12 @@ pub struct Metrics {
     /// node-based drag acts over a layer about a cell longer than L.
     #[serde(default)]
     pub darcy_flux_rel_error: Option<f64>,
+    /// The drag-convergence scene (a fixed layer without gravity in a fluid
+    /// moving along it): the largest error of the fluid's mean velocity
+    /// against the update's own law inside the layer and free flow outside,
+    /// relative to the part the layer takes (|u0| L / H).
+    #[serde(default)]
+    pub drag_layer_error: Option<f64>,
     /// Kinetic energy the drag dissipated over the run (J/m).
     #[serde(default)]
     pub drag_dissipated: Option<f64>,

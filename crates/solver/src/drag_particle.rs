@@ -1,0 +1,129 @@
+//! Particle-based bang-bang drag (docs/physics.md section 6): each particle
+//! of a phase that sits inside the other phase (every node of its stencil
+//! carries the other phase's mass) feels f_p = B V_p^mix (v^other(x_p) -
+//! v_p) with V_p^mix = V_p / n_p its mixture volume, spread to the nodes by
+//! N_ip. The phases' nodal sums differ where only one phase's particles
+//! interact, so the nodal equilibrium correction subtracts half their sum
+//! from each: f_i^a = -f_i^b node by node. Explicit over the step, with v^n
+//! on the grid and on the particles.
+
+// The loops walk the weights and the stencil rows in step.
+#![allow(clippy::needless_range_loop)]
+
+use crate::drag::{mixture_volume, Coupling, Drag, Scratch};
+use crate::grid::Grid;
+use crate::particles::Vec2;
+use crate::Solver;
+
+/// Spreads `from`'s particle drag against `other`'s grid velocity into `force` (folded).
+fn spread<const W: usize>(
+    from: &Solver,
+    other: &Grid,
+    drag: &Drag,
+    porosity: impl Fn(usize) -> f64,
+    force: &mut [Vec2],
+) {
+    let g = &from.grid;
+    let nx = g.dims[0];
+    for &n in &g.active {
+        force[n as usize] = Vec2::zeros();
+    }
+    let present = |n: usize| other.is_active(n) && other.mass[n] > 0.0;
+    for (p, st) in from.stencils.iter().enumerate() {
+        let (wx, _) = from.shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+        let (wy, _) = from.shape.stencil_weights::<W>(st.frac[1], st.half[1]);
+        let (mut v_other, mut n_p, mut inside) = (Vec2::zeros(), 0.0, true);
+        for c in 0..W {
+            let row = st.node as usize + c * nx;
+            for a in 0..W {
+                let w = wx[a] * wy[c];
+                if w == 0.0 {
+                    continue;
+                }
+                let node = row + a;
+                if !present(node) {
+                    inside = false;
+                }
+                v_other += w * other.vel[node];
+                n_p += w * porosity(node);
+            }
+        }
+        if !inside {
+            continue;
+        }
+        let f =
+            drag.coefficient_at(n_p) * mixture_volume(from, p) * (v_other - from.particles.v[p]);
+        for c in 0..W {
+            let row = st.node as usize + c * nx;
+            for a in 0..W {
+                force[row + a] += (wx[a] * wy[c]) * f;
+            }
+        }
+    }
+    g.fold(force);
+}
+
+/// Both phases' particle drag, corrected to equilibrium node by node, added
+/// to v^{n+1} over `dt`. With `fixed_a` phase a's velocity stays zero.
+pub(crate) fn couple(
+    a: &mut Solver,
+    b: &mut Solver,
+    drag: &Drag,
+    scratch: &mut Scratch,
+    dt: f64,
+    fixed_a: bool,
+    out: &mut Coupling,
+) {
+    let [va, vb] = &scratch.volume;
+    let porosity = |n: usize| {
+        let v = va[n] + vb[n];
+        if v > 0.0 {
+            vb[n] / v
+        } else {
+            1.0
+        }
+    };
+    let [fa, fb] = &mut scratch.force;
+    match a.shape.width() {
+        2 => {
+            spread::<2>(a, &b.grid, drag, porosity, fa);
+            spread::<2>(b, &a.grid, drag, porosity, fb);
+        }
+        3 => {
+            spread::<3>(a, &b.grid, drag, porosity, fa);
+            spread::<3>(b, &a.grid, drag, porosity, fb);
+        }
+        _ => {
+            spread::<4>(a, &b.grid, drag, porosity, fa);
+            spread::<4>(b, &a.grid, drag, porosity, fb);
+        }
+    }
+    let (ga, gb) = (&mut a.grid, &mut b.grid);
+    for &n in &ga.inside {
+        let n = n as usize;
+        let (ma, mb) = (ga.mass[n], gb.mass[n]);
+        if !(gb.is_active(n) && ma > 0.0 && mb > 0.0) {
+            continue;
+        }
+        out.nodes += 1;
+        let inv_a = if fixed_a { 0.0 } else { 1.0 / ma };
+        let volume = va[n] + vb[n];
+        let k = drag.coefficient_at(vb[n] / volume) * volume * (inv_a + 1.0 / mb);
+        out.stable_dt = out.stable_dt.min(2.0 / k);
+        // Nodal equilibrium: remove half the pair's sum from each.
+        let correction = 0.5 * (fa[n] + fb[n]);
+        let (force_a, force_b) = (fa[n] - correction, fb[n] - correction);
+        let da = (dt * inv_a) * force_a;
+        let db = (dt / mb) * force_b;
+        let (sa, sb) = (ga.vel_new[n], gb.vel_new[n]);
+        let scale = ma * sa.norm() + mb * sb.norm();
+        if scale > 0.0 && !fixed_a {
+            let residual = (ma * da + mb * db).norm() / scale;
+            out.momentum_residual = out.momentum_residual.max(residual);
+        }
+        ga.vel_new[n] = sa + da;
+        gb.vel_new[n] = sb + db;
+        ga.accel[n] += da / dt;
+        gb.accel[n] += db / dt;
+    }
+}
