@@ -274,3 +274,32 @@ fn drag_convergence_writes_each_models_observed_order() {
         assert!(p > 0.5, "{o}");
     }
 }
+
+/// Terzaghi's consolidation, coarse (h = 2.5 mm) and short (T <= 0.17):
+/// the pore pressure on the grid carries the load undrained and drains
+/// through the free top; U(T) follows the exact degree of consolidation and
+/// the pore pressure the series solution, within what the undrained
+/// column's ringing (about 5 % of p0 at this h) leaves.
+#[test]
+fn terzaghi_column_consolidates_like_the_series_solution() {
+    let out = scratch("terzaghi");
+    let o = kick(&[
+        "run",
+        "studies/terzaghi.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "scene.cell=0.0025",
+        "--set",
+        "scene.t_end=0.05",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = Summary::read(&out.join("terzaghi")).unwrap();
+    assert_eq!(s.status, Status::Completed, "{}", s.reason);
+    let m = &s.metrics;
+    let p = m.terzaghi_max_error_over_p0.unwrap();
+    let u = m.terzaghi_u_error.unwrap();
+    assert!(u < 0.02, "U off by {u}");
+    assert!(p < 0.1, "pore pressure off by {p} of p0");
+    assert!(out.join("terzaghi").join("terzaghi.parquet").exists());
+}

@@ -280,7 +280,7 @@ fn couple_nodes(
 /// sum over the active nodes (ghosts included: they carry the real
 /// particles' mass that lands beyond a wall or a periodic edge) of
 /// m_raw |v^{n+1}|^2 / 2.
-fn grid_kinetic(g: &Grid) -> f64 {
+pub(crate) fn grid_kinetic(g: &Grid) -> f64 {
     g.active
         .iter()
         .map(|&n| 0.5 * g.mass_raw[n as usize] * g.vel_new[n as usize].norm_squared())
@@ -288,7 +288,7 @@ fn grid_kinetic(g: &Grid) -> f64 {
 }
 
 /// Ghost nodes take their partners' corrected values again.
-fn refill(g: &mut Grid) {
+pub(crate) fn refill(g: &mut Grid) {
     let mut vel_new: Vec<Vec2> = std::mem::take(&mut g.vel_new);
     g.fill(&mut vel_new);
     g.vel_new = vel_new;

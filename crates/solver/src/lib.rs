@@ -20,6 +20,7 @@ mod measure;
 pub mod mixture;
 pub mod par;
 pub mod particles;
+pub mod pore_pressure;
 pub mod remedy_null_space;
 pub mod remedy_volumetric;
 pub mod scene;

@@ -8,7 +8,8 @@
 
 use crate::checkpoint::{unseal, CheckpointError, Reader, Writer};
 use crate::drag::{self, Coupling, Drag, DragModel, DragUpdate};
-use crate::{ConfigError, Energy, Solver, StepError, Vec2};
+use crate::pore_pressure::{PorePressure, TopLoad};
+use crate::{ConfigError, Energy, Material, Solver, StepError, Vec2};
 
 const MAGIC: &[u8; 8] = b"KICKMIX1";
 
@@ -21,6 +22,11 @@ pub struct Mixture {
     last: Coupling,
     /// The solid is a fixed skeleton (its grid velocity held at zero).
     fixed_solid: bool,
+    /// The fluid's pressure on the grid (`with_pore_pressure`).
+    pore: Option<PorePressure>,
+    /// Longitudinal wave speed of the pore pressure (bounds the step).
+    pore_wave_speed: f64,
+    load: Option<TopLoad>,
 }
 
 impl Mixture {
@@ -70,6 +76,9 @@ impl Mixture {
             scratch,
             drag_dissipated: 0.0,
             fixed_solid: false,
+            pore: None,
+            pore_wave_speed: 0.0,
+            load: None,
             last: Coupling {
                 stable_dt: f64::INFINITY,
                 ..Coupling::default()
@@ -100,6 +109,42 @@ impl Mixture {
         self
     }
 
+    /// Moves the fluid's pressure to the grid (`pore_pressure.rs`): the
+    /// fluid's material becomes the pore fluid's EOS, its particles' own EOS
+    /// pressure is switched off (K = 0 there; viscosity stays), and the step
+    /// stays below cfl h / c with c^2 = K_f / rho_f + K_f (1 - n) / (n rho_s).
+    pub fn with_pore_pressure(mut self) -> Self {
+        let [solid, fluid] = &mut self.phases;
+        let scene = &fluid.cfg.scene;
+        let body = &scene.bodies[0];
+        let index = scene.material_index(body).expect("validated");
+        let pore_fluid = scene.materials[index].clone();
+        let n = body.fraction;
+        let solid_scene = &solid.cfg.scene;
+        let rho_s = solid_scene
+            .material_index(&solid_scene.bodies[0])
+            .map_or(pore_fluid.rho0, |m| solid_scene.materials[m].rho0);
+        let k_f = pore_fluid.k;
+        self.pore_wave_speed = (k_f / pore_fluid.rho0 + k_f * (1.0 - n) / (n * rho_s)).sqrt();
+        for m in fluid.cfg.scene.materials.iter_mut() {
+            m.k = 0.0;
+        }
+        crate::timestep::refresh_eos_cache(&mut fluid.particles, &fluid.cfg.scene.materials);
+        self.pore = Some(PorePressure::new(&fluid.grid, pore_fluid));
+        self
+    }
+
+    /// A downward traction q (Pa) on the solid's top surface, ramped over `ramp` s.
+    pub fn with_top_load(mut self, traction: f64, ramp: f64) -> Self {
+        self.load = Some(TopLoad::new(&self.phases[0], traction, ramp));
+        self
+    }
+
+    /// The pore pressure's EOS (the fluid's material as given), when on.
+    pub fn pore_fluid(&self) -> Option<&Material> {
+        self.pore.as_ref().map(|p| &p.fluid)
+    }
+
     pub fn phase(&self, k: usize) -> &Solver {
         &self.phases[k]
     }
@@ -113,7 +158,11 @@ impl Mixture {
     /// the first step; nodal masses and volumes change little in a step),
     /// with the phases' CFL number as safety.
     pub fn next_dt(&self) -> f64 {
-        let dt = self.phases[0].next_dt().min(self.phases[1].next_dt());
+        let mut dt = self.phases[0].next_dt().min(self.phases[1].next_dt());
+        if self.pore.is_some() {
+            let s = &self.phases[0];
+            dt = dt.min(s.cfg.method.cfl * s.cfg.scene.cell / self.pore_wave_speed);
+        }
         match self.drag.update {
             DragUpdate::Explicit => dt.min(self.phases[0].cfg.method.cfl * self.last.stable_dt),
             DragUpdate::Implicit | DragUpdate::Exponential => dt,
@@ -133,13 +182,29 @@ impl Mixture {
     /// One step of a given size: both phases to their grid update, the drag,
     /// then both phases on from the grid.
     pub fn step_with_dt(&mut self, dt: f64) -> Result<(), StepError> {
+        let t = self.time();
         let [a, b] = &mut self.phases;
         a.begin_step(dt)?;
         b.begin_step(dt)?;
+        // External and pore forces first (each phase's budget books the
+        // energy they give as exchange, like the drag's), then the drag.
+        if let Some(load) = self.load.as_mut() {
+            if !self.fixed_solid {
+                a.dissipated -= load.apply(a, t, dt);
+            }
+        }
+        if let Some(pore) = self.pore.as_mut() {
+            let gained = pore.apply(a, b, dt, self.fixed_solid);
+            a.dissipated -= gained[0];
+            b.dissipated -= gained[1];
+        }
         self.last = drag::couple(a, b, &self.drag, &mut self.scratch, dt, self.fixed_solid);
         self.drag_dissipated += self.last.dissipated;
         a.finish_step();
         b.finish_step();
+        if let Some(pore) = &self.pore {
+            pore.show_on(b);
+        }
         Ok(())
     }
 

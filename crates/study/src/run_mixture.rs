@@ -18,6 +18,7 @@ use crate::timeseries::{Peaks, Timeseries};
 use indicatif::ProgressBar;
 use monitor::{Event, Monitor, StepReport};
 use solver::drag::DragUpdate;
+use solver::pore_pressure::ramp_share;
 use solver::{Mixture, Phase, Scene, Solver, StateView, Vec2};
 use std::path::Path;
 
@@ -283,6 +284,215 @@ fn darcy_figures(v: &StateView, layer: [f64; 2], b: f64, n: f64) -> Option<(f64,
     Some((error, linearity, q))
 }
 
+/// Terzaghi's consolidation (docs/physics.md section 6): a saturated
+/// column (one solid and one fluid body over the same rectangle standing on
+/// the floor, periodic in x, no gravity, pore pressure on) loaded on top by
+/// q ramped over t_r (`ramp_share`). Its pore pressure against the series
+/// solution for that ramp (Duhamel's sum of the step solution over the
+/// load's increments), and its degree of consolidation from the top's
+/// settlement against the exact one.
+struct TerzaghiCheck {
+    height: f64,
+    p0: f64,
+    cv: f64,
+    ramp: f64,
+    /// Settlement per unit load right after loading (undrained) and at the end.
+    s0: f64,
+    s_inf: f64,
+    row: f64,
+    /// Ids of the solid's top row (by id) and their mean height at t = 0.
+    top: Vec<bool>,
+    top_y0: f64,
+    /// Samples: t, T, max |p - p_exact| / p0, U simulated, U exact.
+    samples: Vec<[f64; 5]>,
+}
+
+impl TerzaghiCheck {
+    /// Compared only for T >= this (after the ramp's waves).
+    const T_FROM: f64 = 0.1;
+
+    fn new(scene: &Scene, spec: &MixtureSpec, mix: &Mixture) -> Option<Self> {
+        let [solid, fluid] = Phase::ALL.map(|ph| scene.bodies.iter().find(|b| b.phase == Some(ph)));
+        let (solid, fluid) = (solid?, fluid?);
+        let single = scene.bodies.len() == 2;
+        let on_floor = (solid.rect[1] - scene.origin[1]).abs() < 1e-12;
+        if !(spec.pore_pressure
+            && spec.top_traction > 0.0
+            && scene.gravity == 0.0
+            && single
+            && on_floor
+            && solid.rect == fluid.rect
+            && scene.periodic == [true, false])
+        {
+            return None;
+        }
+        let sm = &scene.materials[scene.material_index(solid)?];
+        let k_f = mix.pore_fluid()?.k;
+        let n = fluid.fraction;
+        let m = solid.fraction * (sm.k + 4.0 * sm.shear_modulus / 3.0);
+        let permeability_over_mu = n * n / spec.drag.coefficient_at(n);
+        let height = solid.rect[3] - solid.rect[1];
+        let q = spec.top_traction;
+        let v = mix.phase(0).view();
+        let l = scene.cell / scene.ppc as f64;
+        let y_max = v.x.iter().map(|x| x.y).fold(f64::NEG_INFINITY, f64::max);
+        let mut top = vec![false; v.n_initial];
+        let (mut sum, mut count) = (0.0, 0.0);
+        for (x, &id) in v.x.iter().zip(v.id) {
+            if x.y > y_max - 0.5 * l {
+                top[id as usize] = true;
+                sum += x.y;
+                count += 1.0;
+            }
+        }
+        Some(TerzaghiCheck {
+            height,
+            p0: q / (1.0 + n * m / k_f),
+            cv: permeability_over_mu / (1.0 / m + n / k_f),
+            ramp: spec.traction_ramp,
+            s0: q * height / (m + k_f / n),
+            s_inf: q * height / m,
+            row: 0.5 * scene.cell,
+            top,
+            top_y0: sum / count,
+            samples: vec![],
+        })
+    }
+
+    /// Load history weights: (tau, dq/q over the step) at RAMP_POINTS
+    /// midpoints of the ramp's part before t (empty for a step load).
+    fn history(&self, t: f64) -> Vec<(f64, f64)> {
+        const RAMP_POINTS: usize = 200;
+        if self.ramp <= 0.0 {
+            return vec![];
+        }
+        let held = t.min(self.ramp);
+        let d = held / RAMP_POINTS as f64;
+        (0..RAMP_POINTS)
+            .map(|i| {
+                let (a, b) = (i as f64 * d, (i + 1) as f64 * d);
+                (
+                    0.5 * (a + b),
+                    ramp_share(b, self.ramp) - ramp_share(a, self.ramp),
+                )
+            })
+            .collect()
+    }
+
+    /// The ramped load's exact pressure (Duhamel): each mode's decay summed
+    /// over the load's increments.
+    fn pressure(&self, z: f64, t: f64, history: &[(f64, f64)]) -> f64 {
+        let hh = self.height * self.height;
+        self.p0
+            * (0..400)
+                .map(|k| {
+                    let m = (2 * k + 1) as f64 * std::f64::consts::FRAC_PI_2;
+                    let a = m * m * self.cv / hh;
+                    let decay = if history.is_empty() {
+                        (-a * t).exp()
+                    } else {
+                        history
+                            .iter()
+                            .map(|&(tau, dq)| dq * (-a * (t - tau)).exp())
+                            .sum()
+                    };
+                    2.0 / m * (m * z / self.height).sin() * decay
+                })
+                .sum::<f64>()
+    }
+
+    /// Settlement fraction of the step load: s0 + (s_inf - s0) U(T).
+    fn step_settlement(&self, t: f64) -> f64 {
+        let big_t = self.cv * t / (self.height * self.height);
+        let u = 1.0
+            - (0..400)
+                .map(|k| {
+                    let m = (2 * k + 1) as f64;
+                    8.0 / (m * m * std::f64::consts::PI.powi(2))
+                        * (-m * m * std::f64::consts::PI.powi(2) * big_t / 4.0).exp()
+                })
+                .sum::<f64>();
+        self.s0 + (self.s_inf - self.s0) * u
+    }
+
+    /// U of the ramped load, as the simulation's: the settlement beyond the
+    /// undrained part of the load applied so far, over s_inf - s0.
+    fn exact_u(&self, t: f64, history: &[(f64, f64)]) -> f64 {
+        let settlement = if history.is_empty() {
+            self.step_settlement(t)
+        } else {
+            history
+                .iter()
+                .map(|&(tau, dq)| dq * self.step_settlement(t - tau))
+                .sum()
+        };
+        (settlement - self.s0 * ramp_share(t, self.ramp)) / (self.s_inf - self.s0)
+    }
+
+    fn sample(&mut self, mix: &Mixture) {
+        let t = mix.time();
+        let big_t = self.cv * t / (self.height * self.height);
+        let history = self.history(t);
+        let fluid = mix.phase(1).view();
+        let rows = (self.height / self.row).ceil() as usize + 1;
+        let mut sums = vec![(0.0, 0.0, 0usize); rows];
+        for (x, p) in fluid.x.iter().zip(fluid.pressure) {
+            if x.y < self.height {
+                let r = ((x.y / self.row) as usize).min(rows - 1);
+                sums[r].0 += x.y;
+                sums[r].1 += p;
+                sums[r].2 += 1;
+            }
+        }
+        let error = sums
+            .iter()
+            .filter(|r| r.2 > 0)
+            .map(|&(y, p, c)| {
+                let (y, p) = (y / c as f64, p / c as f64);
+                (p - self.pressure(self.height - y, t, &history)).abs()
+            })
+            .fold(0.0, f64::max)
+            / self.p0;
+        let solid = mix.phase(0).view();
+        let (mut sum, mut count) = (0.0, 0.0_f64);
+        for (x, &id) in solid.x.iter().zip(solid.id) {
+            if self.top.get(id as usize).copied().unwrap_or(false) {
+                sum += x.y;
+                count += 1.0;
+            }
+        }
+        let settlement = self.top_y0 - sum / count.max(1.0);
+        let u = (settlement - self.s0 * ramp_share(t, self.ramp)) / (self.s_inf - self.s0);
+        self.samples
+            .push([t, big_t, error, u, self.exact_u(t, &history)]);
+    }
+
+    fn max_error(&self) -> Option<f64> {
+        self.samples
+            .iter()
+            .filter(|s| s[1] >= Self::T_FROM)
+            .map(|s| s[2])
+            .reduce(f64::max)
+    }
+
+    fn write(&self, dir: &Path, csv: bool) -> std::io::Result<()> {
+        let col = |k: usize| self.samples.iter().map(|s| s[k]).collect::<Vec<f64>>();
+        let (t, big_t, e, u, ue) = (col(0), col(1), col(2), col(3), col(4));
+        tables::write_columns(
+            &[
+                ("t", &t),
+                ("T", &big_t),
+                ("max_error_over_p0", &e),
+                ("U", &u),
+                ("U_exact", &ue),
+            ],
+            dir,
+            "terzaghi",
+            csv,
+        )
+    }
+}
+
 /// The relative velocity against the exact decay and the update's own law.
 struct DecayCheck {
     tau: f64,
@@ -408,12 +618,17 @@ fn build(case: &Case, spec: &MixtureSpec) -> Result<Mixture, String> {
     let [solid, fluid] = phases;
     let solid = solid.map_err(|e| format!("setup (solid): {e}"))?;
     let fluid = fluid.map_err(|e| format!("setup (fluid): {e}"))?;
-    let mix = Mixture::new([solid, fluid], spec.drag).map_err(|e| format!("setup: {e}"))?;
-    Ok(if spec.fixed_solid {
-        mix.fix_solid()
-    } else {
-        mix
-    })
+    let mut mix = Mixture::new([solid, fluid], spec.drag).map_err(|e| format!("setup: {e}"))?;
+    if spec.fixed_solid {
+        mix = mix.fix_solid();
+    }
+    if spec.pore_pressure {
+        mix = mix.with_pore_pressure();
+    }
+    if spec.top_traction > 0.0 {
+        mix = mix.with_top_load(spec.top_traction, spec.traction_ramp);
+    }
+    Ok(mix)
 }
 
 pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simulated> {
@@ -444,6 +659,7 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
     let mut decay = decay_time(scene, &spec)
         .and_then(|tau| DecayCheck::new(tau, relative(&mix), spec.drag.update));
     let mut layer = LayerCheck::new(scene, &spec, mean_velocity(mix.phase(1)));
+    let mut terzaghi = TerzaghiCheck::new(scene, &spec, &mix);
     let conserves_momentum =
         scene.periodic == [true, true] && scene.gravity == 0.0 && !spec.fixed_solid;
     let (p0, p_scale) = {
@@ -463,6 +679,7 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
                      watches: &mut [PhaseWatch; 2],
                      rows: &mut MixtureRows,
                      decay: &Option<DecayCheck>,
+                     terzaghi: &mut Option<TerzaghiCheck>,
                      event_row: bool| {
         for w in watches.iter_mut() {
             w.push_row(&mix.phase(w.phase.index()).view(), event_row);
@@ -470,6 +687,9 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
         if rows.step.last() != Some(&(mix.phase(0).step_count() as f64)) {
             let exact = decay.as_ref().map(|d| d.exact(mix.time()));
             rows.push(mix, relative(mix), exact, total_energy(mix));
+            if let Some(c) = terzaghi.as_mut() {
+                c.sample(mix);
+            }
         }
     };
 
@@ -477,7 +697,7 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
         write_vtk(&particles_dir, &mix)?;
         next_vtk += 1;
     }
-    push_rows(&mix, &mut watches, &mut rows, &decay, false);
+    push_rows(&mix, &mut watches, &mut rows, &decay, &mut terzaghi, false);
     let (status, reason) = loop {
         if mix.phase(0).finished() {
             break (Status::Completed, String::new());
@@ -521,6 +741,7 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
                 &mut watches,
                 &mut rows,
                 &decay,
+                &mut terzaghi,
                 !regular || stop.is_some(),
             );
             let t = mix.time();
@@ -541,6 +762,7 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
         &mut watches,
         &mut rows,
         &decay,
+        &mut terzaghi,
         status != Status::Completed,
     );
     write_vtk(&particles_dir, &mix)?;
@@ -588,6 +810,16 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
         metrics.drag_dt_over_tau = d.first_ratio;
     }
     metrics.drag_layer_error = layer.map(|l| l.max_error);
+    if let Some(c) = &terzaghi {
+        c.write(dir, opts.csv)?;
+        metrics.terzaghi_max_error_over_p0 = c.max_error();
+        metrics.terzaghi_u_error = c
+            .samples
+            .iter()
+            .filter(|s| s[1] >= TerzaghiCheck::T_FROM)
+            .map(|s| (s[3] - s[4]).abs())
+            .reduce(f64::max);
+    }
     if let Some(layer) = darcy_layer(scene, &spec) {
         let n = scene
             .bodies

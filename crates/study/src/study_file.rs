@@ -121,6 +121,16 @@ struct DragTable {
     /// The solid is a fixed skeleton (its grid velocity held at zero).
     #[serde(default)]
     fixed_solid: bool,
+    /// The fluid's pressure on the grid from each node's volume balance
+    /// (grains incompressible; the fluid's material is the pore fluid).
+    #[serde(default)]
+    pore_pressure: bool,
+    /// A downward traction (Pa) on the solid's top surface.
+    #[serde(default)]
+    top_traction: f64,
+    /// Seconds over which that traction ramps up from 0.
+    #[serde(default)]
+    traction_ramp: f64,
 }
 
 /// A mixture case's interaction: the resolved `[drag]` table.
@@ -128,6 +138,9 @@ struct DragTable {
 pub struct MixtureSpec {
     pub drag: Drag,
     pub fixed_solid: bool,
+    pub pore_pressure: bool,
+    pub top_traction: f64,
+    pub traction_ramp: f64,
 }
 
 /// One expanded case of a study.
@@ -437,6 +450,17 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
             ));
         }
     }
+    for (key, v) in [
+        ("drag.top_traction", t.top_traction),
+        ("drag.traction_ramp", t.traction_ramp),
+    ] {
+        if !(v >= 0.0 && v.is_finite()) {
+            return Err((
+                key.into(),
+                format!("{v} is out of range (allowed: finite >= 0)"),
+            ));
+        }
+    }
     Ok(MixtureSpec {
         drag: Drag {
             coefficient,
@@ -445,6 +469,9 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
             update: t.update,
         },
         fixed_solid: t.fixed_solid,
+        pore_pressure: t.pore_pressure,
+        top_traction: t.top_traction,
+        traction_ramp: t.traction_ramp,
     })
 }
 
@@ -784,6 +811,17 @@ mod tests {
             m.contains("unknown key") && m.contains("fixed_solid"),
             "{m}"
         );
+        let (k, _) = bad(&MIXTURE.replace(
+            "coefficient = 1e5",
+            "coefficient = 1e5\ntop_traction = -1.0",
+        ));
+        assert_eq!(k, "drag.top_traction");
+        let (k, m) = bad(&MIXTURE.replace(
+            "coefficient = 1e5",
+            "coefficient = 1e5\nmodel = \"bang_bang_particle\"",
+        ));
+        assert_eq!(k, "drag.update");
+        assert!(m.contains("explicit"), "{m}");
         let (k, m) =
             bad(&MIXTURE.replace("coefficient = 1e5", "coefficient = 1e5\nupdate = \"rk4\""));
         assert_eq!(k, "drag.update");

@@ -125,6 +125,14 @@ pub struct Metrics {
     /// relative to the part the layer takes (|u0| L / H).
     #[serde(default)]
     pub drag_layer_error: Option<f64>,
+    /// Terzaghi's column (pore pressure on, a top traction, no gravity): the
+    /// largest |p - p_exact| / p0 over rows of half a cell and the samples
+    /// with T >= 0.1 (after the load ramp's waves), and the largest |U -
+    /// U_exact| there; both series are in terzaghi.parquet.
+    #[serde(default)]
+    pub terzaghi_max_error_over_p0: Option<f64>,
+    #[serde(default)]
+    pub terzaghi_u_error: Option<f64>,
     /// Kinetic energy the drag dissipated over the run (J/m).
     #[serde(default)]
     pub drag_dissipated: Option<f64>,

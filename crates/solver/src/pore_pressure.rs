@@ -1,0 +1,297 @@
+//! Pore pressure (docs/physics.md section 6): with it on, the fluid's
+//! pressure lives on the grid and follows the volume balance of each node.
+//! Grains are incompressible: the solid's particles carry grain volume
+//! V_p^0 (their reference volume n_s V_mix). The water's reference volume
+//! is the fluid particles' V_p^0. At a node of capacity V_cap = h^2 (walls
+//! and periodic edges folded, so every node looks interior) the water
+//! fills the room the grains leave, and its volume ratio
+//!
+//!   J_i = (V_cap - V_i^grains) / V_i^water0
+//!
+//! gives p_i = max(0, EOS_fluid(J_i)): compressed where more water sits in
+//! a node than the grains leave room for, zero at a free surface or where
+//! the water is short (pore water holds no tension). Its gradient acts on
+//! each particle of both phases by its reference volume, f_p = -V_p^0 grad p
+//! (the fluid n grad p, the grains (1 - n) grad p: buoyancy and the
+//! effective-stress split in one), spread by N_ip and added to v^{n+1} over
+//! the step like the drag. The fluid's own EOS pressure is off (its
+//! viscous stress stays); its particles show the grid pressure.
+//!
+//! Undrained compression of both phases by a volumetric strain e gives
+//! p = K_f e / n; so p0 = q / (1 + n M / K_f) under a step load q on a
+//! skeleton of constrained modulus M, as in Terzaghi's problem.
+
+// The loops walk the weights and the stencil rows in step.
+#![allow(clippy::needless_range_loop)]
+
+use crate::config::Material;
+use crate::grid::Grid;
+use crate::particles::Vec2;
+use crate::transfer_serial::scatter_scalar;
+use crate::Solver;
+
+/// Grid arrays of the pore pressure (allocated once) and the pore fluid's EOS.
+#[derive(Clone, Debug)]
+pub struct PorePressure {
+    pub(crate) fluid: Material,
+    pressure: Vec<f64>,
+    grains: Vec<f64>,
+    water: Vec<f64>,
+    force: Vec<Vec2>,
+}
+
+impl PorePressure {
+    pub fn new(grid: &Grid, fluid: Material) -> Self {
+        let n = grid.dims[0] * grid.dims[1];
+        PorePressure {
+            fluid,
+            pressure: vec![0.0; n],
+            grains: vec![0.0; n],
+            water: vec![0.0; n],
+            force: vec![Vec2::zeros(); n],
+        }
+    }
+
+    /// The nodal pressure of the phases' current stencils (ghosts filled).
+    /// Tension only where the node is saturated (grains and water fill at
+    /// least 0.9 of its support): at a free surface, or where the water is
+    /// short or spread thin, the pressure is cut at zero; inside, a wave's
+    /// tension is kept, so that the water does not cavitate and open a
+    /// drained gap inside a saturated body.
+    fn nodal_pressure(&mut self, solid: &Solver, fluid: &Solver) {
+        reference_volume(solid, &mut self.grains);
+        reference_volume(fluid, &mut self.water);
+        let g = &fluid.grid;
+        let capacity = g.h * g.h;
+        for n in 0..self.pressure.len() {
+            let w = self.water[n];
+            self.pressure[n] = if w > 0.0 && g.is_active(n) {
+                let j = (capacity - self.grains[n]) / w;
+                let p = self.fluid.pressure(j);
+                if self.grains[n] + w >= 0.9 * capacity {
+                    p
+                } else {
+                    p.max(0.0)
+                }
+            } else {
+                0.0
+            };
+        }
+        g.fill(&mut self.pressure);
+    }
+
+    /// Adds each phase's pore-pressure force over `dt` to its v^{n+1} (phase
+    /// a held when `fixed_a`); returns the kinetic energy each phase gained.
+    pub(crate) fn apply(
+        &mut self,
+        a: &mut Solver,
+        b: &mut Solver,
+        dt: f64,
+        fixed_a: bool,
+    ) -> [f64; 2] {
+        self.nodal_pressure(a, b);
+        let mut gained = [0.0; 2];
+        for (k, s) in [a, b].into_iter().enumerate() {
+            if k == 0 && fixed_a {
+                continue;
+            }
+            let before = crate::drag::grid_kinetic(&s.grid);
+            gradient_force(s, &self.pressure, &mut self.force);
+            add_force(&mut s.grid, &self.force, dt);
+            gained[k] = crate::drag::grid_kinetic(&s.grid) - before;
+        }
+        gained
+    }
+
+    /// Each fluid particle's pressure set to the grid pressure (of the
+    /// step's start) at its current position, so that views and files show it.
+    pub(crate) fn show_on(&self, fluid: &mut Solver) {
+        match fluid.shape.width() {
+            2 => interpolate::<2>(&self.pressure, fluid),
+            3 => interpolate::<3>(&self.pressure, fluid),
+            _ => interpolate::<4>(&self.pressure, fluid),
+        }
+    }
+}
+
+/// sum_p N_ip V_p^0 on the raw nodes, folded.
+fn reference_volume(s: &Solver, out: &mut [f64]) {
+    let (q, st, shape, g) = (&s.particles.vol0, &s.stencils, &s.shape, &s.grid);
+    for v in out.iter_mut() {
+        *v = 0.0;
+    }
+    match shape.width() {
+        2 => scatter_scalar::<2>(q, st, shape, g, out),
+        3 => scatter_scalar::<3>(q, st, shape, g, out),
+        _ => scatter_scalar::<4>(q, st, shape, g, out),
+    }
+    g.fold(out);
+}
+
+fn interpolate<const W: usize>(field: &[f64], s: &mut Solver) {
+    let (g, shape) = (&s.grid, &s.shape);
+    let (inv_h, pad, nx) = (1.0 / g.h, crate::grid::PAD as i64, g.dims[0] as i64);
+    let ps = &mut s.particles;
+    for p in 0..ps.len() {
+        let r = (ps.x[p] - g.origin) * inv_h;
+        let (bx, fx) = shape.locate(r.x);
+        let (by, fy) = shape.locate(r.y);
+        let (i, j) = (bx.saturating_add(pad), by.saturating_add(pad));
+        let w = W as i64;
+        if !(i >= 0 && j >= 0 && i + w <= nx && j + w <= g.dims[1] as i64) {
+            continue;
+        }
+        let half = shape.half_widths(&ps.f[p]);
+        let (wx, _) = shape.stencil_weights::<W>(fx, half[0]);
+        let (wy, _) = shape.stencil_weights::<W>(fy, half[1]);
+        let mut sum = 0.0;
+        for c in 0..W {
+            let row = (i + (j + c as i64) * nx) as usize;
+            for a in 0..W {
+                sum += wx[a] * wy[c] * field[row + a];
+            }
+        }
+        ps.pressure[p] = sum;
+    }
+}
+
+/// f_i = -sum_p N_ip V_p^0 grad p(x_p) on the raw nodes, folded.
+fn gradient_force(s: &Solver, pressure: &[f64], force: &mut [Vec2]) {
+    match s.shape.width() {
+        2 => spread::<2>(s, pressure, force),
+        3 => spread::<3>(s, pressure, force),
+        _ => spread::<4>(s, pressure, force),
+    }
+    s.grid.fold(force);
+}
+
+fn spread<const W: usize>(s: &Solver, pressure: &[f64], force: &mut [Vec2]) {
+    let g = &s.grid;
+    let (nx, inv_h) = (g.dims[0], 1.0 / g.h);
+    for &n in &g.active {
+        force[n as usize] = Vec2::zeros();
+    }
+    for (p, st) in s.stencils.iter().enumerate() {
+        let (wx, dwx) = s.shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+        let (wy, dwy) = s.shape.stencil_weights::<W>(st.frac[1], st.half[1]);
+        let mut sum = Vec2::zeros();
+        for c in 0..W {
+            let row = st.node as usize + c * nx;
+            for a in 0..W {
+                let q = pressure[row + a];
+                sum += Vec2::new(dwx[a] * wy[c], wx[a] * dwy[c]) * (q * inv_h);
+            }
+        }
+        let f = -s.particles.vol0[p] * sum;
+        for c in 0..W {
+            let row = st.node as usize + c * nx;
+            for a in 0..W {
+                force[row + a] += (wx[a] * wy[c]) * f;
+            }
+        }
+    }
+}
+
+/// v^{n+1} += dt f / m and a += f / m on the inside nodes with mass; ghosts refilled.
+pub(crate) fn add_force(g: &mut Grid, force: &[Vec2], dt: f64) {
+    for &n in &g.inside {
+        let n = n as usize;
+        let m = g.mass[n];
+        if m > 0.0 {
+            let a = force[n] / m;
+            g.vel_new[n] += dt * a;
+            g.accel[n] += a;
+        }
+    }
+    crate::drag::refill(g);
+}
+
+/// A uniform traction q (Pa, downward) on the top surface of the solid: the
+/// solid particles seeded in its top row carry it, each over its lattice
+/// spacing l = h / ppc, ramped from 0 over `ramp` seconds as q (1 - cos(pi
+/// t / ramp)) / 2 (a step load, or a linear ramp's kinks, ring the column
+/// with waves for a long time).
+#[derive(Clone, Debug)]
+pub struct TopLoad {
+    pub traction: f64,
+    pub ramp: f64,
+    /// By particle id: in the top row at t = 0.
+    loaded: Vec<bool>,
+    force: Vec<Vec2>,
+}
+
+impl TopLoad {
+    pub fn new(solid: &Solver, traction: f64, ramp: f64) -> Self {
+        let ps = &solid.particles;
+        let l = solid.grid.h / solid.cfg.scene.ppc as f64;
+        let top = ps.x.iter().map(|x| x.y).fold(f64::NEG_INFINITY, f64::max);
+        let ids = ps.id.iter().map(|&i| i as usize + 1).max().unwrap_or(0);
+        let mut loaded = vec![false; ids];
+        for (x, &id) in ps.x.iter().zip(&ps.id) {
+            loaded[id as usize] = x.y > top - 0.5 * l;
+        }
+        TopLoad {
+            traction,
+            ramp,
+            loaded,
+            force: vec![Vec2::zeros(); solid.grid.dims[0] * solid.grid.dims[1]],
+        }
+    }
+
+    /// The traction at time t.
+    pub fn at(&self, t: f64) -> f64 {
+        self.traction * ramp_share(t, self.ramp)
+    }
+
+    /// Adds the load of time `t` over `dt` to the solid's v^{n+1}; returns
+    /// the kinetic energy it gave.
+    pub(crate) fn apply(&mut self, s: &mut Solver, t: f64, dt: f64) -> f64 {
+        let before = crate::drag::grid_kinetic(&s.grid);
+        let per_particle = Vec2::new(0.0, -self.at(t) * s.grid.h / s.cfg.scene.ppc as f64);
+        match s.shape.width() {
+            2 => self.spread::<2>(s, per_particle),
+            3 => self.spread::<3>(s, per_particle),
+            _ => self.spread::<4>(s, per_particle),
+        }
+        s.grid.fold(&mut self.force);
+        add_force(&mut s.grid, &self.force, dt);
+        crate::drag::grid_kinetic(&s.grid) - before
+    }
+
+    fn spread<const W: usize>(&mut self, s: &Solver, f: Vec2) {
+        let nx = s.grid.dims[0];
+        for &n in &s.grid.active {
+            self.force[n as usize] = Vec2::zeros();
+        }
+        for (p, st) in s.stencils.iter().enumerate() {
+            if !self
+                .loaded
+                .get(s.particles.id[p] as usize)
+                .copied()
+                .unwrap_or(false)
+            {
+                continue;
+            }
+            let (wx, _) = s.shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+            let (wy, _) = s.shape.stencil_weights::<W>(st.frac[1], st.half[1]);
+            for c in 0..W {
+                let row = st.node as usize + c * nx;
+                for a in 0..W {
+                    self.force[row + a] += (wx[a] * wy[c]) * f;
+                }
+            }
+        }
+    }
+}
+
+/// The share of a load ramped over `ramp` seconds applied at t: (1 -
+/// cos(pi t / ramp)) / 2 until `ramp`, then 1 (a step when ramp = 0).
+pub fn ramp_share(t: f64, ramp: f64) -> f64 {
+    if ramp > 0.0 && t < ramp {
+        0.5 * (1.0 - (std::f64::consts::PI * t.max(0.0) / ramp).cos())
+    } else if t >= 0.0 {
+        1.0
+    } else {
+        0.0
+    }
+}
