@@ -307,6 +307,9 @@ struct TerzaghiCheck {
     samples: Vec<[f64; 5]>,
 }
 
+/// Terms of the series solutions.
+const MODES: usize = 400;
+
 impl TerzaghiCheck {
     /// Compared only for T >= this (after the ramp's waves).
     const T_FROM: f64 = 0.1;
@@ -379,24 +382,32 @@ impl TerzaghiCheck {
             .collect()
     }
 
-    /// The ramped load's exact pressure (Duhamel): each mode's decay summed
-    /// over the load's increments.
-    fn pressure(&self, z: f64, t: f64, history: &[(f64, f64)]) -> f64 {
+    /// Each mode's decay at t for the ramped load (Duhamel: the step
+    /// solution's exp(-a_k (t - tau)) summed over the load's increments).
+    fn mode_decays(&self, t: f64, history: &[(f64, f64)]) -> Vec<f64> {
         let hh = self.height * self.height;
+        (0..MODES)
+            .map(|k| {
+                let m = (2 * k + 1) as f64 * std::f64::consts::FRAC_PI_2;
+                let a = m * m * self.cv / hh;
+                if history.is_empty() {
+                    (-a * t).exp()
+                } else {
+                    history.iter().map(|&(tau, dq)| dq * (-a * (t - tau)).exp()).sum()
+                }
+            })
+            .collect()
+    }
+
+    /// The exact pressure at depth z from the modes' decays.
+    fn pressure(&self, z: f64, decays: &[f64]) -> f64 {
         self.p0
-            * (0..400)
-                .map(|k| {
+            * decays
+                .iter()
+                .enumerate()
+                .map(|(k, d)| {
                     let m = (2 * k + 1) as f64 * std::f64::consts::FRAC_PI_2;
-                    let a = m * m * self.cv / hh;
-                    let decay = if history.is_empty() {
-                        (-a * t).exp()
-                    } else {
-                        history
-                            .iter()
-                            .map(|&(tau, dq)| dq * (-a * (t - tau)).exp())
-                            .sum()
-                    };
-                    2.0 / m * (m * z / self.height).sin() * decay
+                    2.0 / m * (m * z / self.height).sin() * d
                 })
                 .sum::<f64>()
     }
@@ -405,7 +416,7 @@ impl TerzaghiCheck {
     fn step_settlement(&self, t: f64) -> f64 {
         let big_t = self.cv * t / (self.height * self.height);
         let u = 1.0
-            - (0..400)
+            - (0..MODES)
                 .map(|k| {
                     let m = (2 * k + 1) as f64;
                     8.0 / (m * m * std::f64::consts::PI.powi(2))
@@ -433,6 +444,7 @@ impl TerzaghiCheck {
         let t = mix.time();
         let big_t = self.cv * t / (self.height * self.height);
         let history = self.history(t);
+        let decays = self.mode_decays(t, &history);
         let fluid = mix.phase(1).view();
         let rows = (self.height / self.row).ceil() as usize + 1;
         let mut sums = vec![(0.0, 0.0, 0usize); rows];
@@ -449,7 +461,7 @@ impl TerzaghiCheck {
             .filter(|r| r.2 > 0)
             .map(|&(y, p, c)| {
                 let (y, p) = (y / c as f64, p / c as f64);
-                (p - self.pressure(self.height - y, t, &history)).abs()
+                (p - self.pressure(self.height - y, &decays)).abs()
             })
             .fold(0.0, f64::max)
             / self.p0;
