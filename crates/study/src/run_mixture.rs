@@ -393,7 +393,10 @@ impl TerzaghiCheck {
                 if history.is_empty() {
                     (-a * t).exp()
                 } else {
-                    history.iter().map(|&(tau, dq)| dq * (-a * (t - tau)).exp()).sum()
+                    history
+                        .iter()
+                        .map(|&(tau, dq)| dq * (-a * (t - tau)).exp())
+                        .sum()
                 }
             })
             .collect()
