@@ -30,7 +30,11 @@ pub fn mixture_section(m: &Matrix, out: &Path, page: &mut Page) -> Res {
          box periodic along gravity, at t_end) the error of the layer's pressure drop against \
          mu q L / k from the fitted gradients, the largest departure of its row-averaged \
          pressure from a line (over the drop), the measured flux q and its error against the \
-         flux that carries the column's weight; and each phase's events.",
+         flux that carries the column's weight; under gravity in a closed box, the mean over \
+         the last second of the fluid's free-surface spread and of its lowest particles' \
+         spread across the columns (levelling and evenness of penetration), the largest \
+         cell saturation at the end (above 1: water crowding into the grains' room) and the \
+         fluid's late hydrostatic departure; and each phase's events.",
     );
     let opt = |v: Option<f64>| Cell::Num(v.map_or("-".into(), short));
     let param = |r: &crate::report_matrix::Row, key: &str| {
@@ -57,6 +61,10 @@ pub fn mixture_section(m: &Matrix, out: &Path, page: &mut Page) -> Res {
         "Darcy p linearity",
         "Darcy flux q (m/s)",
         "q error",
+        "surface spread late (m)",
+        "penetration spread late (m)",
+        "saturation max",
+        "fluid hydro late (rel. RMS)",
         "events solid / fluid",
     ]
     .map(String::from)
@@ -88,6 +96,10 @@ pub fn mixture_section(m: &Matrix, out: &Path, page: &mut Page) -> Res {
                     opt(mx.darcy_linearity),
                     opt(mx.darcy_flux),
                     opt(mx.darcy_flux_rel_error),
+                    opt(mx.surface_spread_late),
+                    opt(mx.penetration_spread_late),
+                    opt(mx.saturation_max),
+                    opt(s.phases.get(1).and_then(|p| p.metrics.hydro_rel_rms_late)),
                     Cell::Num(events),
                 ],
             )

@@ -508,6 +508,80 @@ impl TerzaghiCheck {
     }
 }
 
+/// The fluid's free surface and wetting front under gravity (a box closed
+/// along gravity): per column of one cell, the highest and the lowest
+/// fluid particle; their spreads (max - min over the columns holding
+/// fluid) per sample, averaged over the last simulated second of a run that
+/// reached t_end (the filter stone's levelling and evenness of penetration).
+struct SurfaceCheck {
+    /// (t, surface spread, penetration spread)
+    samples: Vec<[f64; 3]>,
+}
+
+impl SurfaceCheck {
+    fn new(scene: &Scene) -> Option<Self> {
+        (scene.gravity > 0.0 && !scene.periodic[1]).then_some(SurfaceCheck { samples: vec![] })
+    }
+
+    fn sample(&mut self, mix: &Mixture) {
+        let v = mix.phase(1).view();
+        let (h, x0) = (v.scene.cell, v.scene.origin[0]);
+        let columns = (v.scene.size[0] / h).round() as usize;
+        let mut top = vec![f64::NEG_INFINITY; columns];
+        let mut bottom = vec![f64::INFINITY; columns];
+        for x in v.x {
+            let c = (((x.x - x0) / h).floor().max(0.0) as usize).min(columns - 1);
+            top[c] = top[c].max(x.y);
+            bottom[c] = bottom[c].min(x.y);
+        }
+        let spread = |v: &[f64]| {
+            let (lo, hi) = v
+                .iter()
+                .filter(|y| y.is_finite())
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &y| {
+                    (a.min(y), b.max(y))
+                });
+            if hi >= lo {
+                hi - lo
+            } else {
+                f64::NAN
+            }
+        };
+        self.samples
+            .push([mix.time(), spread(&top), spread(&bottom)]);
+    }
+
+    /// Mean of column k over the last simulated second.
+    fn late(&self, k: usize, t_end: f64) -> Option<f64> {
+        let v: Vec<f64> = self
+            .samples
+            .iter()
+            .filter(|s| s[0] >= t_end - 1.0 && s[0] > 0.0 && s[k].is_finite())
+            .map(|s| s[k])
+            .collect();
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    }
+}
+
+/// Largest saturation of a cell: the reference volumes (grains and the
+/// fluid's V_p^0) of the particles in it over its area. 1 in a saturated
+/// mixture; above 1 where water crowds into the grains' room.
+fn saturation_max(mix: &Mixture) -> f64 {
+    let v = mix.phase(0).view();
+    let (h, o) = (v.scene.cell, v.scene.origin);
+    let [nx, ny] = [0, 1].map(|k| (v.scene.size[k] / h).round() as usize);
+    let mut cells = vec![0.0; nx * ny];
+    for k in 0..2 {
+        let v = mix.phase(k).view();
+        for (x, v0) in v.x.iter().zip(v.volume0) {
+            let i = (((x.x - o[0]) / h).floor().max(0.0) as usize).min(nx - 1);
+            let j = (((x.y - o[1]) / h).floor().max(0.0) as usize).min(ny - 1);
+            cells[i + j * nx] += v0;
+        }
+    }
+    cells.iter().fold(0.0, |m: f64, c| m.max(c / (h * h)))
+}
+
 /// The relative velocity against the exact decay and the update's own law.
 struct DecayCheck {
     tau: f64,
@@ -675,6 +749,7 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
         .and_then(|tau| DecayCheck::new(tau, relative(&mix), spec.drag.update));
     let mut layer = LayerCheck::new(scene, &spec, mean_velocity(mix.phase(1)));
     let mut terzaghi = TerzaghiCheck::new(scene, &spec, &mix);
+    let mut surface = SurfaceCheck::new(scene);
     let conserves_momentum =
         scene.periodic == [true, true] && scene.gravity == 0.0 && !spec.fixed_solid;
     let (p0, p_scale) = {
@@ -695,6 +770,7 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
                      rows: &mut MixtureRows,
                      decay: &Option<DecayCheck>,
                      terzaghi: &mut Option<TerzaghiCheck>,
+                     surface: &mut Option<SurfaceCheck>,
                      event_row: bool| {
         for w in watches.iter_mut() {
             w.push_row(&mix.phase(w.phase.index()).view(), event_row);
@@ -705,6 +781,9 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
             if let Some(c) = terzaghi.as_mut() {
                 c.sample(mix);
             }
+            if let Some(c) = surface.as_mut() {
+                c.sample(mix);
+            }
         }
     };
 
@@ -712,7 +791,15 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
         write_vtk(&particles_dir, &mix)?;
         next_vtk += 1;
     }
-    push_rows(&mix, &mut watches, &mut rows, &decay, &mut terzaghi, false);
+    push_rows(
+        &mix,
+        &mut watches,
+        &mut rows,
+        &decay,
+        &mut terzaghi,
+        &mut surface,
+        false,
+    );
     let (status, reason) = loop {
         if mix.phase(0).finished() {
             break (Status::Completed, String::new());
@@ -757,6 +844,7 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
                 &mut rows,
                 &decay,
                 &mut terzaghi,
+                &mut surface,
                 !regular || stop.is_some(),
             );
             let t = mix.time();
@@ -778,6 +866,7 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
         &mut rows,
         &decay,
         &mut terzaghi,
+        &mut surface,
         status != Status::Completed,
     );
     write_vtk(&particles_dir, &mix)?;
@@ -825,6 +914,11 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
         metrics.drag_dt_over_tau = d.first_ratio;
     }
     metrics.drag_layer_error = layer.map(|l| l.max_error);
+    metrics.saturation_max = Some(saturation_max(&mix));
+    if let (Some(c), true) = (&surface, completed) {
+        metrics.surface_spread_late = c.late(1, mix.time());
+        metrics.penetration_spread_late = c.late(2, mix.time());
+    }
     if let Some(c) = &terzaghi {
         c.write(dir, opts.csv)?;
         metrics.terzaghi_max_error_over_p0 = c.max_error();

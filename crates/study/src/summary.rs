@@ -133,6 +133,20 @@ pub struct Metrics {
     pub terzaghi_max_error_over_p0: Option<f64>,
     #[serde(default)]
     pub terzaghi_u_error: Option<f64>,
+    /// Under gravity in a box closed along it, for a run that reached t_end:
+    /// the mean over the last second of the fluid's free-surface spread
+    /// (highest fluid particle per column of one cell, max - min over the
+    /// columns) and of its lowest particle's spread (evenness of
+    /// penetration), in metres.
+    #[serde(default)]
+    pub surface_spread_late: Option<f64>,
+    #[serde(default)]
+    pub penetration_spread_late: Option<f64>,
+    /// At the end: the largest saturation of a cell (grains' and fluid's
+    /// reference volumes over its area): above 1 where the water crowds
+    /// into the grains' room.
+    #[serde(default)]
+    pub saturation_max: Option<f64>,
     /// Kinetic energy the drag dissipated over the run (J/m).
     #[serde(default)]
     pub drag_dissipated: Option<f64>,
