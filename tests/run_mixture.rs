@@ -216,8 +216,13 @@ fn darcy_column_meets_the_pressure_drop_and_converges_in_flux() {
             assert_eq!(m.energy_injected_max.unwrap_or(0.0), 0.0, "{name}");
             let dp = m.darcy_dp_rel_error.unwrap();
             assert!(dp < 0.02, "{name}: pressure drop off by {dp}");
-            let lin = m.darcy_linearity.unwrap();
-            assert!(lin < 0.02, "{name}: p departs from a line by {lin}");
+            // At h = 1 cm only two rows lie inside the layer: no linearity figure.
+            if h != "1cm" {
+                let lin = m.darcy_linearity.unwrap();
+                assert!(lin < 0.02, "{name}: p departs from a line by {lin}");
+            } else {
+                assert!(m.darcy_linearity.is_none());
+            }
             flux_errors.push(m.darcy_flux_rel_error.unwrap());
         }
         assert!(

@@ -94,6 +94,11 @@ fn rms(errors: impl Iterator<Item = f64>) -> Option<f64> {
 /// Least-squares slope of y against x (None below two distinct x).
 pub fn slope(points: impl Iterator<Item = (f64, f64)>) -> Option<f64> {
     let pts: Vec<(f64, f64)> = points.collect();
+    line_fit(&pts).map(|(slope, _)| slope)
+}
+
+/// Least-squares line of y against x: (slope, intercept); None below two distinct x.
+pub fn line_fit(pts: &[(f64, f64)]) -> Option<(f64, f64)> {
     let n = pts.len() as f64;
     if pts.len() < 2 {
         return None;
@@ -104,7 +109,7 @@ pub fn slope(points: impl Iterator<Item = (f64, f64)>) -> Option<f64> {
     );
     let sxx: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
     let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    (sxx > 0.0).then(|| sxy / sxx)
+    (sxx > 0.0).then(|| (sxy / sxx, my - sxy / sxx * mx))
 }
 
 /// `sim`: the simulated (T, Z), sorted by T; `data`: Martin & Moyce's.

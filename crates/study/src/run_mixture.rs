@@ -7,7 +7,7 @@
 //! phase's figures. Checkpoints and `kick reproduce` are single-phase only
 //! so far.
 
-use crate::metrics;
+use crate::metrics::{self, line_fit};
 use crate::output_files::write_atomic;
 use crate::run_case::{RunOptions, Simulated};
 use crate::snapshot::Snapshot;
@@ -204,27 +204,17 @@ impl LayerCheck {
     }
 }
 
-/// Least-squares slope and intercept of y against x.
-fn line_fit(points: &[(f64, f64)]) -> Option<(f64, f64)> {
-    let n = points.len() as f64;
-    if points.len() < 2 {
-        return None;
-    }
-    let (mx, my) = points
-        .iter()
-        .fold((0.0, 0.0), |(a, b), p| (a + p.0 / n, b + p.1 / n));
-    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(a, b), p| {
-        (a + (p.0 - mx) * (p.1 - my), b + (p.0 - mx) * (p.0 - mx))
-    });
-    (sxx > 0.0).then(|| (sxy / sxx, my - sxy / sxx * mx))
-}
-
 /// Darcy's figures from the fluid's state: (relative error of the layer's
 /// pressure drop against mu q L / k = B q L / n^2, linearity of p inside the
-/// layer relative to that drop, the flux q). Rows of one cell; the layer's
+/// layer relative to that drop, from three rows up; the flux q). Rows of one cell; the layer's
 /// gradient from rows at least one cell inside its faces, the free fluid's
 /// from rows at least two cells away from them.
-fn darcy_figures(v: &StateView, layer: [f64; 2], b: f64, n: f64) -> Option<(f64, f64, f64)> {
+fn darcy_figures(
+    v: &StateView,
+    layer: [f64; 2],
+    b: f64,
+    n: f64,
+) -> Option<(f64, Option<f64>, f64)> {
     let h = v.scene.cell;
     let (y_lo, height) = (v.scene.origin[1], v.scene.size[1]);
     let rows = (height / h).round() as usize;
@@ -276,11 +266,13 @@ fn darcy_figures(v: &StateView, layer: [f64; 2], b: f64, n: f64) -> Option<(f64,
     let expected = b * q / (n * n);
     let error = ((s_in - s_out) - expected).abs() / expected.abs();
     let drop = expected.abs() * (y1 - y0);
-    let linearity = pts
-        .iter()
-        .map(|&(y, p)| (p - (a_in + s_in * y)).abs())
-        .fold(0.0, f64::max)
-        / drop;
+    // A line through two rows says nothing about linearity.
+    let linearity = (pts.len() >= 3).then(|| {
+        pts.iter()
+            .map(|&(y, p)| (p - (a_in + s_in * y)).abs())
+            .fold(0.0, f64::max)
+            / drop
+    });
     Some((error, linearity, q))
 }
 
@@ -938,7 +930,7 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
         let b = spec.drag.coefficient_at(n);
         if let Some((error, linearity, q)) = darcy_figures(&mix.phase(1).view(), layer, b, n) {
             metrics.darcy_dp_rel_error = Some(error);
-            metrics.darcy_linearity = Some(linearity);
+            metrics.darcy_linearity = linearity;
             metrics.darcy_flux = Some(q);
             // The column's weight balances the layer's drop: q = rho g H n^2 / (B L).
             let fluid = mix.phase(1).view();
