@@ -138,11 +138,13 @@ scheme = "usl"
 permeability = 1e-9
 
 [output]
-checkpoint_every = 0
+checkpoint_every = 500
 "#;
 
 /// A saturated block dropped on the floor at 2 m/s: each phase's monitor
-/// calls its impact `impact`, and the events say which phase.
+/// calls its impact `impact`, and the events say which phase; each phase's
+/// event replays bit for bit from the checkpoint before it (on 1 and 2
+/// threads), and an id both phases logged needs `--phase`.
 #[test]
 fn a_dropped_mixture_logs_each_phase_impact_with_its_phase() {
     let dir = scratch("drop");
@@ -182,6 +184,38 @@ fn a_dropped_mixture_logs_each_phase_impact_with_its_phase() {
     let m = &s.metrics;
     assert!(m.drag_decay_rel_error.is_none() && m.momentum_drift_rel.is_none());
     assert!(m.drag_dissipated.unwrap() > 0.0);
+    let case = dir.join("drop");
+    let case = case.to_str().unwrap();
+    for (phase, threads) in [("solid", "1"), ("fluid", "2")] {
+        let e = s
+            .events
+            .iter()
+            .find(|e| e.phase.as_deref() == Some(phase))
+            .unwrap();
+        assert!(e.checkpoint.is_some(), "{phase}: {e:?}");
+        let id = e.id.to_string();
+        let o = kick(&[
+            "reproduce",
+            case,
+            "--event",
+            &id,
+            "--phase",
+            phase,
+            "--threads",
+            threads,
+        ]);
+        assert!(o.status.success(), "{phase}: {}", stderr(&o));
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(text.contains("hash match"), "{phase}: {text}");
+    }
+    let shared = s
+        .events
+        .iter()
+        .find(|a| s.events.iter().any(|b| b.id == a.id && b.phase != a.phase))
+        .expect("both phases number their events from 1");
+    let o = kick(&["reproduce", case, "--event", &shared.id.to_string()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--phase"), "{}", stderr(&o));
 }
 
 /// Steady Darcy flow through a fixed layer, driven by gravity in a box

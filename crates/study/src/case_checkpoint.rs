@@ -3,9 +3,10 @@
 
 use monitor::Monitor;
 use solver::checkpoint::{unseal, CheckpointError, Reader, Writer};
-use solver::Solver;
+use solver::{Mixture, Solver};
 
 const MAGIC: &[u8; 8] = b"KICKCASE";
+const MIXTURE_MAGIC: &[u8; 8] = b"KICKCMIX";
 
 pub fn save(solver: &Solver, monitor: &Monitor) -> Vec<u8> {
     let s = solver.checkpoint();
@@ -29,4 +30,32 @@ pub fn load(
     r.finish()?;
     solver.restore(s)?;
     monitor.restore_state(m)
+}
+
+/// A mixture case's checkpoint: the mixture (both phases) and each phase's
+/// monitor, sealed.
+pub fn save_mixture(mix: &Mixture, monitors: [&Monitor; 2]) -> Vec<u8> {
+    let mut w = Writer(MIXTURE_MAGIC.to_vec());
+    w.bytes(&mix.checkpoint());
+    for m in monitors {
+        w.bytes(&m.save_state());
+    }
+    w.seal()
+}
+
+/// Restores a mixture and its monitors; on error none is trusted.
+pub fn load_mixture(
+    bytes: &[u8],
+    mix: &mut Mixture,
+    monitors: [&mut Monitor; 2],
+) -> Result<(), CheckpointError> {
+    let mut r = Reader(unseal(bytes, MIXTURE_MAGIC)?);
+    let m = r.bytes()?;
+    let states = [r.bytes()?, r.bytes()?];
+    r.finish()?;
+    mix.restore(m)?;
+    for (monitor, state) in monitors.into_iter().zip(states) {
+        monitor.restore_state(state)?;
+    }
+    Ok(())
 }

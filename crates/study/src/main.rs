@@ -72,6 +72,10 @@ enum Command {
         /// Event id (see summary.json).
         #[arg(long)]
         event: u32,
+        /// In a mixture, the event's phase (solid or fluid): each phase's
+        /// monitor numbers its events from 1.
+        #[arg(long)]
+        phase: Option<String>,
         #[arg(long)]
         threads: Option<usize>,
         /// Output folder (default CASE_DIR/reproduce/event_K).
@@ -260,6 +264,7 @@ fn main() -> ExitCode {
         Command::Reproduce {
             case_dir,
             event,
+            phase,
             threads,
             out,
             before,
@@ -269,6 +274,7 @@ fn main() -> ExitCode {
                 return bad_input("--threads: 0 is out of range (allowed >= 1)");
             }
             let opts = reproduce::ReproduceOptions {
+                phase,
                 threads,
                 out,
                 before,

@@ -16,6 +16,8 @@ use serde_json::json;
 use std::path::{Path, PathBuf};
 
 pub struct ReproduceOptions {
+    /// The event's phase in a mixture (`solid` or `fluid`).
+    pub phase: Option<String>,
     pub threads: Option<usize>,
     pub out: Option<PathBuf>,
     /// VTK every step from this many steps before the event's first step ...
@@ -40,7 +42,19 @@ pub fn reproduce(
     opts: &ReproduceOptions,
 ) -> Result<Outcome, ReproduceError> {
     let events = Summary::read(case_dir).map_err(ReproduceError)?.events;
-    let Some(logged) = events.iter().find(|e| e.id == id).cloned() else {
+    let matching: Vec<&Event> = events
+        .iter()
+        .filter(|e| e.id == id && (opts.phase.is_none() || e.phase == opts.phase))
+        .collect();
+    if matching.len() > 1 {
+        let phases: Vec<&str> = matching.iter().filter_map(|e| e.phase.as_deref()).collect();
+        return Err(ReproduceError(format!(
+            "{}: event {id} is logged in phases {}: say which with --phase",
+            case_dir.join("summary.json").display(),
+            phases.join(" and ")
+        )));
+    }
+    let Some(logged) = matching.first().map(|e| (*e).clone()) else {
         let ids: Vec<String> = events.iter().map(|e| e.id.to_string()).collect();
         return Err(ReproduceError(format!(
             "{}: no event {id} (events: {})",
@@ -67,6 +81,16 @@ pub fn reproduce(
         .out
         .clone()
         .unwrap_or_else(|| case_dir.join("reproduce").join(format!("event_{id}")));
+    if case.mixture.is_some() {
+        let run = || {
+            crate::run_mixture::replay(case, &bytes, &logged, opts, &out)
+                .map(|r| r.map_err(|e| ReproduceError(format!("{}: {e}", ckpt_path.display()))))
+        };
+        let replay = with_threads(opts.threads, run)
+            .map_err(|e| ReproduceError(format!("{}: {e}", out.display())))??;
+        return finish(case_dir, &out, id, &ckpt_name, &logged, replay)
+            .map_err(|e| ReproduceError(format!("{}: {e}", out.display())));
+    }
     let run = || -> std::io::Result<Result<Outcome, ReproduceError>> {
         let mut d = match Driver::new(case) {
             Ok(d) => d,
@@ -111,71 +135,102 @@ pub fn reproduce(
             }
         }
         tables::write_timeseries(&d.series, &out, true)?;
-        let mut diverged = vec![];
-        match (&hash_at_first, &logged.state_hash) {
-            (Some(h), Some(l)) if h == l => {}
-            (h, l) => diverged.push(format!(
-                "state hash at step {}: replayed {}, logged {}",
-                logged.first_step,
-                h.as_deref().unwrap_or("(step not reached)"),
-                l.as_deref().unwrap_or("(none)")
-            )),
-        }
-        match &replayed {
-            None => diverged.push(format!("the monitor did not detect event {id} again")),
-            Some(e) => {
-                if e.first_step != logged.first_step {
-                    diverged.push(format!(
-                        "event {id} first step: replayed {}, logged {}",
-                        e.first_step, logged.first_step
-                    ));
-                }
-                if e.kind != logged.kind || e.cells != logged.cells {
-                    diverged.push(format!(
-                        "event {id} region: replayed {:?} {:?}, logged {:?} {:?}",
-                        e.kind, e.cells, logged.kind, logged.cells
-                    ));
-                }
-                if e.particles != logged.particles || e.n_particles != logged.n_particles {
-                    diverged.push(format!(
-                        "event {id} particles: replayed {} ids, logged {}",
-                        e.n_particles, logged.n_particles
-                    ));
-                }
-            }
-        }
-        let matched = diverged.is_empty();
-        let message = if matched {
-            format!(
-                "reproduced event {id} at step {}: hash match",
-                logged.first_step
-            )
-        } else {
-            format!("event {id} diverged: {}", diverged.join("; "))
+        let replay = Replay {
+            start,
+            hash_at_first,
+            replayed,
         };
-        let record = json!({
-            "case_dir": case_dir.display().to_string(),
-            "event": id,
-            "checkpoint": ckpt_name,
-            "checkpoint_step": start,
-            "first_step": logged.first_step,
-            "last_step": logged.last_step,
-            "logged_state_hash": logged.state_hash,
-            "replayed_state_hash": hash_at_first,
-            "replayed_event": replayed,
-            "matched": matched,
-            "message": message,
-        });
-        write_atomic(
-            &out.join("reproduce.json"),
-            serde_json::to_string_pretty(&record)?.as_bytes(),
-        )?;
-        Ok(Ok(Outcome {
-            matched,
-            message,
-            out: out.clone(),
-        }))
+        finish(case_dir, &out, id, &ckpt_name, &logged, replay).map(Ok)
     };
     with_threads(opts.threads, run)
         .map_err(|e| ReproduceError(format!("{}: {e}", out.display())))?
+}
+
+/// What a replay found: the checkpoint's step, the state hash at the
+/// event's first step, and the event as the monitor detected it again.
+pub(crate) struct Replay {
+    pub start: u64,
+    pub hash_at_first: Option<String>,
+    pub replayed: Option<Event>,
+}
+
+/// Compares a replay with the logged event and writes reproduce.json.
+fn finish(
+    case_dir: &Path,
+    out: &Path,
+    id: u32,
+    ckpt_name: &str,
+    logged: &Event,
+    replay: Replay,
+) -> std::io::Result<Outcome> {
+    let Replay {
+        start,
+        hash_at_first,
+        replayed,
+    } = replay;
+    let mut diverged = vec![];
+    match (&hash_at_first, &logged.state_hash) {
+        (Some(h), Some(l)) if h == l => {}
+        (h, l) => diverged.push(format!(
+            "state hash at step {}: replayed {}, logged {}",
+            logged.first_step,
+            h.as_deref().unwrap_or("(step not reached)"),
+            l.as_deref().unwrap_or("(none)")
+        )),
+    }
+    match &replayed {
+        None => diverged.push(format!("the monitor did not detect event {id} again")),
+        Some(e) => {
+            if e.first_step != logged.first_step {
+                diverged.push(format!(
+                    "event {id} first step: replayed {}, logged {}",
+                    e.first_step, logged.first_step
+                ));
+            }
+            if e.kind != logged.kind || e.cells != logged.cells {
+                diverged.push(format!(
+                    "event {id} region: replayed {:?} {:?}, logged {:?} {:?}",
+                    e.kind, e.cells, logged.kind, logged.cells
+                ));
+            }
+            if e.particles != logged.particles || e.n_particles != logged.n_particles {
+                diverged.push(format!(
+                    "event {id} particles: replayed {} ids, logged {}",
+                    e.n_particles, logged.n_particles
+                ));
+            }
+        }
+    }
+    let matched = diverged.is_empty();
+    let message = if matched {
+        format!(
+            "reproduced event {id} at step {}: hash match",
+            logged.first_step
+        )
+    } else {
+        format!("event {id} diverged: {}", diverged.join("; "))
+    };
+    let record = json!({
+        "case_dir": case_dir.display().to_string(),
+        "event": id,
+        "phase": logged.phase,
+        "checkpoint": ckpt_name,
+        "checkpoint_step": start,
+        "first_step": logged.first_step,
+        "last_step": logged.last_step,
+        "logged_state_hash": logged.state_hash,
+        "replayed_state_hash": hash_at_first,
+        "replayed_event": replayed,
+        "matched": matched,
+        "message": message,
+    });
+    write_atomic(
+        &out.join("reproduce.json"),
+        serde_json::to_string_pretty(&record)?.as_bytes(),
+    )?;
+    Ok(Outcome {
+        matched,
+        message,
+        out: out.to_path_buf(),
+    })
 }

@@ -227,7 +227,9 @@ pub fn ring_name(step: u64) -> String {
 
 /// Ring checkpoints every `every` steps (plus step 0), the last
 /// `CHECKPOINT_RING` kept, and any that precedes an event kept for good.
-struct CheckpointRing<'a> {
+/// `save` gives the checkpoint's bytes (a case's solver and monitor, or a
+/// mixture's phases and monitors).
+pub(crate) struct CheckpointRing<'a> {
     dir: &'a Path,
     every: u64,
     ring: Vec<(u64, PathBuf)>,
@@ -236,7 +238,11 @@ struct CheckpointRing<'a> {
 
 impl<'a> CheckpointRing<'a> {
     /// Writes the step-0 checkpoint, which precedes any event, even one at step 1.
-    fn start(dir: &'a Path, every: u64, d: &Driver) -> std::io::Result<Self> {
+    pub(crate) fn start(
+        dir: &'a Path,
+        every: u64,
+        save: impl FnOnce() -> Vec<u8>,
+    ) -> std::io::Result<Self> {
         let mut ring = CheckpointRing {
             dir,
             every,
@@ -244,30 +250,34 @@ impl<'a> CheckpointRing<'a> {
             pinned: BTreeSet::new(),
         };
         if every > 0 {
-            ring.save(0, d)?;
+            ring.save(0, save())?;
         }
         Ok(ring)
     }
 
-    fn save(&mut self, step: u64, d: &Driver) -> std::io::Result<()> {
+    fn save(&mut self, step: u64, bytes: Vec<u8>) -> std::io::Result<()> {
         let path = self.dir.join(ring_name(step));
-        write_atomic(&path, &case_checkpoint::save(&d.solver, &d.monitor))?;
+        write_atomic(&path, &bytes)?;
         self.ring.push((step, path));
         Ok(())
     }
 
     /// The latest checkpoint (it precedes an event opened now), kept for good.
-    fn pin_latest(&mut self) -> Option<String> {
+    pub(crate) fn pin_latest(&mut self) -> Option<String> {
         let (step, _) = self.ring.last()?;
         self.pinned.insert(*step);
         Some(ring_name(*step))
     }
 
-    fn after_step(&mut self, step: u64, d: &Driver) -> std::io::Result<()> {
+    pub(crate) fn after_step(
+        &mut self,
+        step: u64,
+        save: impl FnOnce() -> Vec<u8>,
+    ) -> std::io::Result<()> {
         if self.every == 0 || !step.is_multiple_of(self.every) {
             return Ok(());
         }
-        self.save(step, d)?;
+        self.save(step, save())?;
         if self.ring.len() > CHECKPOINT_RING {
             let (old, path) = self.ring.remove(0);
             if !self.pinned.contains(&old) {
@@ -417,7 +427,9 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
     let mut frames = EventFrames::new(particles_dir, d.solver.particle_count());
     vtk.catch_up(&d.solver)?;
     d.push_row(false);
-    let mut ring = CheckpointRing::start(dir, case.output.checkpoint_every, &d)?;
+    let mut ring = CheckpointRing::start(dir, case.output.checkpoint_every, || {
+        case_checkpoint::save(&d.solver, &d.monitor)
+    })?;
     let (status, reason) = loop {
         if d.solver.finished() {
             break (Status::Completed, String::new());
@@ -442,7 +454,7 @@ fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simul
             break (Status::BlewUp, reason);
         }
         vtk.catch_up(&d.solver)?;
-        ring.after_step(step, &d)?;
+        ring.after_step(step, || case_checkpoint::save(&d.solver, &d.monitor))?;
     };
     d.push_row(status != Status::Completed);
     vtk.write(&d.solver)?;

@@ -4,12 +4,13 @@
 //! the fluid's, `timeseries_solid.parquet` the solid's), the mixture's own
 //! rows in `mixture.parquet` (relative velocity, drag dissipation, total
 //! energy and momentum), VTK files per phase and the summary with each
-//! phase's figures. Checkpoints and `kick reproduce` are single-phase only
-//! so far.
+//! phase's figures, and ring checkpoints of the mixture and both monitors
+//! (the one before each event kept) for `kick reproduce`.
 
+use crate::case_checkpoint;
 use crate::metrics::{self, line_fit};
 use crate::output_files::write_atomic;
-use crate::run_case::{RunOptions, Simulated};
+use crate::run_case::{CheckpointRing, RunOptions, Simulated};
 use crate::snapshot::Snapshot;
 use crate::study_file::{Case, MixtureSpec};
 use crate::summary::{Metrics, PhaseSummary, Status};
@@ -693,7 +694,12 @@ fn write_vtk(dir: &Path, mix: &Mixture) -> std::io::Result<()> {
     Ok(())
 }
 
-fn build(case: &Case, spec: &MixtureSpec) -> Result<Mixture, String> {
+fn checkpoint(mix: &Mixture, watches: &[PhaseWatch; 2]) -> Vec<u8> {
+    case_checkpoint::save_mixture(mix, [&watches[0].monitor, &watches[1].monitor])
+}
+
+/// The mixture a case describes, at t = 0.
+pub(crate) fn build(case: &Case, spec: &MixtureSpec) -> Result<Mixture, String> {
     let [solid, fluid] = case.phase_configs();
     let phases = [solid, fluid].map(Solver::new);
     let [solid, fluid] = phases;
@@ -792,6 +798,9 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
         &mut surface,
         false,
     );
+    let mut ring = CheckpointRing::start(dir, case.output.checkpoint_every, || {
+        checkpoint(&mix, &watches)
+    })?;
     let (status, reason) = loop {
         if mix.phase(0).finished() {
             break (Status::Completed, String::new());
@@ -805,12 +814,24 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
         let mut stop = stop;
         if stop.is_none() {
             let hash = mix.state_hash();
-            for w in watches.iter_mut() {
+            let mut new = [0; 2];
+            for (k, w) in watches.iter_mut().enumerate() {
                 let before = w.monitor.events().len();
                 if let Some(r) = w.observe(&mix.phase(w.phase.index()).view(), hash) {
                     stop.get_or_insert(format!("{} phase, step {step}: {r}", w.phase.name()));
                 }
-                opened += w.monitor.events().len() - before;
+                new[k] = w.monitor.events().len() - before;
+                opened += new[k];
+            }
+            if opened > 0 {
+                // The checkpoint before them, kept for `kick reproduce`.
+                let checkpoint = ring.pin_latest();
+                for (w, n_new) in watches.iter_mut().zip(new) {
+                    let n = w.monitor.events().len();
+                    for e in &mut w.monitor.events_mut()[n - n_new..] {
+                        e.checkpoint = checkpoint.clone();
+                    }
+                }
             }
             let dt = mix.phase(0).view().dt;
             if let Some(d) = decay.as_mut() {
@@ -851,6 +872,7 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
             write_vtk(&particles_dir, &mix)?;
             next_vtk += 1;
         }
+        ring.after_step(step, || checkpoint(&mix, &watches))?;
     };
     push_rows(
         &mix,
@@ -963,4 +985,86 @@ fn fill_losses(m: &mut Metrics, s: &Solver, initial_mass: f64) {
     m.particles_inverted = losses.inverted;
     m.mass_lost_fraction = losses.mass() / initial_mass;
     m.t_first_loss = losses.t_first;
+}
+
+/// `kick reproduce` of a mixture's event: the mixture and both monitors
+/// restored from `checkpoint`, stepped through the event's last step (VTK
+/// per phase every step from `opts.before` steps before its first step),
+/// the state hash at its first step and the event its phase's monitor
+/// detects again. Err: the checkpoint does not restore, or is not before the event.
+pub(crate) fn replay(
+    case: &Case,
+    checkpoint: &[u8],
+    logged: &Event,
+    opts: &crate::reproduce::ReproduceOptions,
+    out: &Path,
+) -> std::io::Result<Result<crate::reproduce::Replay, String>> {
+    let spec = case.mixture.expect("a mixture case");
+    let mut mix = match build(case, &spec) {
+        Ok(m) => m,
+        Err(e) => return Ok(Err(e)),
+    };
+    let mut watches = Phase::ALL.map(|phase| PhaseWatch {
+        phase,
+        monitor: Monitor::new(case.monitor.clone(), &mix.phase(phase.index()).view()),
+        series: Timeseries::new(),
+        peaks: Peaks::default(),
+    });
+    {
+        let [a, b] = &mut watches;
+        if let Err(e) =
+            case_checkpoint::load_mixture(checkpoint, &mut mix, [&mut a.monitor, &mut b.monitor])
+        {
+            return Ok(Err(e.to_string()));
+        }
+    }
+    let start = mix.phase(0).step_count();
+    if start >= logged.first_step {
+        return Ok(Err(format!(
+            "taken at step {start}, not before the event (step {})",
+            logged.first_step
+        )));
+    }
+    let phase = match logged.phase.as_deref() {
+        Some("solid") => Phase::Solid,
+        _ => Phase::Fluid,
+    };
+    let vtk_from = logged.first_step.saturating_sub(opts.before).max(start);
+    let end = logged.last_step + opts.after;
+    let (mut hash_at_first, mut replayed) = (None, None);
+    while !mix.phase(0).finished() && mix.phase(0).step_count() < end {
+        if mix.step().is_err() {
+            break;
+        }
+        let step = mix.phase(0).step_count();
+        let hash = mix.state_hash();
+        let mut stop = false;
+        for w in watches.iter_mut() {
+            stop |= w
+                .observe(&mix.phase(w.phase.index()).view(), hash)
+                .is_some();
+        }
+        if step >= vtk_from {
+            write_vtk(&out.join("particles"), &mix)?;
+        }
+        if step == logged.first_step {
+            hash_at_first = Some(format!("{hash:016x}"));
+        }
+        if step == logged.last_step {
+            replayed = watches[phase.index()]
+                .monitor
+                .events()
+                .iter()
+                .find(|e| e.id == logged.id)
+                .cloned();
+        }
+        if stop {
+            break;
+        }
+    }
+    Ok(Ok(crate::reproduce::Replay {
+        start,
+        hash_at_first,
+        replayed,
+    }))
 }
