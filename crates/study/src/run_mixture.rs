@@ -33,17 +33,24 @@ struct PhaseWatch {
 
 impl PhaseWatch {
     /// Observes the phase's last step; the monitor's blow-out reason, if any.
-    fn observe(&mut self, v: &StateView, hash: u64) -> Option<String> {
-        self.monitor.observe(v);
+    /// Observes the phase's last step and stamps the events it opened with
+    /// the phase and the mixture's state hash (computed once a step, and
+    /// only when an event opens: it reads every particle).
+    fn observe(&mut self, mix: &Mixture, hash: &mut Option<String>) -> Option<String> {
+        self.monitor.observe(&mix.phase(self.phase.index()).view());
         let report = self.monitor.report();
         self.peaks.add(report);
         let opened = report.events_opened;
         let blow_out = report.blow_out.clone();
-        let n = self.monitor.events().len();
-        let hash = format!("{hash:016x}");
-        for e in &mut self.monitor.events_mut()[n - opened..] {
-            e.phase = Some(self.phase.name().into());
-            e.state_hash = Some(hash.clone());
+        if opened > 0 {
+            let hash = hash
+                .get_or_insert_with(|| format!("{:016x}", mix.state_hash()))
+                .clone();
+            let n = self.monitor.events().len();
+            for e in &mut self.monitor.events_mut()[n - opened..] {
+                e.phase = Some(self.phase.name().into());
+                e.state_hash = Some(hash.clone());
+            }
         }
         blow_out
     }
@@ -813,11 +820,11 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
         let mut opened = 0;
         let mut stop = stop;
         if stop.is_none() {
-            let hash = mix.state_hash();
+            let mut hash = None;
             let mut new = [0; 2];
             for (k, w) in watches.iter_mut().enumerate() {
                 let before = w.monitor.events().len();
-                if let Some(r) = w.observe(&mix.phase(w.phase.index()).view(), hash) {
+                if let Some(r) = w.observe(&mix, &mut hash) {
                     stop.get_or_insert(format!("{} phase, step {step}: {r}", w.phase.name()));
                 }
                 new[k] = w.monitor.events().len() - before;
@@ -1037,18 +1044,16 @@ pub(crate) fn replay(
             break;
         }
         let step = mix.phase(0).step_count();
-        let hash = mix.state_hash();
+        let mut hash = None;
         let mut stop = false;
         for w in watches.iter_mut() {
-            stop |= w
-                .observe(&mix.phase(w.phase.index()).view(), hash)
-                .is_some();
+            stop |= w.observe(&mix, &mut hash).is_some();
         }
         if step >= vtk_from {
             write_vtk(&out.join("particles"), &mix)?;
         }
         if step == logged.first_step {
-            hash_at_first = Some(format!("{hash:016x}"));
+            hash_at_first = Some(format!("{:016x}", mix.state_hash()));
         }
         if step == logged.last_step {
             replayed = watches[phase.index()]
