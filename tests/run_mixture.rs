@@ -11,19 +11,26 @@ fn scratch(name: &str) -> common::Scratch {
     common::scratch("mixture", name)
 }
 
-#[test]
-fn drag_decay_study_meets_the_exact_and_discrete_decay() {
-    let out = scratch("decay");
-    let o = kick(&[
+/// `kick matrix STUDY --out OUT --jobs 2 --threads 1 EXTRA..`.
+fn matrix(study: &str, out: &std::path::Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
         "matrix",
-        "studies/drag_decay.toml",
+        study,
         "--out",
         out.to_str().unwrap(),
         "--jobs",
         "2",
         "--threads",
         "1",
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    kick(&args)
+}
+
+#[test]
+fn drag_decay_study_meets_the_exact_and_discrete_decay() {
+    let out = scratch("decay");
+    let o = matrix("studies/drag_decay.toml", &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     let mut seen = 0;
     for update in ["explicit", "implicit", "exponential"] {
@@ -226,16 +233,7 @@ fn a_dropped_mixture_logs_each_phase_impact_with_its_phase() {
 #[test]
 fn darcy_column_meets_the_pressure_drop_and_converges_in_flux() {
     let out = scratch("darcy");
-    let o = kick(&[
-        "matrix",
-        "studies/darcy.toml",
-        "--out",
-        out.to_str().unwrap(),
-        "--jobs",
-        "2",
-        "--threads",
-        "1",
-    ]);
+    let o = matrix("studies/darcy.toml", &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     for update in ["implicit", "exponential"] {
         let mut flux_errors = vec![];
@@ -273,16 +271,7 @@ fn darcy_column_meets_the_pressure_drop_and_converges_in_flux() {
 #[test]
 fn drag_convergence_writes_each_models_observed_order() {
     let out = scratch("convergence");
-    let o = kick(&[
-        "matrix",
-        "studies/drag_convergence.toml",
-        "--out",
-        out.to_str().unwrap(),
-        "--jobs",
-        "2",
-        "--threads",
-        "1",
-    ]);
+    let o = matrix("studies/drag_convergence.toml", &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     let cells = ["2cm", "0.6666666666666667cm", "0.2222222222222222cm"];
     let errors = |model: &str| -> Vec<f64> {
@@ -351,20 +340,11 @@ fn terzaghi_column_consolidates_like_the_series_solution() {
 #[test]
 fn filter_stone_locks_without_anti_locking_and_not_with_it() {
     let out = scratch("filter");
-    let o = kick(&[
-        "matrix",
+    let o = matrix(
         "studies/filter_stone.toml",
-        "--out",
-        out.to_str().unwrap(),
-        "--jobs",
-        "2",
-        "--threads",
-        "1",
-        "--set",
-        "scene.t_end=1.5",
-        "--set",
-        "matrix.ensemble=1",
-    ]);
+        &out,
+        &["--set", "scene.t_end=1.5", "--set", "matrix.ensemble=1"],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let read = |name: &str| Summary::read(&out.join(name)).unwrap();
     let (locked, anti) = (read("j_bar0.0_e0"), read("j_bar1.0_e0"));

@@ -224,8 +224,8 @@ fn couple_nodes(
     let [pa, pb] = &scratch.presence;
     let capacity = a.grid.h * a.grid.h;
     let (ga, gb) = (&mut a.grid, &mut b.grid);
-    for &n in &ga.inside {
-        let n = n as usize;
+    for k in 0..ga.inside.len() {
+        let n = ga.inside[k] as usize;
         let (ma, mb) = (ga.mass[n], gb.mass[n]);
         // chi_i: both phases at the node.
         if !(gb.is_active(n) && ma > 0.0 && mb > 0.0) {
@@ -264,17 +264,34 @@ fn couple_nodes(
             centre - (inv_a / inv) * rel_new,
             centre + (inv_b / inv) * rel_new,
         );
-        let (da, db) = (na - sa, nb - sb);
-        let scale = ma * sa.norm() + mb * sb.norm();
-        if scale > 0.0 && !fixed_a {
-            let residual = (ma * da + mb * db).norm() / scale;
-            out.momentum_residual = out.momentum_residual.max(residual);
-        }
-        ga.vel_new[n] = na;
-        gb.vel_new[n] = nb;
-        ga.accel[n] += da / dt;
-        gb.accel[n] += db / dt;
+        set_pair(ga, gb, n, [na, nb], dt, fixed_a, out);
     }
+}
+
+/// Sets node n's corrected v^{n+1} of both phases (their accelerations
+/// take the change over dt) and records the pair's momentum residual
+/// |m_a dv_a + m_b dv_b| over the node's momentum (not for a fixed a).
+pub(crate) fn set_pair(
+    ga: &mut Grid,
+    gb: &mut Grid,
+    n: usize,
+    [na, nb]: [Vec2; 2],
+    dt: f64,
+    fixed_a: bool,
+    out: &mut Coupling,
+) {
+    let (ma, mb) = (ga.mass[n], gb.mass[n]);
+    let (sa, sb) = (ga.vel_new[n], gb.vel_new[n]);
+    let (da, db) = (na - sa, nb - sb);
+    let scale = ma * sa.norm() + mb * sb.norm();
+    if scale > 0.0 && !fixed_a {
+        let residual = (ma * da + mb * db).norm() / scale;
+        out.momentum_residual = out.momentum_residual.max(residual);
+    }
+    ga.vel_new[n] = na;
+    gb.vel_new[n] = nb;
+    ga.accel[n] += da / dt;
+    gb.accel[n] += db / dt;
 }
 
 /// sum over the active nodes (ghosts included: they carry the real

@@ -10,7 +10,7 @@
 // The loops walk the weights and the stencil rows in step.
 #![allow(clippy::needless_range_loop)]
 
-use crate::drag::{mixture_volume, Coupling, Drag, Scratch};
+use crate::drag::{mixture_volume, set_pair, Coupling, Drag, Scratch};
 use crate::grid::Grid;
 use crate::particles::Vec2;
 use crate::Solver;
@@ -99,8 +99,8 @@ pub(crate) fn couple(
         }
     }
     let (ga, gb) = (&mut a.grid, &mut b.grid);
-    for &n in &ga.inside {
-        let n = n as usize;
+    for k in 0..ga.inside.len() {
+        let n = ga.inside[k] as usize;
         let (ma, mb) = (ga.mass[n], gb.mass[n]);
         if !(gb.is_active(n) && ma > 0.0 && mb > 0.0) {
             continue;
@@ -115,15 +115,7 @@ pub(crate) fn couple(
         let (force_a, force_b) = (fa[n] - correction, fb[n] - correction);
         let da = (dt * inv_a) * force_a;
         let db = (dt / mb) * force_b;
-        let (sa, sb) = (ga.vel_new[n], gb.vel_new[n]);
-        let scale = ma * sa.norm() + mb * sb.norm();
-        if scale > 0.0 && !fixed_a {
-            let residual = (ma * da + mb * db).norm() / scale;
-            out.momentum_residual = out.momentum_residual.max(residual);
-        }
-        ga.vel_new[n] = sa + da;
-        gb.vel_new[n] = sb + db;
-        ga.accel[n] += da / dt;
-        gb.accel[n] += db / dt;
+        let new = [ga.vel_new[n] + da, gb.vel_new[n] + db];
+        set_pair(ga, gb, n, new, dt, fixed_a, out);
     }
 }
