@@ -135,24 +135,24 @@ pub(crate) fn mixture_volume(s: &Solver, p: usize) -> f64 {
 fn nodal_presence(s: &Solver, per_particle: &mut Vec<f64>, out: &mut [f64]) {
     per_particle.clear();
     per_particle.extend((0..s.particles.len()).map(|p| mixture_volume(s, p)));
-    let (st, shape, g) = (&s.stencils, &s.shape, &s.grid);
-    match shape.width() {
-        2 => scatter_scalar::<2>(per_particle, st, shape, g, out),
-        3 => scatter_scalar::<3>(per_particle, st, shape, g, out),
-        _ => scatter_scalar::<4>(per_particle, st, shape, g, out),
-    }
-    g.fold(out);
+    scatter_folded(per_particle, s, out);
 }
 
-/// V_i = sum_p N_ip V_p on the raw nodes, folded.
-fn nodal_volume(s: &Solver, out: &mut [f64]) {
-    let (q, st, shape, g) = (&s.particles.vol, &s.stencils, &s.shape, &s.grid);
+/// sum_p N_ip q_p over a phase's particles on its active raw nodes, folded
+/// (a wall or periodic node then looks like an interior one).
+pub(crate) fn scatter_folded(q: &[f64], s: &Solver, out: &mut [f64]) {
+    let (st, shape, g) = (&s.stencils, &s.shape, &s.grid);
     match shape.width() {
         2 => scatter_scalar::<2>(q, st, shape, g, out),
         3 => scatter_scalar::<3>(q, st, shape, g, out),
         _ => scatter_scalar::<4>(q, st, shape, g, out),
     }
     g.fold(out);
+}
+
+/// V_i = sum_p N_ip V_p on the raw nodes, folded.
+fn nodal_volume(s: &Solver, out: &mut [f64]) {
+    scatter_folded(&s.particles.vol, s, out);
 }
 
 /// Corrects both phases' v^{n+1} (and the nodal accelerations) for the drag

@@ -27,7 +27,6 @@
 use crate::config::Material;
 use crate::grid::Grid;
 use crate::particles::Vec2;
-use crate::transfer_serial::scatter_scalar;
 use crate::Solver;
 
 /// Grid arrays of the pore pressure (allocated once) and the pore fluid's EOS.
@@ -115,17 +114,11 @@ impl PorePressure {
 }
 
 /// sum_p N_ip V_p^0 on the raw nodes, folded.
+/// Zeroed whole first: the pressure reads the grains' sums at the fluid's
+/// nodes, which the solid's active set need not cover.
 fn reference_volume(s: &Solver, out: &mut [f64]) {
-    let (q, st, shape, g) = (&s.particles.vol0, &s.stencils, &s.shape, &s.grid);
-    for v in out.iter_mut() {
-        *v = 0.0;
-    }
-    match shape.width() {
-        2 => scatter_scalar::<2>(q, st, shape, g, out),
-        3 => scatter_scalar::<3>(q, st, shape, g, out),
-        _ => scatter_scalar::<4>(q, st, shape, g, out),
-    }
-    g.fold(out);
+    out.fill(0.0);
+    crate::drag::scatter_folded(&s.particles.vol0, s, out);
 }
 
 fn interpolate<const W: usize>(field: &[f64], s: &mut Solver) {
