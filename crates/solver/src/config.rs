@@ -62,6 +62,21 @@ pub enum JUpdate {
     Exp,
 }
 
+/// How `method.j_bar` reconstructs J on the grid before interpolating it
+/// back.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum JBarFit {
+    /// Each node takes the mass-weighted mean of J (Zhao, Jiang & Choo
+    /// 2023): a linear J field is bent at the edges of the material.
+    #[default]
+    Constant,
+    /// Each node fits J by mass-weighted least squares to a plane over its
+    /// support and the particle reads the planes back: any linear J field
+    /// (the hydrostatic one) is kept wherever the support spans both axes.
+    Linear,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum InitialState {
@@ -421,6 +436,14 @@ pub struct Method {
     /// J-bar by particle-grid averaging (Zhao, Jiang & Choo 2023), blend b
     /// in 0 ..= 1 (0 = off).
     pub j_bar: f64,
+    /// The nodal reconstruction of `j_bar`: `constant` (the paper's mean) or
+    /// `linear` (a least-squares plane per node, exact for linear J).
+    pub j_bar_fit: JBarFit,
+    /// Volume consistency: the time (s) over which J relaxes towards rho0 /
+    /// (grid density) where the particle's stencil is inside the material
+    /// (0 = off; each step blends by min(dt / time, 1)), so J cannot drift
+    /// away from how closely the particles pack.
+    pub volume_relaxation_time: f64,
     /// Whether the particle carries the averaged J of `cell_dilatation` /
     /// `j_bar` to the next step (`true`, the default: J, F and V are
     /// replaced) or keeps its own J and F, the average setting only this
@@ -461,6 +484,8 @@ impl Default for Method {
             f_reset: false,
             cell_dilatation: 0.0,
             j_bar: 0.0,
+            j_bar_fit: JBarFit::Constant,
+            volume_relaxation_time: 0.0,
             carry_averaged_j: true,
             average_increment: false,
             bulk_damping: 0.0,
@@ -571,11 +596,22 @@ impl SolverConfig {
         within(m.cell_dilatation, 0.0, 1.0, "method.cell_dilatation")?;
         within(m.xpic_order as f64, 1.0, 16.0, "method.xpic_order")?;
         within(m.j_bar, 0.0, 1.0, "method.j_bar")?;
+        within(
+            m.volume_relaxation_time,
+            0.0,
+            1e3,
+            "method.volume_relaxation_time",
+        )?;
         within(m.bulk_damping, 0.0, 0.5 / m.cfl, "method.bulk_damping")?;
         check(
             m.cell_dilatation == 0.0 || m.j_bar == 0.0,
             "method.j_bar",
             "cannot be combined with method.cell_dilatation (two averagings of J: choose one)",
+        )?;
+        check(
+            m.j_bar_fit == JBarFit::Constant || m.j_bar > 0.0,
+            "method.j_bar_fit",
+            "= \"linear\" needs method.j_bar > 0 (it is the nodal fit of J-bar)",
         )?;
         check(
             m.carry_averaged_j || m.cell_dilatation > 0.0 || m.j_bar > 0.0,
@@ -610,6 +646,10 @@ impl SolverConfig {
             for (key, on) in [
                 ("method.cell_dilatation", m.cell_dilatation > 0.0),
                 ("method.j_bar", m.j_bar > 0.0),
+                (
+                    "method.volume_relaxation_time",
+                    m.volume_relaxation_time > 0.0,
+                ),
                 ("method.pressure_smoothing", m.pressure_smoothing),
             ] {
                 check(

@@ -223,8 +223,16 @@ impl Solver {
             solver.xpic = transfer_xpic::Scratch::new(&solver.grid, n);
         }
         let m = &solver.cfg.method;
-        if m.cell_dilatation > 0.0 || m.j_bar > 0.0 || m.pressure_smoothing {
-            solver.volumetric = remedy_volumetric::Scratch::new(&solver.grid, n);
+        if m.cell_dilatation > 0.0
+            || m.j_bar > 0.0
+            || m.pressure_smoothing
+            || m.volume_relaxation_time > 0.0
+        {
+            solver.volumetric = remedy_volumetric::Scratch::new(
+                &solver.grid,
+                n,
+                m.j_bar_fit == config::JBarFit::Linear,
+            );
         }
         solver.start_clock();
         solver

@@ -4,6 +4,11 @@
 //!   the particles of a cell, J_p <- (1 - b) J_p + b J_c;
 //! - J-bar by particle-grid averaging (Zhao, Jiang & Choo 2023):
 //!   J_i = sum N m J / m_i, J_bar = sum N J_i, J_p <- (1 - b) J_p + b J_bar;
+//!   with `j_bar_fit = "linear"` each node fits a plane instead of the mean
+//!   (mass-weighted least squares over its support), so a linear J field,
+//!   the hydrostatic one, is a fixed point up to the material's edges;
+//! - volume consistency: J relaxes towards rho0 / (grid density), the
+//!   volume the particles' packing gives them;
 //! - pressure smoothing through the nodes (CB-Geo): the same round trip for p.
 //!
 //! J changes scale F by (J_new / J)^(1/2), so that det F = J (2D). Every pass
@@ -12,7 +17,7 @@
 // The loops walk several arrays in step (weights, nodes, particles).
 #![allow(clippy::needless_range_loop)]
 
-use crate::config::Material;
+use crate::config::{JBarFit, Material, Method};
 use crate::grid::Grid;
 use crate::particles::{Mat2, Particles};
 use crate::shape::{Shape, Stencil};
@@ -27,6 +32,10 @@ pub struct Scratch {
     /// Per padded node: sum N m q and sum N m.
     node_sum: Vec<f64>,
     node_mass: Vec<f64>,
+    /// Per padded node, for the linear fit: sum w, sum w d (2), sum w d d^T
+    /// (3), sum w q, sum w q d (2), with w = N m and d the particle's offset
+    /// from the node in cells; then the node's plane (mean, d mean, slope).
+    node_moments: Vec<[f64; 9]>,
     /// Per particle: the averaged value.
     averaged: Vec<f64>,
     /// Per particle: its own J and F while the averaged ones set the stress
@@ -39,7 +48,8 @@ pub struct Scratch {
 }
 
 impl Scratch {
-    pub fn new(grid: &Grid, particles: usize) -> Self {
+    /// `linear_fit`: room for `j_bar_fit = "linear"`'s nodal moments.
+    pub fn new(grid: &Grid, particles: usize, linear_fit: bool) -> Self {
         let cells = grid.cells[0] * grid.cells[1];
         let nodes = grid.dims[0] * grid.dims[1];
         Scratch {
@@ -48,6 +58,7 @@ impl Scratch {
             cell_bad: vec![false; cells],
             node_sum: vec![0.0; nodes],
             node_mass: vec![0.0; nodes],
+            node_moments: vec![[0.0; 9]; if linear_fit { nodes } else { 0 }],
             averaged: vec![0.0; particles],
             own_j: vec![0.0; particles],
             own_f: vec![Mat2::zeros(); particles],
@@ -155,6 +166,117 @@ fn round_trip<const W: usize>(
     }
 }
 
+/// Below this variance (cells^2) along a direction a node's data do not
+/// determine a slope there (a single row of particles): the plane is flat
+/// along it. A full quadratic B-spline support has 1/4.
+const MIN_FIT_VARIANCE: f64 = 1e-4;
+
+/// The round trip with a plane per node: q_i(d) = qm_i + b_i . (d - dm_i)
+/// fitted by least squares with weights N m over the node's particles,
+/// q_bar_p = sum N q_i(d_ip). The fit's first normal equation makes
+/// sum_p m_p q_bar_p = sum_p m_p q_p for any arrangement; a linear q is
+/// returned exactly where every node's data span the directions it varies in.
+fn round_trip_linear<const W: usize>(
+    ps: &Particles,
+    q: &[f64],
+    stencils: &[Stencil],
+    shape: &Shape,
+    grid: &Grid,
+    s: &mut Scratch,
+) {
+    s.node_moments.fill([0.0; 9]);
+    let nx = grid.dims[0];
+    for p in 0..ps.len() {
+        let st = &stencils[p];
+        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
+        let (m, qp) = (ps.mass[p], q[p]);
+        for c in 0..W {
+            let row = st.node as usize + c * nx;
+            let dy = st.frac[1] - c as f64;
+            for a in 0..W {
+                let w = wx[a] * wy[c] * m;
+                let dx = st.frac[0] - a as f64;
+                let n = &mut s.node_moments[row + a];
+                n[0] += w;
+                n[1] += w * dx;
+                n[2] += w * dy;
+                n[3] += w * dx * dx;
+                n[4] += w * dx * dy;
+                n[5] += w * dy * dy;
+                n[6] += w * qp;
+                n[7] += w * qp * dx;
+                n[8] += w * qp * dy;
+            }
+        }
+    }
+    for n in s.node_moments.iter_mut() {
+        *n = node_plane(n);
+    }
+    for p in 0..ps.len() {
+        let st = &stencils[p];
+        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
+        let mut sum = 0.0;
+        for c in 0..W {
+            let row = st.node as usize + c * nx;
+            let dy = st.frac[1] - c as f64;
+            for a in 0..W {
+                let w = wx[a] * wy[c];
+                if w != 0.0 {
+                    let f = &s.node_moments[row + a];
+                    let dx = st.frac[0] - a as f64;
+                    sum += w * (f[0] + f[3] * (dx - f[1]) + f[4] * (dy - f[2]));
+                }
+            }
+        }
+        s.averaged[p] = sum;
+    }
+}
+
+/// A node's moments -> [mean q, mean dx, mean dy, slope x, slope y]: the
+/// slope solves C b = cov(d, q) on the directions where the weighted
+/// covariance C of the offsets has variance above `MIN_FIT_VARIANCE` (a
+/// pseudo-inverse by C's eigenvectors), zero along the others.
+fn node_plane(n: &[f64; 9]) -> [f64; 9] {
+    let s0 = n[0];
+    if s0 <= 0.0 {
+        return [0.0; 9];
+    }
+    let (mx, my, qm) = (n[1] / s0, n[2] / s0, n[6] / s0);
+    let cxx = n[3] / s0 - mx * mx;
+    let cxy = n[4] / s0 - mx * my;
+    let cyy = n[5] / s0 - my * my;
+    let gx = n[7] / s0 - qm * mx;
+    let gy = n[8] / s0 - qm * my;
+    // Eigenvectors of the symmetric 2 x 2 C.
+    let half_trace = 0.5 * (cxx + cyy);
+    let root = (0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy).sqrt();
+    let (l1, l2) = (half_trace + root, half_trace - root);
+    // The first eigenvector, (l1 - cyy, cxy) or (cxy, l1 - cxx), written
+    // without the cancellation of l1 - cyy when C is nearly isotropic.
+    let (vx, vy) = if cxx >= cyy {
+        (0.5 * (cxx - cyy) + root, cxy)
+    } else {
+        (cxy, 0.5 * (cyy - cxx) + root)
+    };
+    let len = (vx * vx + vy * vy).sqrt();
+    let (ex, ey) = if len > 0.0 {
+        (vx / len, vy / len)
+    } else {
+        (1.0, 0.0)
+    };
+    let mut b = [0.0; 2];
+    for (l, (ux, uy)) in [(l1, (ex, ey)), (l2, (-ey, ex))] {
+        if l > MIN_FIT_VARIANCE {
+            let along = (ux * gx + uy * gy) / l;
+            b[0] += along * ux;
+            b[1] += along * uy;
+        }
+    }
+    [qm, mx, my, b[0], b[1], 0.0, 0.0, 0.0, 0.0]
+}
+
 fn averaged(
     ps: &Particles,
     q: &[f64],
@@ -170,19 +292,38 @@ fn averaged(
     }
 }
 
-/// J-bar by particle-grid averaging with blend `b`: of J, or with
-/// `increment` of this step's J_new / J_old (then J_bar = J_old times the
-/// averaged ratio). Skipped for the whole step when some J <= 0: averaging
+fn averaged_linear(
+    ps: &Particles,
+    q: &[f64],
+    stencils: &[Stencil],
+    shape: &Shape,
+    grid: &Grid,
+    s: &mut Scratch,
+) {
+    match shape.width() {
+        2 => round_trip_linear::<2>(ps, q, stencils, shape, grid, s),
+        3 => round_trip_linear::<3>(ps, q, stencils, shape, grid, s),
+        _ => round_trip_linear::<4>(ps, q, stencils, shape, grid, s),
+    }
+}
+
+/// J-bar by particle-grid averaging with `method.j_bar`'s blend b and
+/// `j_bar_fit`: of J, or with `average_increment` of this step's J_new /
+/// J_old (then J_bar = J_old times the averaged ratio). Skipped for the whole step when some J <= 0: averaging
 /// would hide the inversion.
 pub fn j_bar(
     ps: &mut Particles,
     stencils: &[Stencil],
     shape: &Shape,
     grid: &Grid,
-    b: f64,
-    increment: bool,
+    method: &Method,
     s: &mut Scratch,
 ) {
+    let (b, increment) = (method.j_bar, method.average_increment);
+    let averaged = match method.j_bar_fit {
+        JBarFit::Constant => averaged,
+        JBarFit::Linear => averaged_linear,
+    };
     if ps.j.iter().any(|j| !(*j > 0.0 && j.is_finite())) {
         return;
     }
@@ -211,6 +352,69 @@ pub fn j_bar(
             (1.0 - b) * ps.j[p] + b * s.averaged[p]
         };
         set_j(ps, p, j_new);
+    }
+}
+
+/// A particle's stencil counts as inside the material when every node it
+/// weighs holds at least this share of a full node's mass rho0 h^2: near a
+/// free surface the grid density says nothing about the particles' volume.
+const FULL_NODE_SHARE: f64 = 0.75;
+
+/// Volume consistency with blend `b`: J_geo = rho0 / sum N rho_i, with the
+/// grid density rho_i = m_i / h^2 of the folded nodal mass (mirror images
+/// at walls included), J_p <- (1 - b) J_p + b J_geo where the stencil is
+/// inside the material. The particles' J then follows how closely they
+/// actually pack, so particles that crowd (more of them per node than their
+/// J says) are pressed apart by the pressure.
+pub fn volume_consistency(
+    ps: &mut Particles,
+    stencils: &[Stencil],
+    shape: &Shape,
+    grid: &Grid,
+    b: f64,
+    s: &mut Scratch,
+) {
+    match shape.width() {
+        2 => volume_consistency_w::<2>(ps, stencils, shape, grid, b, s),
+        3 => volume_consistency_w::<3>(ps, stencils, shape, grid, b, s),
+        _ => volume_consistency_w::<4>(ps, stencils, shape, grid, b, s),
+    }
+}
+
+fn volume_consistency_w<const W: usize>(
+    ps: &mut Particles,
+    stencils: &[Stencil],
+    shape: &Shape,
+    grid: &Grid,
+    b: f64,
+    s: &mut Scratch,
+) {
+    s.node_mass.copy_from_slice(&grid.mass);
+    grid.fill(&mut s.node_mass);
+    let nx = grid.dims[0];
+    let area = grid.h * grid.h;
+    for p in 0..ps.len() {
+        let st = &stencils[p];
+        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
+        let rho0 = ps.mass[p] / ps.vol0[p];
+        let full = FULL_NODE_SHARE * rho0 * area;
+        let (mut sum, mut inside) = (0.0, true);
+        for c in 0..W {
+            let row = st.node as usize + c * nx;
+            for a in 0..W {
+                let w = wx[a] * wy[c];
+                if w != 0.0 {
+                    let m = s.node_mass[row + a];
+                    inside &= m >= full;
+                    sum += w * m;
+                }
+            }
+        }
+        if inside {
+            let j_geo = rho0 * area / sum;
+            set_j(ps, p, (1.0 - b) * ps.j[p] + b * j_geo);
+        }
     }
 }
 

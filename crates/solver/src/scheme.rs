@@ -147,7 +147,8 @@ fn stress(s: &mut Solver, which: StressVelocity, clock: &mut Instant) {
     lap(&mut s.times.stress, clock);
 }
 
-/// Cell-averaged dilatation or J-bar, then pressure smoothing (each off by default).
+/// Cell-averaged dilatation or J-bar, volume consistency, then pressure
+/// smoothing (each off by default).
 fn volumetric_remedies(s: &mut Solver) {
     use crate::remedy_volumetric as rv;
     let m = &s.cfg.method;
@@ -159,18 +160,14 @@ fn volumetric_remedies(s: &mut Solver) {
     if m.cell_dilatation > 0.0 {
         rv::cell_dilatation(ps, &s.grid, m.cell_dilatation, scratch);
     } else if m.j_bar > 0.0 {
-        let increment = m.average_increment;
-        rv::j_bar(
-            ps,
-            &s.stencils,
-            &s.shape,
-            &s.grid,
-            m.j_bar,
-            increment,
-            scratch,
-        );
+        rv::j_bar(ps, &s.stencils, &s.shape, &s.grid, m, scratch);
     }
-    if averaging {
+    let relax = m.volume_relaxation_time > 0.0;
+    if relax {
+        let blend = (s.dt / m.volume_relaxation_time).min(1.0);
+        rv::volume_consistency(ps, &s.stencils, &s.shape, &s.grid, blend, scratch);
+    }
+    if averaging || relax {
         rv::reevaluate_eos(ps, &s.cfg.scene.materials);
         if !m.carry_averaged_j {
             rv::restore_own(ps, scratch);

@@ -253,3 +253,220 @@ fn j_bar_of_the_increment_leaves_a_field_at_rest_alone() {
         );
     }
 }
+
+/// The undisturbed lattice block with J = `j(x)` (F = J^(1/2) I, V = V0 J)
+/// after one J-bar pass of the given fit; returns the positions, the J
+/// before and the J after.
+fn lattice_j_bar(
+    shape: ShapeKind,
+    fit: JBarFit,
+    j: impl Fn(Vec2) -> f64,
+) -> (Vec<Vec2>, Vec<f64>, Vec<f64>) {
+    let mut material = Material::tait(1e5);
+    material.eos = EosKind::Linear;
+    let mut scene = common::box_scene([1.0, 1.0], [0.2, 0.2, 0.8, 0.8], material, 0.0);
+    scene.cell = 0.05;
+    let cfg = SolverConfig {
+        scene: scene.clone(),
+        method: Method {
+            j_bar: 1.0,
+            j_bar_fit: fit,
+            ..method(shape)
+        },
+        perturb: vec![],
+    };
+    let mut ps = solver::scene::seed(&scene);
+    for p in 0..ps.len() {
+        let jp = j(ps.x[p]);
+        ps.j[p] = jp;
+        ps.f[p] = Mat2::identity() * jp.sqrt();
+        ps.vol[p] = ps.vol0[p] * jp;
+    }
+    let (x, j0) = (ps.x.clone(), ps.j.clone());
+    let mut s = Solver::with_particles(cfg, ps);
+    apply(&mut s);
+    let after = s.view().j.to_vec();
+    (x, j0, after)
+}
+
+/// `j_bar_fit = "linear"`: a linear J field (the hydrostatic one) is a fixed
+/// point up to the block's edges and corners, where the mean of the
+/// constant fit bends it; sum m J is conserved for a disordered block.
+#[test]
+fn j_bar_linear_fit_keeps_a_linear_field_to_the_edges_and_conserves_volume() {
+    let linear_j = |x: Vec2| 1.0 + 0.01 * x.x - 0.02 * x.y;
+    for shape in [ShapeKind::Linear, ShapeKind::Bspline2, ShapeKind::Bspline3] {
+        let worst = |fit| {
+            let (_, j0, j1) = lattice_j_bar(shape, fit, linear_j);
+            j0.iter()
+                .zip(&j1)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0f64, f64::max)
+        };
+        let (linear, constant) = (worst(JBarFit::Linear), worst(JBarFit::Constant));
+        // In units of J's change over a cell (0.02 x 0.05 = 1e-3).
+        assert!(linear < 1e-12, "{shape:?}: linear fit moved J by {linear}");
+        assert!(
+            constant > 1e-5,
+            "{shape:?}: the constant fit bends the edges ({constant})"
+        );
+
+        let (mut s, _) = disordered(
+            Method {
+                j_bar: 1.0,
+                j_bar_fit: JBarFit::Linear,
+                ..method(shape)
+            },
+            0.02,
+        );
+        let mj = |v: &StateView| -> f64 { v.mass.iter().zip(v.j).map(|(m, j)| m * j).sum() };
+        let before = mj(&s.view());
+        apply(&mut s);
+        let after = mj(&s.view());
+        assert!(
+            (after / before - 1.0).abs() < 1e-13,
+            "{shape:?}: {before} -> {after}"
+        );
+    }
+}
+
+/// Both fits take a particle checkerboard on the lattice out of J wherever
+/// the stencils are full two deep: the weighted mean and the weighted first
+/// moment of the checkerboard vanish over a full support.
+#[test]
+fn j_bar_linear_fit_removes_a_lattice_checkerboard() {
+    let checker = |x: Vec2| {
+        let (i, j) = (((x.x - 0.2) / 0.025) as i64, ((x.y - 0.2) / 0.025) as i64);
+        1.0 + 0.01 * if (i + j) % 2 == 0 { 1.0 } else { -1.0 }
+    };
+    for shape in [ShapeKind::Linear, ShapeKind::Bspline2, ShapeKind::Bspline3] {
+        let reach = 0.05
+            * if shape == ShapeKind::Bspline3 {
+                4.0
+            } else {
+                3.0
+            };
+        let (x, _, j1) = lattice_j_bar(shape, JBarFit::Linear, checker);
+        let mut inside = 0.0f64;
+        for p in 0..x.len() {
+            let interior = x[p].x > 0.2 + reach
+                && x[p].x < 0.8 - reach
+                && x[p].y > 0.2 + reach
+                && x[p].y < 0.8 - reach;
+            if interior {
+                inside = inside.max((j1[p] - 1.0).abs());
+            }
+        }
+        assert!(inside < 1e-12, "{shape:?}: checkerboard left {inside}");
+    }
+}
+
+/// A lattice block resting in the box's lower-left corner, its particles
+/// moved towards the corner by the factor `squeeze` while J stays 1 (as if
+/// J had drifted from the packing), after one step's stages with a
+/// relaxation time below dt (full blend) and no gravity: positions, J.
+fn squeezed_block(squeeze: f64, shape: ShapeKind) -> (Vec<Vec2>, Vec<f64>) {
+    let mut material = Material::tait(1e5);
+    material.eos = EosKind::Linear;
+    let mut scene = common::box_scene([1.0, 1.0], [0.0, 0.0, 0.6, 0.6], material, 0.0);
+    scene.cell = 0.05;
+    let cfg = SolverConfig {
+        scene: scene.clone(),
+        method: Method {
+            volume_relaxation_time: 1e-12,
+            ..method(shape)
+        },
+        perturb: vec![],
+    };
+    let mut ps = solver::scene::seed(&scene);
+    for x in ps.x.iter_mut() {
+        *x *= squeeze;
+    }
+    let mut s = Solver::with_particles(cfg, ps);
+    for stage in Stage::ALL {
+        s.run_stage(stage).unwrap();
+    }
+    let v = s.view();
+    (v.x.to_vec(), v.j.to_vec())
+}
+
+/// Volume consistency: J follows the packing. Particles packed as their J
+/// says keep J = 1, at the walls too (the folded mass counts the mirror
+/// images); particles squeezed together with J = 1 get J = squeeze^2 where
+/// their stencil is inside the material, and keep J near the free edges.
+#[test]
+fn volume_consistency_sets_j_from_how_closely_particles_pack() {
+    for shape in [ShapeKind::Linear, ShapeKind::Bspline2, ShapeKind::Bspline3] {
+        // A stencil's nodes and their supports: a full node mass needs the
+        // material this deep.
+        let reach = 0.05
+            * match shape {
+                ShapeKind::Linear => 2.0,
+                ShapeKind::Bspline2 => 3.0,
+                _ => 4.0,
+            };
+        let (x, j) = squeezed_block(1.0, shape);
+        let (mut inside, mut wall) = (0usize, 0.0f64);
+        for p in 0..x.len() {
+            let near_free_edge = x[p].x > 0.6 - reach || x[p].y > 0.6 - reach;
+            if !near_free_edge {
+                inside += 1;
+                wall = wall.max((j[p] - 1.0).abs());
+            }
+        }
+        assert!(inside > 200, "{shape:?}: {inside}");
+        assert!(
+            wall < 1e-12,
+            "{shape:?}: consistent packing moved J by {wall}"
+        );
+
+        let squeeze = 0.98;
+        let (x, j) = squeezed_block(squeeze, shape);
+        let (mut worst, mut kept) = (0.0f64, 0usize);
+        for p in 0..x.len() {
+            let top = 0.6 * squeeze;
+            if x[p].x < top - reach && x[p].y < top - reach {
+                worst = worst.max((j[p] / (squeeze * squeeze) - 1.0).abs());
+            } else if j[p] == 1.0 {
+                kept += 1;
+            }
+        }
+        // The squeezed lattice no longer matches the grid: its aliasing
+        // leaves a residue of order (1 - squeeze)^2 or smaller.
+        eprintln!("{shape:?}: squeezed J off the packing by {worst:.2e}");
+        assert!(worst < 1e-3, "{shape:?}: J off the packing by {worst}");
+        assert!(kept > 0, "{shape:?}: J kept at the free edges");
+    }
+}
+
+/// The fit without J-bar, and a relaxation time out of range, are refused
+/// by key.
+#[test]
+fn j_bar_fit_without_j_bar_and_a_negative_relaxation_time_are_refused() {
+    let scene = common::box_scene([1.0, 1.0], [0.2, 0.2, 0.8, 0.8], Material::tait(1e5), 9.81);
+    for (method, key) in [
+        (
+            Method {
+                j_bar_fit: JBarFit::Linear,
+                ..method(ShapeKind::Bspline2)
+            },
+            "method.j_bar_fit",
+        ),
+        (
+            Method {
+                volume_relaxation_time: -1.0,
+                ..method(ShapeKind::Bspline2)
+            },
+            "method.volume_relaxation_time",
+        ),
+    ] {
+        let err = Solver::new(SolverConfig {
+            scene: scene.clone(),
+            method,
+            perturb: vec![],
+        })
+        .err()
+        .unwrap_or_else(|| panic!("{key}: accepted"));
+        assert_eq!(err.key, key, "{err:?}");
+    }
+}

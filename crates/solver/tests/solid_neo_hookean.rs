@@ -186,6 +186,13 @@ fn solid_refuses_f_reset_and_the_fluid_j_remedies() {
             },
             "method.pressure_smoothing",
         ),
+        (
+            Method {
+                volume_relaxation_time: 0.1,
+                ..base.clone()
+            },
+            "method.volume_relaxation_time",
+        ),
     ] {
         let err = Solver::new(SolverConfig {
             scene: scene.clone(),
