@@ -152,6 +152,28 @@ fn list_expands_the_bug_report_matrix() {
     }
 }
 
+/// Every shipped study file is valid: each case passes the solver's checks
+/// (a bad combination in a matrix exits 2), and case names are unique.
+#[test]
+fn every_shipped_study_lists_its_cases() {
+    let mut studies: Vec<_> = std::fs::read_dir("studies")
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    studies.sort();
+    assert!(studies.len() >= 10, "{studies:?}");
+    for study in studies {
+        let o = kick(&["list", study.to_str().unwrap()]);
+        assert!(o.status.success(), "{}: {}", study.display(), stderr(&o));
+        let text = String::from_utf8(o.stdout).unwrap();
+        let names: Vec<&str> = text.lines().map(|l| l.split('\t').next().unwrap()).collect();
+        let unique: std::collections::BTreeSet<_> = names.iter().collect();
+        assert!(!names.is_empty(), "{}", study.display());
+        assert_eq!(unique.len(), names.len(), "{}: names unique", study.display());
+    }
+}
+
 fn bad(study_text: &str, extra: &[&str]) -> String {
     // One folder per call: tests run in parallel.
     static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
