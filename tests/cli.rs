@@ -156,7 +156,7 @@ fn list_expands_the_bug_report_matrix() {
 /// (a bad combination in a matrix exits 2), and case names are unique.
 #[test]
 fn every_shipped_study_lists_its_cases() {
-    let mut studies: Vec<_> = std::fs::read_dir("studies")
+    let mut studies: Vec<_> = std::fs::read_dir(common::repo().join("studies"))
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "toml"))
@@ -167,10 +167,18 @@ fn every_shipped_study_lists_its_cases() {
         let o = kick(&["list", study.to_str().unwrap()]);
         assert!(o.status.success(), "{}: {}", study.display(), stderr(&o));
         let text = String::from_utf8(o.stdout).unwrap();
-        let names: Vec<&str> = text.lines().map(|l| l.split('\t').next().unwrap()).collect();
+        let names: Vec<&str> = text
+            .lines()
+            .map(|l| l.split('\t').next().unwrap())
+            .collect();
         let unique: std::collections::BTreeSet<_> = names.iter().collect();
         assert!(!names.is_empty(), "{}", study.display());
-        assert_eq!(unique.len(), names.len(), "{}: names unique", study.display());
+        assert_eq!(
+            unique.len(),
+            names.len(),
+            "{}: names unique",
+            study.display()
+        );
     }
 }
 
