@@ -46,6 +46,18 @@ impl Mixture {
                     .into(),
             });
         }
+        if phases
+            .iter()
+            .any(|p| p.cfg.method.volume_relaxation_time > 0.0)
+        {
+            // A phase fills only its share of each node: its grid density
+            // says nothing of its particles' volume.
+            return Err(ConfigError {
+                key: "method.volume_relaxation_time".into(),
+                message: "is for a single phase: in a mixture each phase fills only part of a node"
+                    .into(),
+            });
+        }
         if !(drag.coefficient >= 0.0 && drag.coefficient.is_finite()) {
             return Err(ConfigError {
                 key: "drag.coefficient".into(),

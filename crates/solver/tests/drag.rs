@@ -315,6 +315,27 @@ fn phases_over_different_grids_are_refused() {
     assert_eq!(err.key, "scene");
 }
 
+/// The volume relaxation reads a phase's grid density as the whole node's:
+/// refused in a mixture.
+#[test]
+fn volume_relaxation_is_refused_in_a_mixture() {
+    let method = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
+    let relaxed = Method {
+        volume_relaxation_time: 0.1,
+        ..method.clone()
+    };
+    let a = common::phase([0.0, 0.0, 0.1, 0.1], RHO_S, N_S, method, |_| Vec2::zeros());
+    let b = common::phase([0.0, 0.0, 0.1, 0.1], RHO_F, N_F, relaxed, |_| Vec2::zeros());
+    let drag = Drag {
+        coefficient: 1.0,
+        kozeny_carman: None,
+        model: DragModel::BangBangNode,
+        update: DragUpdate::Implicit,
+    };
+    let err = Mixture::new([a, b], drag).err().unwrap();
+    assert_eq!(err.key, "method.volume_relaxation_time");
+}
+
 /// Kozeny-Carman: at the reference porosity the coefficient is B0; at
 /// porosity 0.4 with n0 = 0.3 it is B0 (0.3 / 0.4) (0.6 / 0.7)^2, and the
 /// decay follows that tau. B = n^2 mu / k.
