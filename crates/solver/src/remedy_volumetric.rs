@@ -277,33 +277,25 @@ fn node_plane(n: &[f64; 9]) -> [f64; 9] {
     [qm, mx, my, b[0], b[1], 0.0, 0.0, 0.0, 0.0]
 }
 
+/// The round trip of `q` into `s.averaged` with the nodal `fit`,
+/// monomorphised on the stencil width.
 fn averaged(
     ps: &Particles,
     q: &[f64],
     stencils: &[Stencil],
     shape: &Shape,
     grid: &Grid,
+    fit: JBarFit,
     s: &mut Scratch,
 ) {
-    match shape.width() {
-        2 => round_trip::<2>(ps, q, stencils, shape, grid, s),
-        3 => round_trip::<3>(ps, q, stencils, shape, grid, s),
-        _ => round_trip::<4>(ps, q, stencils, shape, grid, s),
-    }
-}
-
-fn averaged_linear(
-    ps: &Particles,
-    q: &[f64],
-    stencils: &[Stencil],
-    shape: &Shape,
-    grid: &Grid,
-    s: &mut Scratch,
-) {
-    match shape.width() {
-        2 => round_trip_linear::<2>(ps, q, stencils, shape, grid, s),
-        3 => round_trip_linear::<3>(ps, q, stencils, shape, grid, s),
-        _ => round_trip_linear::<4>(ps, q, stencils, shape, grid, s),
+    use JBarFit::{Constant, Linear};
+    match (shape.width(), fit) {
+        (2, Constant) => round_trip::<2>(ps, q, stencils, shape, grid, s),
+        (3, Constant) => round_trip::<3>(ps, q, stencils, shape, grid, s),
+        (_, Constant) => round_trip::<4>(ps, q, stencils, shape, grid, s),
+        (2, Linear) => round_trip_linear::<2>(ps, q, stencils, shape, grid, s),
+        (3, Linear) => round_trip_linear::<3>(ps, q, stencils, shape, grid, s),
+        (_, Linear) => round_trip_linear::<4>(ps, q, stencils, shape, grid, s),
     }
 }
 
@@ -319,11 +311,7 @@ pub fn j_bar(
     method: &Method,
     s: &mut Scratch,
 ) {
-    let (b, increment) = (method.j_bar, method.average_increment);
-    let averaged = match method.j_bar_fit {
-        JBarFit::Constant => averaged,
-        JBarFit::Linear => averaged_linear,
-    };
+    let (b, increment, fit) = (method.j_bar, method.average_increment, method.j_bar_fit);
     if ps.j.iter().any(|j| !(*j > 0.0 && j.is_finite())) {
         return;
     }
@@ -335,14 +323,14 @@ pub fn j_bar(
             s.ratio[p] = ps.j[p] / s.own_j[p];
         }
         let ratio = std::mem::take(&mut s.ratio);
-        averaged(ps, &ratio[..n], stencils, shape, grid, s);
+        averaged(ps, &ratio[..n], stencils, shape, grid, fit, s);
         s.ratio = ratio;
         for p in 0..n {
             s.averaged[p] *= s.own_j[p];
         }
     } else {
         let j = std::mem::take(&mut ps.j);
-        averaged(ps, &j, stencils, shape, grid, s);
+        averaged(ps, &j, stencils, shape, grid, fit, s);
         ps.j = j;
     }
     for p in 0..ps.len() {
@@ -427,7 +415,7 @@ pub fn smooth_pressure(
     s: &mut Scratch,
 ) {
     let pressure = std::mem::take(&mut ps.pressure);
-    averaged(ps, &pressure, stencils, shape, grid, s);
+    averaged(ps, &pressure, stencils, shape, grid, JBarFit::Constant, s);
     ps.pressure = pressure;
     for p in 0..ps.len() {
         let p_new = s.averaged[p];

@@ -142,28 +142,15 @@ fn j_bar_conserves_mass_weighted_volume_and_blends() {
 fn pressure_smoothing_conserves_mass_weighted_pressure_and_keeps_a_linear_field_inside() {
     for shape in [ShapeKind::Linear, ShapeKind::Bspline2] {
         // On the undisturbed lattice with J linear in x, p = K (1 - J) is linear.
-        let mut material = Material::tait(1e5);
-        material.eos = EosKind::Linear;
-        let mut scene = common::box_scene([1.0, 1.0], [0.2, 0.2, 0.8, 0.8], material, 0.0);
-        scene.cell = 0.05;
-        let cfg = SolverConfig {
-            scene: scene.clone(),
-            method: Method {
+        let mut s = lattice(
+            Method {
                 pressure_smoothing: true,
                 ..method(shape)
             },
-            perturb: vec![],
-        };
-        let mut ps = solver::scene::seed(&scene);
-        for p in 0..ps.len() {
-            let j = 1.0 - 0.01 * ps.x[p].x;
-            ps.j[p] = j;
-            ps.f[p] = Mat2::identity() * j.sqrt();
-            ps.vol[p] = ps.vol0[p] * j;
-        }
-        let k = scene.materials[0].k;
-        let raw: Vec<f64> = ps.j.iter().map(|j| k * (1.0 - j)).collect();
-        let mut s = Solver::with_particles(cfg, ps);
+            |x| 1.0 - 0.01 * x.x,
+        );
+        let k = s.config().scene.materials[0].k;
+        let raw: Vec<f64> = s.view().j.iter().map(|j| k * (1.0 - j)).collect();
         apply(&mut s);
         let v = s.view();
         let mp = |p: &[f64]| -> f64 { v.mass.iter().zip(p).map(|(m, p)| m * p).sum() };
@@ -254,27 +241,13 @@ fn j_bar_of_the_increment_leaves_a_field_at_rest_alone() {
     }
 }
 
-/// The undisturbed lattice block with J = `j(x)` (F = J^(1/2) I, V = V0 J)
-/// after one J-bar pass of the given fit; returns the positions, the J
-/// before and the J after.
-fn lattice_j_bar(
-    shape: ShapeKind,
-    fit: JBarFit,
-    j: impl Fn(Vec2) -> f64,
-) -> (Vec<Vec2>, Vec<f64>, Vec<f64>) {
+/// The undisturbed lattice block (h = 0.05, linear EOS) with J = `j(x)`
+/// (F = J^(1/2) I, V = V0 J).
+fn lattice(method: Method, j: impl Fn(Vec2) -> f64) -> Solver {
     let mut material = Material::tait(1e5);
     material.eos = EosKind::Linear;
     let mut scene = common::box_scene([1.0, 1.0], [0.2, 0.2, 0.8, 0.8], material, 0.0);
     scene.cell = 0.05;
-    let cfg = SolverConfig {
-        scene: scene.clone(),
-        method: Method {
-            j_bar: 1.0,
-            j_bar_fit: fit,
-            ..method(shape)
-        },
-        perturb: vec![],
-    };
     let mut ps = solver::scene::seed(&scene);
     for p in 0..ps.len() {
         let jp = j(ps.x[p]);
@@ -282,8 +255,28 @@ fn lattice_j_bar(
         ps.f[p] = Mat2::identity() * jp.sqrt();
         ps.vol[p] = ps.vol0[p] * jp;
     }
-    let (x, j0) = (ps.x.clone(), ps.j.clone());
-    let mut s = Solver::with_particles(cfg, ps);
+    let cfg = SolverConfig {
+        scene,
+        method,
+        perturb: vec![],
+    };
+    Solver::with_particles(cfg, ps)
+}
+
+/// The lattice block after one J-bar pass of the given fit; returns the
+/// positions, the J before and the J after.
+fn lattice_j_bar(
+    shape: ShapeKind,
+    fit: JBarFit,
+    j: impl Fn(Vec2) -> f64,
+) -> (Vec<Vec2>, Vec<f64>, Vec<f64>) {
+    let method = Method {
+        j_bar: 1.0,
+        j_bar_fit: fit,
+        ..method(shape)
+    };
+    let mut s = lattice(method, j);
+    let (x, j0) = (s.view().x.to_vec(), s.view().j.to_vec());
     apply(&mut s);
     let after = s.view().j.to_vec();
     (x, j0, after)
