@@ -120,6 +120,26 @@ pub fn cell_dilatation(ps: &mut Particles, grid: &Grid, b: f64, s: &mut Scratch)
     }
 }
 
+/// Calls `f(node, N, dx, dy)` for every node of a particle's stencil: its
+/// padded index, the weight and the particle's offset from it in cells.
+#[inline(always)]
+fn each_node<const W: usize>(
+    st: &Stencil,
+    shape: &Shape,
+    nx: usize,
+    mut f: impl FnMut(usize, f64, f64, f64),
+) {
+    let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+    let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
+    for c in 0..W {
+        let row = st.node as usize + c * nx;
+        let dy = st.frac[1] - c as f64;
+        for a in 0..W {
+            f(row + a, wx[a] * wy[c], st.frac[0] - a as f64, dy);
+        }
+    }
+}
+
 /// The round trip q_i = sum N m q / m_i, q_bar_p = sum N q_i into
 /// `s.averaged` (sum_p m_p q_bar_p = sum_p m_p q_p for any arrangement).
 fn round_trip<const W: usize>(
@@ -134,34 +154,19 @@ fn round_trip<const W: usize>(
     s.node_mass.fill(0.0);
     let nx = grid.dims[0];
     for p in 0..ps.len() {
-        let st = &stencils[p];
-        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
         let (m, mq) = (ps.mass[p], ps.mass[p] * q[p]);
-        for c in 0..W {
-            let row = st.node as usize + c * nx;
-            for a in 0..W {
-                let w = wx[a] * wy[c];
-                s.node_sum[row + a] += w * mq;
-                s.node_mass[row + a] += w * m;
-            }
-        }
+        each_node::<W>(&stencils[p], shape, nx, |n, w, _, _| {
+            s.node_sum[n] += w * mq;
+            s.node_mass[n] += w * m;
+        });
     }
     for p in 0..ps.len() {
-        let st = &stencils[p];
-        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
         let mut sum = 0.0;
-        for c in 0..W {
-            let row = st.node as usize + c * nx;
-            for a in 0..W {
-                let n = row + a;
-                let w = wx[a] * wy[c];
-                if w != 0.0 {
-                    sum += w * s.node_sum[n] / s.node_mass[n];
-                }
+        each_node::<W>(&stencils[p], shape, nx, |n, w, _, _| {
+            if w != 0.0 {
+                sum += w * s.node_sum[n] / s.node_mass[n];
             }
-        }
+        });
         s.averaged[p] = sum;
     }
 }
@@ -187,49 +192,32 @@ fn round_trip_linear<const W: usize>(
     s.node_moments.fill([0.0; 9]);
     let nx = grid.dims[0];
     for p in 0..ps.len() {
-        let st = &stencils[p];
-        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
         let (m, qp) = (ps.mass[p], q[p]);
-        for c in 0..W {
-            let row = st.node as usize + c * nx;
-            let dy = st.frac[1] - c as f64;
-            for a in 0..W {
-                let w = wx[a] * wy[c] * m;
-                let dx = st.frac[0] - a as f64;
-                let n = &mut s.node_moments[row + a];
-                n[0] += w;
-                n[1] += w * dx;
-                n[2] += w * dy;
-                n[3] += w * dx * dx;
-                n[4] += w * dx * dy;
-                n[5] += w * dy * dy;
-                n[6] += w * qp;
-                n[7] += w * qp * dx;
-                n[8] += w * qp * dy;
-            }
-        }
+        each_node::<W>(&stencils[p], shape, nx, |i, w, dx, dy| {
+            let w = w * m;
+            let n = &mut s.node_moments[i];
+            n[0] += w;
+            n[1] += w * dx;
+            n[2] += w * dy;
+            n[3] += w * dx * dx;
+            n[4] += w * dx * dy;
+            n[5] += w * dy * dy;
+            n[6] += w * qp;
+            n[7] += w * qp * dx;
+            n[8] += w * qp * dy;
+        });
     }
     for n in s.node_moments.iter_mut() {
         *n = node_plane(n);
     }
     for p in 0..ps.len() {
-        let st = &stencils[p];
-        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
         let mut sum = 0.0;
-        for c in 0..W {
-            let row = st.node as usize + c * nx;
-            let dy = st.frac[1] - c as f64;
-            for a in 0..W {
-                let w = wx[a] * wy[c];
-                if w != 0.0 {
-                    let f = &s.node_moments[row + a];
-                    let dx = st.frac[0] - a as f64;
-                    sum += w * (f[0] + f[3] * (dx - f[1]) + f[4] * (dy - f[2]));
-                }
+        each_node::<W>(&stencils[p], shape, nx, |i, w, dx, dy| {
+            if w != 0.0 {
+                let f = &s.node_moments[i];
+                sum += w * (f[0] + f[3] * (dx - f[1]) + f[4] * (dy - f[2]));
             }
-        }
+        });
         s.averaged[p] = sum;
     }
 }
@@ -382,23 +370,16 @@ fn volume_consistency_w<const W: usize>(
     let nx = grid.dims[0];
     let area = grid.h * grid.h;
     for p in 0..ps.len() {
-        let st = &stencils[p];
-        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
         let rho0 = ps.mass[p] / ps.vol0[p];
         let full = FULL_NODE_SHARE * rho0 * area;
         let (mut sum, mut inside) = (0.0, true);
-        for c in 0..W {
-            let row = st.node as usize + c * nx;
-            for a in 0..W {
-                let w = wx[a] * wy[c];
-                if w != 0.0 {
-                    let m = s.node_mass[row + a];
-                    inside &= m >= full;
-                    sum += w * m;
-                }
+        each_node::<W>(&stencils[p], shape, nx, |n, w, _, _| {
+            if w != 0.0 {
+                let m = s.node_mass[n];
+                inside &= m >= full;
+                sum += w * m;
             }
-        }
+        });
         if inside {
             let j_geo = rho0 * area / sum;
             set_j(ps, p, (1.0 - b) * ps.j[p] + b * j_geo);
