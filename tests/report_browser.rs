@@ -119,6 +119,11 @@ fn case_and_matrix_pages_link_existing_files_and_load_in_chromium() {
     let index = out.join("report").join("index.html");
     assert!(String::from_utf8_lossy(&o.stdout).contains("index.html"));
     let matrix_links = links(&index);
+    let html = std::fs::read_to_string(&index).unwrap();
+    assert!(
+        html.contains("<table id=\"speed_accuracy_cheapest\">"),
+        "the cheapest case for each stated error is tabulated"
+    );
     for f in [
         "heatmap_outcome.png",
         "heatmap_hydro.png",

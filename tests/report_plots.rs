@@ -16,6 +16,7 @@ use study::plot_common::{
 use study::plot_matrix::{
     pareto_front, HeatCell, HeatKey, HeatPanel, HeatmapFigure, LinesFigure, ParetoFigure,
 };
+use study::report_matrix::cheapest_for_error;
 use study::snapshot::Snapshot;
 
 fn scratch(name: &str) -> common::Scratch {
@@ -367,6 +368,34 @@ fn pareto_front_keeps_the_non_dominated_points() {
         (3.0, 0.3),
     ];
     assert_eq!(pareto_front(&pts), vec![0, 3, 1]);
+}
+
+#[test]
+fn the_cheapest_case_for_each_stated_error_is_on_the_front_cheapest_first() {
+    let pts: Vec<(String, f64, f64)> = [
+        (1.0, 0.5),
+        (10.0, 0.01),
+        (f64::NAN, 0.001),
+        (0.5, f64::INFINITY),
+        (20.0, 0.2),
+        (3.0, 0.1),
+        (3.0, 0.3),
+        (0.0, 0.05),
+    ]
+    .iter()
+    .enumerate()
+    .map(|(i, &(x, y))| (format!("c{i}"), x, y))
+    .collect();
+    let front = cheapest_for_error(&pts);
+    assert_eq!(front, vec![0, 5, 1]);
+    // Brute force: for every stated error, the cheapest usable case within it.
+    for target in [0.005, 0.01, 0.05, 0.1, 0.2, 0.5, 1.0] {
+        let cheapest = (0..pts.len())
+            .filter(|&i| pts[i].1 > 0.0 && pts[i].1.is_finite() && pts[i].2 <= target)
+            .min_by(|&a, &b| pts[a].1.total_cmp(&pts[b].1));
+        let first_within = front.iter().copied().find(|&i| pts[i].2 <= target);
+        assert_eq!(cheapest, first_within, "target {target}");
+    }
 }
 
 #[test]

@@ -5,7 +5,9 @@
 
 use crate::output_files::{relative_path, write_atomic};
 use crate::plot_common::{err, render, short, ColourScale, Res};
-use crate::plot_matrix::{HeatCell, HeatKey, HeatPanel, HeatmapFigure, LinesFigure, ParetoFigure};
+use crate::plot_matrix::{
+    pareto_front, HeatCell, HeatKey, HeatPanel, HeatmapFigure, LinesFigure, ParetoFigure,
+};
 use crate::report::{read_parquet, text_column};
 use crate::report_case::case_report;
 use crate::report_html::{escape, Cell, Page};
@@ -251,7 +253,7 @@ pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
         heatmaps(&m, &out, &mut page)?;
         stability_map(&m, &out, &mut page)?;
     }
-    speed_accuracy(&m.rows, &out, &mut page)?;
+    speed_accuracy(&m, &out, &mut page)?;
     ensemble_table(&m, &mut page);
     case_table(&m, &mut page);
     let title = format!(
@@ -555,10 +557,11 @@ fn stability_map(m: &Matrix, out: &Path, page: &mut Page) -> Res {
 /// The accuracy figures the speed-accuracy front is drawn against: the late
 /// hydrostatic departure always, the surge front's early error (shifted)
 /// when the study tracks a front.
-fn speed_accuracy(rows: &[Row], out: &Path, page: &mut Page) -> Res {
+fn speed_accuracy(m: &Matrix, out: &Path, page: &mut Page) -> Res {
     page.h2("Speed against accuracy");
+    let rows = &m.rows;
     pareto(
-        rows,
+        m,
         out,
         page,
         (
@@ -571,7 +574,7 @@ fn speed_accuracy(rows: &[Row], out: &Path, page: &mut Page) -> Res {
     let front = |r: &Row| Row::nan(r.summary.metrics.front_rms_error_early_shifted);
     if rows.iter().any(|r| front(r).is_finite()) {
         pareto(
-            rows,
+            m,
             out,
             page,
             (
@@ -590,13 +593,14 @@ fn speed_accuracy(rows: &[Row], out: &Path, page: &mut Page) -> Res {
 /// otherwise every case that ran (a blown-up one's accuracy then over the
 /// second before it blew up). `names`: file stem, axis label, caption.
 fn pareto(
-    rows: &[Row],
+    m: &Matrix,
     out: &Path,
     page: &mut Page,
     names: (&str, &str, &str),
     error: impl Fn(&Row) -> f64,
 ) -> Res {
     let (stem, label, caption) = names;
+    let rows = &m.rows;
     let point = |r: &Row| (r.case().to_string(), r.summary.wall_s / r.t_end(), error(r));
     let ran = |r: &&Row| r.summary.status != Status::Failed && r.t_end() > 0.0;
     let completed: Vec<_> = rows
@@ -626,7 +630,62 @@ fn pareto(
         &render(&fig, out, stem)?,
         &format!("Cost against {caption}, Pareto front in red"),
     );
+    cheapest_table(m, &fig.points, stem, label, page);
     Ok(())
+}
+
+/// The Pareto front as a table: for an error of at most each front point's,
+/// that point is the cheapest case that ran.
+fn cheapest_table(
+    m: &Matrix,
+    points: &[(String, f64, f64)],
+    stem: &str,
+    label: &str,
+    page: &mut Page,
+) {
+    let front = cheapest_for_error(points);
+    if front.is_empty() {
+        return;
+    }
+    page.p(&format!(
+        "The cheapest case for a stated {label}: for an error of at most the first column, no case that ran costs less than the one named (its name gives its parameters; the cost is as measured on the machine and under the load the matrix ran with)."
+    ));
+    let headers = [
+        "error at most",
+        "cheapest case",
+        "wall s per simulated s",
+        "M particle-steps/s",
+    ]
+    .map(String::from);
+    let rows: Vec<(String, Vec<Cell>)> = front
+        .iter()
+        .filter_map(|&i| {
+            let (case, cost, error) = &points[i];
+            let row = m.rows.iter().find(|r| r.case() == case)?;
+            let cells = vec![
+                Cell::Num(format!("{error:.4}")),
+                Cell::Text(row.link_html()),
+                Cell::Num(format!("{cost:.3}")),
+                Cell::Num(format!("{:.2}", row.summary.particle_steps_per_s / 1e6)),
+            ];
+            Some((String::new(), cells))
+        })
+        .collect();
+    page.table(&format!("{stem}_cheapest"), &headers, &rows);
+}
+
+/// Indices of the Pareto front of (name, cost, error) points with positive
+/// finite cost and error, cheapest first: each is the cheapest point whose
+/// error is at most its own.
+pub fn cheapest_for_error(points: &[(String, f64, f64)]) -> Vec<usize> {
+    let usable: Vec<usize> = (0..points.len())
+        .filter(|&i| {
+            let (_, x, y) = points[i];
+            x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite()
+        })
+        .collect();
+    let xy: Vec<(f64, f64)> = usable.iter().map(|&i| (points[i].1, points[i].2)).collect();
+    pareto_front(&xy).into_iter().map(|k| usable[k]).collect()
 }
 
 /// Per case of an ensemble: survival and first kick as median [min, max] over its runs.
