@@ -285,7 +285,14 @@ fn drag_convergence_writes_each_models_observed_order() {
             .collect()
     };
     let node = errors("bang_bang_node");
-    for model in ["bang_bang_node", "bang_bang_particle", "svf_node"] {
+    let models = [
+        "bang_bang_node",
+        "bang_bang_particle",
+        "svf_node",
+        "svf_capped",
+        "svf_particle",
+    ];
+    for model in models {
         let e = errors(model);
         assert!(e.windows(2).all(|w| w[1] < w[0]), "{model}: {e:?}");
         if model != "bang_bang_node" {
@@ -295,7 +302,7 @@ fn drag_convergence_writes_each_models_observed_order() {
     let orders: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("observed_order.json")).unwrap()).unwrap();
     let orders = orders.as_array().unwrap();
-    assert_eq!(orders.len(), 3, "{orders:?}");
+    assert_eq!(orders.len(), models.len(), "{orders:?}");
     for o in orders {
         assert_eq!(o["figure"], "drag_layer_error");
         let p = o["observed_order"].as_f64().unwrap();

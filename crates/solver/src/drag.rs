@@ -21,8 +21,8 @@ use crate::transfer_serial::scatter_scalar;
 use crate::Solver;
 use serde::{Deserialize, Serialize};
 
-/// Which interaction model (the slides' list; SVF particle-based and
-/// SVF-capped are not built yet).
+/// Which interaction model (the slides' list; the volume constraint against
+/// over-saturation is not a model of its own yet).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum DragModel {
@@ -35,10 +35,33 @@ pub enum DragModel {
     /// Explicit update only.
     BangBangParticle,
     /// Smooth volume fractions at the node: the drag acts on the volume both
-    /// phases share there, V_i^cap phi_i^a phi_i^b, with phi_i = min(1,
-    /// sum_p N_ip V_p / n_p / V_i^cap) the share of the node's support a
-    /// phase's bodies cover and V_i^cap = h^2; no chi_i.
+    /// phases share there, V_i^cap phi_i^a phi_i^b, with phi_i = sum_p N_ip
+    /// V_p / n_p / V_i^cap the share of the node's support a phase's bodies
+    /// cover and V_i^cap = h^2; no chi_i.
     SvfNode,
+    /// As `SvfNode` with each phi_i capped at 1 (the smooth fraction loses
+    /// its smoothness where the quadrature overshoots 1).
+    SvfCapped,
+    /// The other phase's smooth fraction interpolated to the particle:
+    /// f_p = B V_p^mix phi^other(x_p) (v^other(x_p) - v_p), phi^other(x_p) =
+    /// sum_i N_ip phi_i^other, spread by N_ip with the nodal equilibrium
+    /// correction; no inside test. Explicit update only.
+    SvfParticle,
+}
+
+impl DragModel {
+    /// The particle-based models, which take the explicit update only.
+    pub fn is_particle_based(self) -> bool {
+        matches!(self, DragModel::BangBangParticle | DragModel::SvfParticle)
+    }
+
+    /// The models that need each phase's smooth nodal presence.
+    fn uses_presence(self) -> bool {
+        matches!(
+            self,
+            DragModel::SvfNode | DragModel::SvfCapped | DragModel::SvfParticle
+        )
+    }
 }
 
 /// How the nodal drag is integrated over a step.
@@ -130,12 +153,13 @@ pub(crate) fn mixture_volume(s: &Solver, p: usize) -> f64 {
     s.particles.vol[p] / s.particles.vol0[p] * l * l
 }
 
-/// sum_p N_ip V_p / n_p on the raw nodes, folded: the volume the phase's
-/// bodies cover in each node's support.
+/// sum_p N_ip V_p / n_p on the raw nodes, folded, ghosts filled: the volume
+/// the phase's bodies cover in each node's support.
 fn nodal_presence(s: &Solver, per_particle: &mut Vec<f64>, out: &mut [f64]) {
     per_particle.clear();
     per_particle.extend((0..s.particles.len()).map(|p| mixture_volume(s, p)));
     scatter_folded(per_particle, s, out);
+    s.grid.fill(out);
 }
 
 /// sum_p N_ip q_p over a phase's particles on its active raw nodes, folded
@@ -150,9 +174,11 @@ pub(crate) fn scatter_folded(q: &[f64], s: &Solver, out: &mut [f64]) {
     g.fold(out);
 }
 
-/// V_i = sum_p N_ip V_p on the raw nodes, folded.
+/// V_i = sum_p N_ip V_p on the raw nodes, folded, ghosts filled (particles
+/// near a periodic edge or wall read them).
 fn nodal_volume(s: &Solver, out: &mut [f64]) {
     scatter_folded(&s.particles.vol, s, out);
+    s.grid.fill(out);
 }
 
 /// Corrects both phases' v^{n+1} (and the nodal accelerations) for the drag
@@ -172,7 +198,7 @@ pub fn couple(
         nodal_volume(a, va);
         nodal_volume(b, vb);
     }
-    if drag.model == DragModel::SvfNode {
+    if drag.model.uses_presence() {
         let [pa, pb] = &mut scratch.presence;
         nodal_presence(a, &mut scratch.per_particle, pa);
         nodal_presence(b, &mut scratch.per_particle, pb);
@@ -191,7 +217,7 @@ pub fn couple(
         }
     }
     let before = [grid_kinetic(&a.grid), grid_kinetic(&b.grid)];
-    if drag.model == DragModel::BangBangParticle {
+    if drag.model.is_particle_based() {
         crate::drag_particle::couple(a, b, drag, scratch, dt, fixed_a, &mut out);
     } else {
         couple_nodes(a, b, drag, scratch, dt, fixed_a, &mut out);
@@ -209,8 +235,8 @@ pub fn couple(
     out
 }
 
-/// The node-based models (bang-bang, SVF): one relative-velocity update per
-/// node both phases occupy.
+/// The node-based models (bang-bang, SVF, SVF-capped): one relative-velocity
+/// update per node both phases occupy.
 fn couple_nodes(
     a: &mut Solver,
     b: &mut Solver,
@@ -235,7 +261,8 @@ fn couple_nodes(
         let (inv_a, inv_b) = (if fixed_a { 0.0 } else { 1.0 / ma }, 1.0 / mb);
         let volume = va[n] + vb[n];
         let shared = match drag.model {
-            DragModel::SvfNode => {
+            DragModel::SvfNode => capacity * (pa[n] / capacity) * (pb[n] / capacity),
+            DragModel::SvfCapped => {
                 capacity * (pa[n] / capacity).min(1.0) * (pb[n] / capacity).min(1.0)
             }
             _ => volume,

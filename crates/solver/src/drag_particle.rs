@@ -1,26 +1,33 @@
-//! Particle-based bang-bang drag (docs/physics.md section 6): each particle
+//! Particle-based drag (docs/physics.md section 6). Bang-bang: each particle
 //! of a phase that sits inside the other phase (every node of its stencil
 //! carries the other phase's mass) feels f_p = B V_p^mix (v^other(x_p) -
-//! v_p) with V_p^mix = V_p / n_p its mixture volume, spread to the nodes by
-//! N_ip. The phases' nodal sums differ where only one phase's particles
-//! interact, so the nodal equilibrium correction subtracts half their sum
-//! from each: f_i^a = -f_i^b node by node. Explicit over the step, with v^n
-//! on the grid and on the particles.
+//! v_p) with V_p^mix = V_p / n_p its mixture volume. SVF: every particle
+//! feels that force times the other phase's smooth fraction at x_p,
+//! sum_i N_ip phi_i^other. Either is spread to the nodes by N_ip. The
+//! phases' nodal sums differ where only one phase's particles interact, so
+//! the nodal equilibrium correction subtracts half their sum from each:
+//! f_i^a = -f_i^b node by node. Explicit over the step, with v^n on the grid
+//! and on the particles.
 
 // The loops walk the weights and the stencil rows in step.
 #![allow(clippy::needless_range_loop)]
 
-use crate::drag::{mixture_volume, set_pair, Coupling, Drag, Scratch};
+use crate::drag::{mixture_volume, set_pair, Coupling, Drag, DragModel, Scratch};
 use crate::grid::Grid;
 use crate::particles::Vec2;
 use crate::Solver;
 
-/// Spreads `from`'s particle drag against `other`'s grid velocity into `force` (folded).
+/// Spreads `from`'s particle drag against `other`'s grid velocity into
+/// `force` (folded). With `other_fraction` (SVF: the other phase's nodal
+/// presence) each particle's force is weighted by the presence interpolated
+/// to it over h^2; without, only particles inside the other phase feel it
+/// (bang-bang).
 fn spread<const W: usize>(
     from: &Solver,
     other: &Grid,
     drag: &Drag,
     porosity: impl Fn(usize) -> f64,
+    other_fraction: Option<&[f64]>,
     force: &mut [Vec2],
 ) {
     let g = &from.grid;
@@ -29,10 +36,11 @@ fn spread<const W: usize>(
         force[n as usize] = Vec2::zeros();
     }
     let present = |n: usize| other.is_active(n) && other.mass[n] > 0.0;
+    let capacity = g.h * g.h;
     for (p, st) in from.stencils.iter().enumerate() {
         let (wx, _) = from.shape.stencil_weights::<W>(st.frac[0], st.half[0]);
         let (wy, _) = from.shape.stencil_weights::<W>(st.frac[1], st.half[1]);
-        let (mut v_other, mut n_p, mut inside) = (Vec2::zeros(), 0.0, true);
+        let (mut v_other, mut n_p, mut inside, mut phi) = (Vec2::zeros(), 0.0, true, 0.0);
         for c in 0..W {
             let row = st.node as usize + c * nx;
             for a in 0..W {
@@ -46,13 +54,23 @@ fn spread<const W: usize>(
                 }
                 v_other += w * other.vel[node];
                 n_p += w * porosity(node);
+                if let Some(presence) = other_fraction {
+                    if present(node) {
+                        phi += w * presence[node];
+                    }
+                }
             }
         }
-        if !inside {
+        let weight = match other_fraction {
+            Some(_) => phi / capacity,
+            None if inside => 1.0,
+            None => continue,
+        };
+        if weight == 0.0 {
             continue;
         }
-        let f =
-            drag.coefficient_at(n_p) * mixture_volume(from, p) * (v_other - from.particles.v[p]);
+        let f = (drag.coefficient_at(n_p) * mixture_volume(from, p) * weight)
+            * (v_other - from.particles.v[p]);
         for c in 0..W {
             let row = st.node as usize + c * nx;
             for a in 0..W {
@@ -84,18 +102,24 @@ pub(crate) fn couple(
         }
     };
     let [fa, fb] = &mut scratch.force;
+    let [phi_a, phi_b] = &scratch.presence;
+    let (of_b, of_a) = if drag.model == DragModel::SvfParticle {
+        (Some(&phi_b[..]), Some(&phi_a[..]))
+    } else {
+        (None, None)
+    };
     match a.shape.width() {
         2 => {
-            spread::<2>(a, &b.grid, drag, porosity, fa);
-            spread::<2>(b, &a.grid, drag, porosity, fb);
+            spread::<2>(a, &b.grid, drag, porosity, of_b, fa);
+            spread::<2>(b, &a.grid, drag, porosity, of_a, fb);
         }
         3 => {
-            spread::<3>(a, &b.grid, drag, porosity, fa);
-            spread::<3>(b, &a.grid, drag, porosity, fb);
+            spread::<3>(a, &b.grid, drag, porosity, of_b, fa);
+            spread::<3>(b, &a.grid, drag, porosity, of_a, fb);
         }
         _ => {
-            spread::<4>(a, &b.grid, drag, porosity, fa);
-            spread::<4>(b, &a.grid, drag, porosity, fb);
+            spread::<4>(a, &b.grid, drag, porosity, of_b, fa);
+            spread::<4>(b, &a.grid, drag, porosity, of_a, fb);
         }
     }
     let (ga, gb) = (&mut a.grid, &mut b.grid);

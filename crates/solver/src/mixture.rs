@@ -7,7 +7,7 @@
 //! run is a plain `Solver` and is untouched by this.
 
 use crate::checkpoint::{unseal, CheckpointError, Reader, Writer};
-use crate::drag::{self, Coupling, Drag, DragModel, DragUpdate};
+use crate::drag::{self, Coupling, Drag, DragUpdate};
 use crate::pore_pressure::{PorePressure, TopLoad};
 use crate::{ConfigError, Energy, Material, Solver, StepError, Vec2};
 
@@ -64,12 +64,12 @@ impl Mixture {
                 message: format!("{} is not a finite number >= 0", drag.coefficient),
             });
         }
-        if drag.model == DragModel::BangBangParticle && drag.update != DragUpdate::Explicit {
+        if drag.model.is_particle_based() && drag.update != DragUpdate::Explicit {
             return Err(ConfigError {
                 key: "drag.update".into(),
                 message: format!(
-                    "{:?} with the particle-based model (allowed: explicit)",
-                    drag.update
+                    "{:?} with the particle-based model {:?} (allowed: explicit)",
+                    drag.update, drag.model
                 ),
             });
         }

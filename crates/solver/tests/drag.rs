@@ -209,7 +209,11 @@ fn drag_is_action_against_reaction_at_every_node() {
         (DragModel::SvfNode, DragUpdate::Explicit),
         (DragModel::SvfNode, DragUpdate::Implicit),
         (DragModel::SvfNode, DragUpdate::Exponential),
+        (DragModel::SvfCapped, DragUpdate::Explicit),
+        (DragModel::SvfCapped, DragUpdate::Implicit),
+        (DragModel::SvfCapped, DragUpdate::Exponential),
         (DragModel::BangBangParticle, DragUpdate::Explicit),
+        (DragModel::SvfParticle, DragUpdate::Explicit),
     ];
     for method in methods() {
         for (model, update) in cases {
@@ -251,29 +255,33 @@ fn drag_is_action_against_reaction_at_every_node() {
 #[test]
 fn every_model_follows_its_update_law_in_the_uniform_mixture() {
     for ratio in [0.1, 1.0] {
-        decay_of(
-            DragModel::SvfNode,
-            DragUpdate::Exponential,
-            ratio,
-            |n| (-n * ratio).exp(),
-            1e-9,
-        );
-        decay_of(
-            DragModel::SvfNode,
-            DragUpdate::Implicit,
-            ratio,
-            |n| (1.0 + ratio).powf(-n),
-            1e-9,
-        );
+        for model in [DragModel::SvfNode, DragModel::SvfCapped] {
+            decay_of(
+                model,
+                DragUpdate::Exponential,
+                ratio,
+                |n| (-n * ratio).exp(),
+                1e-9,
+            );
+            decay_of(
+                model,
+                DragUpdate::Implicit,
+                ratio,
+                |n| (1.0 + ratio).powf(-n),
+                1e-9,
+            );
+        }
     }
     for ratio in [0.01, 0.1, 1.5] {
-        decay_of(
-            DragModel::BangBangParticle,
-            DragUpdate::Explicit,
-            ratio,
-            |n| (1.0 - ratio).powf(n),
-            1e-9,
-        );
+        for model in [DragModel::BangBangParticle, DragModel::SvfParticle] {
+            decay_of(
+                model,
+                DragUpdate::Explicit,
+                ratio,
+                |n| (1.0 - ratio).powf(n),
+                1e-9,
+            );
+        }
     }
 }
 
@@ -281,17 +289,19 @@ fn every_model_follows_its_update_law_in_the_uniform_mixture() {
 fn the_particle_based_model_is_explicit_only() {
     let method = common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usf);
     let full = [0.0, 0.0, 0.1, 0.1];
-    for update in [DragUpdate::Implicit, DragUpdate::Exponential] {
-        let solid = common::phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
-        let fluid = common::phase(full, RHO_F, N_F, method.clone(), |_| Vec2::zeros());
-        let drag = Drag {
-            coefficient: drag_coefficient(),
-            kozeny_carman: None,
-            model: DragModel::BangBangParticle,
-            update,
-        };
-        let e = Mixture::new([solid, fluid], drag).err().expect("refused");
-        assert_eq!(e.key, "drag.update", "{e:?}");
+    for model in [DragModel::BangBangParticle, DragModel::SvfParticle] {
+        for update in [DragUpdate::Implicit, DragUpdate::Exponential] {
+            let solid = common::phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
+            let fluid = common::phase(full, RHO_F, N_F, method.clone(), |_| Vec2::zeros());
+            let drag = Drag {
+                coefficient: drag_coefficient(),
+                kozeny_carman: None,
+                model,
+                update,
+            };
+            let e = Mixture::new([solid, fluid], drag).err().expect("refused");
+            assert_eq!(e.key, "drag.update", "{e:?}");
+        }
     }
 }
 
