@@ -15,6 +15,7 @@ use study::plot_common::{
 };
 use study::plot_matrix::{
     pareto_front, HeatCell, HeatKey, HeatPanel, HeatmapFigure, LinesFigure, ParetoFigure,
+    RefinementFigure,
 };
 use study::report_matrix::cheapest_for_error;
 use study::snapshot::Snapshot;
@@ -356,6 +357,52 @@ fn matrix_plots_render_as_png_and_svg() {
     );
     // x 1..20, y 0.01..0.5, both with 0.3 of padding.
     check_log_ticks(&texts, "speed_accuracy", &["10⁰", "10¹", "10⁻²", "10⁻¹"]);
+    let fig = RefinementFigure {
+        title: "Refinement".into(),
+        y_label: "late hydrostatic departure".into(),
+        lines: vec![
+            (
+                "first".into(),
+                vec![(0.02, 0.016), (0.01, 0.008), (0.005, 0.004)],
+            ),
+            (
+                "second".into(),
+                vec![(0.02, 0.04), (0.01, 0.01), (0.005, 0.0025)],
+            ),
+        ],
+    };
+    let texts = check(
+        &fig,
+        &dir,
+        "refinement",
+        &["cell size h (m)", "slope 1", "slope 2", "second"],
+    );
+    check_log_ticks(&texts, "refinement", &["10⁻²"]);
+}
+
+/// The reference lines have slopes 1 and 2 in log-log, pass through the
+/// mean of the data's log10 points and span its h range.
+#[test]
+fn refinement_reference_slopes_pass_through_the_data_centre() {
+    let pts = [(0.02, 0.04), (0.01, 0.01), (0.005, 0.0025)];
+    let fig = RefinementFigure {
+        title: String::new(),
+        y_label: String::new(),
+        lines: vec![
+            ("a".into(), pts.to_vec()),
+            ("unusable".into(), vec![(0.01, 0.0), (0.02, f64::NAN)]),
+        ],
+    };
+    let refs = fig.reference_lines();
+    assert_eq!(refs.len(), 2);
+    let n = pts.len() as f64;
+    let cx = pts.iter().map(|p| p.0.log10()).sum::<f64>() / n;
+    let cy = pts.iter().map(|p| p.1.log10()).sum::<f64>() / n;
+    for (slope, [a, b]) in refs {
+        assert!(((b.1 - a.1) / (b.0 - a.0) - slope).abs() < 1e-12);
+        assert!((a.1 + slope * (cx - a.0) - cy).abs() < 1e-12);
+        assert!((a.0 - 0.005f64.log10()).abs() < 1e-12 && (b.0 - 0.02f64.log10()).abs() < 1e-12);
+    }
 }
 
 #[test]

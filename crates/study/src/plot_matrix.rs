@@ -350,3 +350,124 @@ impl Figure for ParetoFigure {
         Ok(())
     }
 }
+
+/// Error against cell size on log-log axes, one line per case, with dashed
+/// reference lines of slope 1 and 2 through the middle of the data.
+pub struct RefinementFigure {
+    pub title: String,
+    pub y_label: String,
+    /// (name, [(h, error)]), errors > 0.
+    pub lines: Vec<(String, Vec<(f64, f64)>)>,
+}
+
+/// Most lines that get a legend entry (the rest are drawn unlabelled).
+const REFINEMENT_LEGEND: usize = 12;
+
+impl RefinementFigure {
+    /// The lines' points as log10 (h, error), finite and positive only.
+    fn log_lines(&self) -> Vec<(&String, Vec<(f64, f64)>)> {
+        self.lines
+            .iter()
+            .map(|(name, pts)| {
+                let pts = pts
+                    .iter()
+                    .filter(|(h, e)| *h > 0.0 && *e > 0.0 && h.is_finite() && e.is_finite())
+                    .map(|(h, e)| (h.log10(), e.log10()))
+                    .collect();
+                (name, pts)
+            })
+            .collect()
+    }
+
+    /// Reference lines of slope 1 and 2 through the data's centre (log10
+    /// h and error means), spanning its h range.
+    pub fn reference_lines(&self) -> Vec<(f64, [(f64, f64); 2])> {
+        let pts: Vec<(f64, f64)> = self.log_lines().into_iter().flat_map(|(_, p)| p).collect();
+        if pts.is_empty() {
+            return vec![];
+        }
+        let n = pts.len() as f64;
+        let (cx, cy) = (
+            pts.iter().map(|p| p.0).sum::<f64>() / n,
+            pts.iter().map(|p| p.1).sum::<f64>() / n,
+        );
+        let (x0, x1) = pts
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(p.0), b.max(p.0))
+            });
+        [1.0, 2.0]
+            .map(|s| (s, [(x0, cy + s * (x0 - cx)), (x1, cy + s * (x1 - cx))]))
+            .to_vec()
+    }
+}
+
+impl Figure for RefinementFigure {
+    fn size(&self) -> (u32, u32) {
+        (900, 640)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Res {
+        let lines = self.log_lines();
+        let refs = self.reference_lines();
+        let all = lines
+            .iter()
+            .flat_map(|(_, p)| p.iter().copied())
+            .chain(refs.iter().flat_map(|(_, ends)| ends.iter().copied()));
+        let (x0, x1, y0, y1) = all.fold(
+            (
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+            ),
+            |(a, b, c, d), (x, y)| (a.min(x), b.max(x), c.min(y), d.max(y)),
+        );
+        let (x0, x1, y0, y1) = if x0.is_finite() && y0.is_finite() {
+            (x0 - 0.15, x1 + 0.15, y0 - 0.15, y1 + 0.15)
+        } else {
+            (-3.0, -1.0, -3.0, 0.0)
+        };
+        let mut chart = ChartBuilder::on(root)
+            .caption(&self.title, (SANS, 20))
+            .margin(12)
+            .x_label_area_size(46)
+            .y_label_area_size(70)
+            .build_cartesian_2d(LogAxis::new(x0, x1), LogAxis::new(y0, y1))
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc("cell size h (m)")
+            .y_desc(&self.y_label)
+            .x_label_formatter(&decade_label)
+            .y_label_formatter(&decade_label)
+            .label_style((SANS, 14))
+            .axis_desc_style((SANS, 16))
+            .draw()
+            .map_err(err)?;
+        for &(slope, ends) in &refs {
+            let style = RGBColor(120, 120, 120).stroke_width(if slope == 1.0 { 1 } else { 2 });
+            chart
+                .draw_series(DashedLineSeries::new(ends, 6, 4, style))
+                .map_err(err)?
+                .label(format!("slope {slope}"))
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], style));
+        }
+        for (k, (name, pts)) in lines.iter().enumerate() {
+            let colour = series_colour(k);
+            let series = chart
+                .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
+                .map_err(err)?;
+            if k < REFINEMENT_LEGEND {
+                series.label((*name).clone()).legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 18, y)], colour.stroke_width(2))
+                });
+            }
+            chart
+                .draw_series(pts.iter().map(|p| Circle::new(*p, 4, colour.filled())))
+                .map_err(err)?;
+        }
+        legend(&mut chart, SeriesLabelPosition::LowerRight, 12)?;
+        Ok(())
+    }
+}

@@ -248,7 +248,7 @@ pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
     if !m.axes.is_empty() {
         crate::report_behaviours::behaviours(&m, &mut page);
         crate::report_ablation::ablation_table(&m, &mut page);
-        crate::report_refinement::refinement_table(&m, &mut page);
+        crate::report_refinement::refinement_table(&m, &out, &mut page)?;
         crate::report_mixture::mixture_section(&m, &out, &mut page)?;
         heatmaps(&m, &out, &mut page)?;
         stability_map(&m, &out, &mut page)?;

@@ -1,15 +1,20 @@
 //! Refinement: for a matrix with a `scene.cell` axis, each case's error
 //! against h (the early shifted surge-front error and the late hydrostatic
 //! departure, median over an ensemble) and the observed order of
-//! convergence, the least-squares slope of ln(error) against ln(h).
+//! convergence, the least-squares slope of ln(error) against ln(h), as a
+//! table and, per figure, a log-log plot with reference slopes 1 and 2.
 
 use crate::metrics::observed_order;
-use crate::plot_common::short;
+use crate::plot_common::{render, short, Res};
+use crate::plot_matrix::RefinementFigure;
 use crate::report_html::{Cell, Page};
 use crate::report_matrix::{median, Matrix, Row};
 use std::collections::BTreeMap;
+use std::path::Path;
 
 type Figure = fn(&Row) -> Option<f64>;
+/// A case's figure at each h.
+type Line = (String, Vec<(f64, f64)>);
 
 const FIGURES: [(&str, Figure); 6] = [
     ("surge front, early shifted RMS (Z)", |r| {
@@ -33,9 +38,21 @@ const FIGURES: [(&str, Figure); 6] = [
     }),
 ];
 
-pub fn refinement_table(m: &Matrix, page: &mut Page) {
+/// A case name without its cell-size token (`h2cm`, `h0.5cm`): the name of
+/// the refinement group.
+fn without_cell_size(case: &str) -> String {
+    let is_h = |t: &str| {
+        t.strip_prefix('h')
+            .and_then(|t| t.strip_suffix("cm"))
+            .is_some_and(|v| v.parse::<f64>().is_ok())
+    };
+    let kept: Vec<&str> = case.split('_').filter(|t| !is_h(t)).collect();
+    kept.join("_")
+}
+
+pub fn refinement_table(m: &Matrix, out: &Path, page: &mut Page) -> Res {
     let Some(h_axis) = m.axis("scene.cell") else {
-        return;
+        return Ok(());
     };
     let h_of = |r: &Row| {
         r.summary
@@ -57,12 +74,14 @@ pub fn refinement_table(m: &Matrix, page: &mut Page) {
             .push(r);
     }
     let mut rows: Vec<(String, Vec<Cell>)> = vec![];
+    // Per figure, one (case, [(h, value)]) line per group.
+    let mut plots: Vec<Vec<Line>> = vec![vec![]; FIGURES.len()];
     for (key, by_h) in &groups {
         if by_h.len() < 2 {
             continue;
         }
         let hs: Vec<f64> = by_h.keys().map(|b| f64::from_bits(*b)).collect();
-        for (name, figure) in FIGURES {
+        for (f, (name, figure)) in FIGURES.iter().enumerate() {
             let values: Vec<f64> = by_h
                 .values()
                 .map(|runs| {
@@ -73,7 +92,11 @@ pub fn refinement_table(m: &Matrix, page: &mut Page) {
             if values.iter().all(|v| !v.is_finite()) {
                 continue;
             }
-            let label = key.join(" ");
+            let label = by_h
+                .values()
+                .next()
+                .and_then(|runs| runs.first())
+                .map_or_else(|| key.join(" "), |r| without_cell_size(&r.summary.case));
             let text: Vec<String> = hs
                 .iter()
                 .zip(&values)
@@ -83,13 +106,17 @@ pub fn refinement_table(m: &Matrix, page: &mut Page) {
             let order = if name.contains("speed") {
                 "-".into()
             } else {
+                plots[f].push((
+                    label.clone(),
+                    hs.iter().copied().zip(values.iter().copied()).collect(),
+                ));
                 observed_order(&hs, &values).map_or("-".into(), |p| format!("{p:.2}"))
             };
             rows.push((
                 format!("{label} {name}"),
                 vec![
                     Cell::Text(label),
-                    Cell::Text(name.into()),
+                    Cell::Text((*name).into()),
                     Cell::Text(text.join(", ")),
                     Cell::Num(order),
                 ],
@@ -97,7 +124,7 @@ pub fn refinement_table(m: &Matrix, page: &mut Page) {
         }
     }
     if rows.is_empty() {
-        return;
+        return Ok(());
     }
     page.h2("Refinement: observed order of convergence");
     page.p("Per case (every other axis fixed), the figure at each cell size h (median over an ensemble) and the observed order, the least-squares slope of ln(error) against ln(h) (1 and 2 are first and second order).");
@@ -105,4 +132,43 @@ pub fn refinement_table(m: &Matrix, page: &mut Page) {
         .map(String::from)
         .to_vec();
     page.table("refinement", &headers, &rows);
+    for (f, lines) in plots.into_iter().enumerate() {
+        let drawn = |pts: &Vec<(f64, f64)>| pts.iter().filter(|(_, e)| *e > 0.0).count() >= 2;
+        if !lines.iter().any(|(_, pts)| drawn(pts)) {
+            continue;
+        }
+        let name = FIGURES[f].0;
+        let fig = RefinementFigure {
+            title: format!("Refinement: {name}"),
+            y_label: name.into(),
+            lines,
+        };
+        page.figure(
+            &render(&fig, out, &format!("refinement_{f}"))?,
+            &format!("{name} against h, one line per case, with dashed reference slopes 1 and 2"),
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::without_cell_size;
+
+    #[test]
+    fn the_group_name_drops_only_the_cell_size() {
+        assert_eq!(
+            without_cell_size("h0.5cm_K1.5MPa_tait_base"),
+            "K1.5MPa_tait_base"
+        );
+        assert_eq!(
+            without_cell_size("svf_node_h0.6666666666666667cm"),
+            "svf_node"
+        );
+        assert_eq!(
+            without_cell_size("h2cm_mu0_noslip-floor_j_bar1.0"),
+            "mu0_noslip-floor_j_bar1.0"
+        );
+        assert_eq!(without_cell_size("hydro_heavy"), "hydro_heavy");
+    }
 }
