@@ -8,7 +8,7 @@
 
 use crate::checkpoint::{unseal, CheckpointError, Reader, Writer};
 use crate::drag::{self, Coupling, Drag, DragUpdate};
-use crate::pore_pressure::{PorePressure, TopLoad};
+use crate::pore_pressure::{PoreMode, PorePressure, TopLoad};
 use crate::{ConfigError, Energy, Material, Solver, StepError, Vec2};
 
 const MAGIC: &[u8; 8] = b"KICKMIX1";
@@ -142,7 +142,27 @@ impl Mixture {
             m.k = 0.0;
         }
         crate::timestep::refresh_eos_cache(&mut fluid.particles, &fluid.cfg.scene.materials);
-        self.pore = Some(PorePressure::new(&fluid.grid, pore_fluid));
+        self.pore = Some(PorePressure::new(
+            &fluid.grid,
+            pore_fluid,
+            PoreMode::Balance,
+        ));
+        self
+    }
+
+    /// The volume constraint n_s + n_f <= 1 (`PoreMode::Constraint`): where
+    /// grains and water overfill a node, a pressure K_f times the excess
+    /// pushes them apart; the fluid keeps its own EOS. The step stays below
+    /// cfl h / c with c^2 = (K_f / rho_f) (1 + 1 / n), n = 1 - n_s the
+    /// skeleton's porosity (both pressures on water that fills only its pores).
+    pub fn with_volume_constraint(mut self) -> Self {
+        let [solid, fluid] = &self.phases;
+        let scene = &fluid.cfg.scene;
+        let index = scene.material_index(&scene.bodies[0]).expect("validated");
+        let water = scene.materials[index].clone();
+        let porosity = (1.0 - solid.cfg.scene.bodies[0].fraction).max(1e-3);
+        self.pore_wave_speed = (water.k / water.rho0 * (1.0 + 1.0 / porosity)).sqrt();
+        self.pore = Some(PorePressure::new(&fluid.grid, water, PoreMode::Constraint));
         self
     }
 
@@ -154,7 +174,10 @@ impl Mixture {
 
     /// The pore pressure's EOS (the fluid's material as given), when on.
     pub fn pore_fluid(&self) -> Option<&Material> {
-        self.pore.as_ref().map(|p| &p.fluid)
+        self.pore
+            .as_ref()
+            .filter(|p| p.mode == PoreMode::Balance)
+            .map(|p| &p.fluid)
     }
 
     pub fn phase(&self, k: usize) -> &Solver {

@@ -29,10 +29,23 @@ use crate::grid::Grid;
 use crate::particles::Vec2;
 use crate::Solver;
 
+/// What the nodal pressure stands for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PoreMode {
+    /// The fluid's whole pressure, from each node's volume balance.
+    Balance,
+    /// The volume constraint n_s + n_f <= 1 only: where a node's grains
+    /// (reference volumes) and water (current volumes) overfill it, p_i =
+    /// K_f ((V_i^grains + V_i^water) / V_cap - 1), else 0; only at nodes the
+    /// grains reach. The fluid keeps its own EOS pressure beside it.
+    Constraint,
+}
+
 /// Grid arrays of the pore pressure (allocated once) and the pore fluid's EOS.
 #[derive(Clone, Debug)]
 pub struct PorePressure {
     pub(crate) fluid: Material,
+    pub(crate) mode: PoreMode,
     pressure: Vec<f64>,
     grains: Vec<f64>,
     water: Vec<f64>,
@@ -40,10 +53,11 @@ pub struct PorePressure {
 }
 
 impl PorePressure {
-    pub fn new(grid: &Grid, fluid: Material) -> Self {
+    pub fn new(grid: &Grid, fluid: Material, mode: PoreMode) -> Self {
         let n = grid.dims[0] * grid.dims[1];
         PorePressure {
             fluid,
+            mode,
             pressure: vec![0.0; n],
             grains: vec![0.0; n],
             water: vec![0.0; n],
@@ -59,9 +73,25 @@ impl PorePressure {
     /// drained gap inside a saturated body.
     fn nodal_pressure(&mut self, solid: &Solver, fluid: &Solver) {
         reference_volume(solid, &mut self.grains);
-        reference_volume(fluid, &mut self.water);
         let g = &fluid.grid;
         let capacity = g.h * g.h;
+        if self.mode == PoreMode::Constraint {
+            self.water.fill(0.0);
+            crate::drag::scatter_folded(&fluid.particles.vol, fluid, &mut self.water);
+            let k = self.fluid.k;
+            for n in 0..self.pressure.len() {
+                let (grains, water) = (self.grains[n], self.water[n]);
+                let over = (grains + water) / capacity - 1.0;
+                self.pressure[n] = if grains > 0.0 && water > 0.0 && g.is_active(n) {
+                    k * over.max(0.0)
+                } else {
+                    0.0
+                };
+            }
+            g.fill(&mut self.pressure);
+            return;
+        }
+        reference_volume(fluid, &mut self.water);
         for n in 0..self.pressure.len() {
             let w = self.water[n];
             self.pressure[n] = if w > 0.0 && g.is_active(n) {
@@ -103,8 +133,12 @@ impl PorePressure {
     }
 
     /// Each fluid particle's pressure set to the grid pressure (of the
-    /// step's start) at its current position, so that views and files show it.
+    /// step's start) at its current position, so that views and files show
+    /// it (the balance only: under the constraint the particles keep their own).
     pub(crate) fn show_on(&self, fluid: &mut Solver) {
+        if self.mode == PoreMode::Constraint {
+            return;
+        }
         match fluid.shape.width() {
             2 => interpolate::<2>(&self.pressure, fluid),
             3 => interpolate::<3>(&self.pressure, fluid),

@@ -719,6 +719,9 @@ pub(crate) fn build(case: &Case, spec: &MixtureSpec) -> Result<Mixture, String> 
     if spec.pore_pressure {
         mix = mix.with_pore_pressure();
     }
+    if spec.volume_constraint {
+        mix = mix.with_volume_constraint();
+    }
     if spec.top_traction > 0.0 {
         mix = mix.with_top_load(spec.top_traction, spec.traction_ramp);
     }

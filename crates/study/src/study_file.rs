@@ -125,6 +125,10 @@ struct DragTable {
     /// (grains incompressible; the fluid's material is the pore fluid).
     #[serde(default)]
     pore_pressure: bool,
+    /// The volume constraint n_s + n_f <= 1 per node (the fluid keeps its
+    /// own pressure; not with pore_pressure, which balances volumes already).
+    #[serde(default)]
+    volume_constraint: bool,
     /// A downward traction (Pa) on the solid's top surface.
     #[serde(default)]
     top_traction: f64,
@@ -139,6 +143,7 @@ pub struct MixtureSpec {
     pub drag: Drag,
     pub fixed_solid: bool,
     pub pore_pressure: bool,
+    pub volume_constraint: bool,
     pub top_traction: f64,
     pub traction_ramp: f64,
 }
@@ -436,10 +441,16 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
             ))
         }
     };
-    if t.model == DragModel::BangBangParticle && t.update != DragUpdate::Explicit {
+    if t.model.is_particle_based() && t.update != DragUpdate::Explicit {
         return Err((
             "drag.update".into(),
             "the particle-based model is explicit (allowed: explicit)".into(),
+        ));
+    }
+    if t.volume_constraint && t.pore_pressure {
+        return Err((
+            "drag.volume_constraint".into(),
+            "not with pore_pressure = true, whose volume balance holds the constraint already (allowed: one of them)".into(),
         ));
     }
     if let Some(n0) = t.kozeny_carman {
@@ -470,6 +481,7 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
         },
         fixed_solid: t.fixed_solid,
         pore_pressure: t.pore_pressure,
+        volume_constraint: t.volume_constraint,
         top_traction: t.top_traction,
         traction_ramp: t.traction_ramp,
     })
@@ -818,10 +830,18 @@ mod tests {
         assert_eq!(k, "drag.top_traction");
         let (k, m) = bad(&MIXTURE.replace(
             "coefficient = 1e5",
-            "coefficient = 1e5\nmodel = \"bang_bang_particle\"",
+            "coefficient = 1e5\npore_pressure = true\nvolume_constraint = true",
         ));
-        assert_eq!(k, "drag.update");
-        assert!(m.contains("explicit"), "{m}");
+        assert_eq!(k, "drag.volume_constraint");
+        assert!(m.contains("pore_pressure"), "{m}");
+        for model in ["bang_bang_particle", "svf_particle"] {
+            let (k, m) = bad(&MIXTURE.replace(
+                "coefficient = 1e5",
+                &format!("coefficient = 1e5\nmodel = \"{model}\""),
+            ));
+            assert_eq!(k, "drag.update");
+            assert!(m.contains("explicit"), "{m}");
+        }
         let (k, m) =
             bad(&MIXTURE.replace("coefficient = 1e5", "coefficient = 1e5\nupdate = \"rk4\""));
         assert_eq!(k, "drag.update");
