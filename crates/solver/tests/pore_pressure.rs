@@ -16,13 +16,7 @@ fn a_saturated_mixture_at_rest_stays_at_rest_with_zero_pore_pressure() {
         let full = [0.0, 0.0, 0.1, 0.1];
         let solid = common::phase(full, 2650.0, 0.6, method.clone(), |_| Vec2::zeros());
         let fluid = common::phase(full, 1000.0, 0.4, method.clone(), |_| Vec2::zeros());
-        let drag = Drag {
-            coefficient: 1e5,
-            kozeny_carman: None,
-            model: DragModel::BangBangNode,
-            update: DragUpdate::Exponential,
-        };
-        let mut mix = Mixture::new([solid, fluid], drag)
+        let mut mix = Mixture::new([solid, fluid], bang_bang())
             .unwrap()
             .with_pore_pressure();
         assert_eq!(

@@ -237,6 +237,33 @@ impl LinesFigure {
     }
 }
 
+/// A chart with log10 axes labelled by decade, its mesh drawn.
+fn log_log_chart<'a, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    [x, y]: [LogAxis; 2],
+    [x_label, y_label]: [&str; 2],
+) -> Res<ChartContext<'a, DB, Cartesian2d<LogAxis, LogAxis>>> {
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (SANS, 20))
+        .margin(12)
+        .x_label_area_size(46)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x, y)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .x_label_formatter(&decade_label)
+        .y_label_formatter(&decade_label)
+        .label_style((SANS, 14))
+        .axis_desc_style((SANS, 16))
+        .draw()
+        .map_err(err)?;
+    Ok(chart)
+}
+
 /// Cost against error, one point per case, with the Pareto front (lower is better on both).
 pub struct ParetoFigure {
     pub title: String,
@@ -300,23 +327,12 @@ impl Figure for ParetoFigure {
         let (y0, y1) = range(|p| p.1);
         let y_axis = LogAxis::new(y0, y1);
         let (y0, y1) = (y_axis.range().start, y_axis.range().end);
-        let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, (SANS, 20))
-            .margin(12)
-            .x_label_area_size(46)
-            .y_label_area_size(70)
-            .build_cartesian_2d(LogAxis::new(x0, x1), y_axis)
-            .map_err(err)?;
-        chart
-            .configure_mesh()
-            .x_desc(&self.x_label)
-            .y_desc(&self.y_label)
-            .x_label_formatter(&decade_label)
-            .y_label_formatter(&decade_label)
-            .label_style((SANS, 14))
-            .axis_desc_style((SANS, 16))
-            .draw()
-            .map_err(err)?;
+        let mut chart = log_log_chart(
+            root,
+            &self.title,
+            [LogAxis::new(x0, x1), y_axis],
+            [&self.x_label, &self.y_label],
+        )?;
         let blue = series_colour(0);
         chart
             .draw_series(
@@ -428,23 +444,12 @@ impl Figure for RefinementFigure {
         } else {
             (-3.0, -1.0, -3.0, 0.0)
         };
-        let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, (SANS, 20))
-            .margin(12)
-            .x_label_area_size(46)
-            .y_label_area_size(70)
-            .build_cartesian_2d(LogAxis::new(x0, x1), LogAxis::new(y0, y1))
-            .map_err(err)?;
-        chart
-            .configure_mesh()
-            .x_desc("cell size h (m)")
-            .y_desc(&self.y_label)
-            .x_label_formatter(&decade_label)
-            .y_label_formatter(&decade_label)
-            .label_style((SANS, 14))
-            .axis_desc_style((SANS, 16))
-            .draw()
-            .map_err(err)?;
+        let mut chart = log_log_chart(
+            root,
+            &self.title,
+            [LogAxis::new(x0, x1), LogAxis::new(y0, y1)],
+            ["cell size h (m)", &self.y_label],
+        )?;
         for &(slope, ends) in &refs {
             let style = RGBColor(120, 120, 120).stroke_width(if slope == 1.0 { 1 } else { 2 });
             chart
