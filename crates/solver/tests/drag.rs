@@ -71,6 +71,16 @@ fn uniform_mixture_of(
     Mixture::new([solid, fluid], drag).unwrap()
 }
 
+/// A drag of coefficient B without Kozeny-Carman.
+fn drag(coefficient: f64, model: DragModel, update: DragUpdate) -> Drag {
+    Drag {
+        coefficient,
+        kozeny_carman: None,
+        model,
+        update,
+    }
+}
+
 fn mean_velocity(s: &Solver) -> Vec2 {
     let v = s.view();
     let m: f64 = v.mass.iter().sum();
@@ -223,12 +233,7 @@ fn drag_is_action_against_reaction_at_every_node() {
             let fluid = common::phase([0.04, 0.03, 0.09, 0.08], RHO_F, N_F, method.clone(), |x| {
                 Vec2::new(0.2 + 0.1 * (50.0 * x.y).cos(), 0.1 * (40.0 * x.x).sin())
             });
-            let drag = Drag {
-                coefficient: drag_coefficient(),
-                kozeny_carman: None,
-                model,
-                update,
-            };
+            let drag = drag(drag_coefficient(), model, update);
             let mut mix = Mixture::new([solid, fluid], drag).unwrap();
             let p0 = mix.momentum();
             for _ in 0..200 {
@@ -293,12 +298,7 @@ fn the_particle_based_model_is_explicit_only() {
         for update in [DragUpdate::Implicit, DragUpdate::Exponential] {
             let solid = common::phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
             let fluid = common::phase(full, RHO_F, N_F, method.clone(), |_| Vec2::zeros());
-            let drag = Drag {
-                coefficient: drag_coefficient(),
-                kozeny_carman: None,
-                model,
-                update,
-            };
+            let drag = drag(drag_coefficient(), model, update);
             let e = Mixture::new([solid, fluid], drag).err().expect("refused");
             assert_eq!(e.key, "drag.update", "{e:?}");
         }
@@ -315,12 +315,7 @@ fn phases_over_different_grids_are_refused() {
     material.rho0 = RHO_F;
     let scene = common::box_scene([0.2, 0.1], [0.0, 0.0, 0.1, 0.1], material, 0.0);
     let b = common::solver(scene, method);
-    let drag = Drag {
-        coefficient: 1.0,
-        kozeny_carman: None,
-        model: DragModel::BangBangNode,
-        update: DragUpdate::Implicit,
-    };
+    let drag = drag(1.0, DragModel::BangBangNode, DragUpdate::Implicit);
     let err = Mixture::new([a, b], drag).err().unwrap();
     assert_eq!(err.key, "scene");
 }
@@ -336,12 +331,7 @@ fn volume_relaxation_is_refused_in_a_mixture() {
     };
     let a = common::phase([0.0, 0.0, 0.1, 0.1], RHO_S, N_S, method, |_| Vec2::zeros());
     let b = common::phase([0.0, 0.0, 0.1, 0.1], RHO_F, N_F, relaxed, |_| Vec2::zeros());
-    let drag = Drag {
-        coefficient: 1.0,
-        kozeny_carman: None,
-        model: DragModel::BangBangNode,
-        update: DragUpdate::Implicit,
-    };
+    let drag = drag(1.0, DragModel::BangBangNode, DragUpdate::Implicit);
     let err = Mixture::new([a, b], drag).err().unwrap();
     assert_eq!(err.key, "method.volume_relaxation_time");
 }
@@ -427,12 +417,11 @@ fn fluid_through_a_fixed_skeleton_reaches_darcy_flux() {
             let solid = common::phase(full, RHO_S, N_S, method.clone(), |_| Vec2::zeros());
             let fluid =
                 common::phase_under_gravity(full, RHO_F, N_F, method.clone(), |_| Vec2::zeros(), g);
-            let drag = Drag {
-                coefficient: Drag::from_permeability(mu, k, N_F),
-                kozeny_carman: None,
-                model: DragModel::BangBangNode,
+            let drag = drag(
+                Drag::from_permeability(mu, k, N_F),
+                DragModel::BangBangNode,
                 update,
-            };
+            );
             let mut mix = Mixture::new([solid, fluid], drag).unwrap().fix_solid();
             let x0: Vec<Vec2> = mix.phase(0).view().x.to_vec();
             // tau = n rho_f / B = 0.0025 s: 40 tau.
