@@ -12,13 +12,7 @@ use solver::{Mixture, SchemeKind, ShapeKind, TransferKind, Vec2};
 #[test]
 fn a_saturated_mixture_at_rest_stays_at_rest_with_zero_pore_pressure() {
     for shape in [ShapeKind::Linear, ShapeKind::Bspline2] {
-        let method = common::method(shape, TransferKind::Apic, SchemeKind::Usl);
-        let full = [0.0, 0.0, 0.1, 0.1];
-        let solid = common::phase(full, 2650.0, 0.6, method.clone(), |_| Vec2::zeros());
-        let fluid = common::phase(full, 1000.0, 0.4, method.clone(), |_| Vec2::zeros());
-        let mut mix = Mixture::new([solid, fluid], bang_bang())
-            .unwrap()
-            .with_pore_pressure();
+        let mut mix = saturated_at_rest(shape).with_pore_pressure();
         assert_eq!(
             mix.pore_fluid().unwrap().k,
             1e5,
@@ -28,8 +22,7 @@ fn a_saturated_mixture_at_rest_stays_at_rest_with_zero_pore_pressure() {
             mix.step().unwrap();
         }
         for k in 0..2 {
-            let v = mix.phase(k).view();
-            let speed = v.v.iter().map(|v| v.norm()).fold(0.0, f64::max);
+            let speed = max_speed(&mix, k);
             assert!(speed < 1e-12, "{shape:?} phase {k}: {speed}");
         }
         let p = mix
@@ -58,6 +51,20 @@ fn the_load_ramps_smoothly_from_zero_to_full() {
     }
 }
 
+/// Grains (n_s = 0.6) and water (n_f = 0.4) at rest filling the periodic box.
+fn saturated_at_rest(shape: ShapeKind) -> Mixture {
+    let method = common::method(shape, TransferKind::Apic, SchemeKind::Usl);
+    let full = [0.0, 0.0, 0.1, 0.1];
+    let solid = common::phase(full, 2650.0, 0.6, method.clone(), |_| Vec2::zeros());
+    let fluid = common::phase(full, 1000.0, 0.4, method, |_| Vec2::zeros());
+    Mixture::new([solid, fluid], bang_bang()).unwrap()
+}
+
+fn max_speed(mix: &Mixture, phase: usize) -> f64 {
+    let v = mix.phase(phase).view();
+    v.v.iter().map(|u| u.norm()).fold(0.0, f64::max)
+}
+
 fn bang_bang() -> Drag {
     Drag {
         coefficient: 1e5,
@@ -73,25 +80,13 @@ fn bang_bang() -> Drag {
 #[test]
 fn the_volume_constraint_leaves_a_just_saturated_mixture_at_rest() {
     for shape in [ShapeKind::Linear, ShapeKind::Bspline2] {
-        let method = common::method(shape, TransferKind::Apic, SchemeKind::Usl);
-        let full = [0.0, 0.0, 0.1, 0.1];
-        let solid = common::phase(full, 2650.0, 0.6, method.clone(), |_| Vec2::zeros());
-        let fluid = common::phase(full, 1000.0, 0.4, method.clone(), |_| Vec2::zeros());
-        let mut mix = Mixture::new([solid, fluid], bang_bang())
-            .unwrap()
-            .with_volume_constraint();
+        let mut mix = saturated_at_rest(shape).with_volume_constraint();
         assert!(mix.pore_fluid().is_none(), "the fluid keeps its own EOS");
         for _ in 0..100 {
             mix.step().unwrap();
         }
         for k in 0..2 {
-            let speed = mix
-                .phase(k)
-                .view()
-                .v
-                .iter()
-                .map(|v| v.norm())
-                .fold(0.0, f64::max);
+            let speed = max_speed(&mix, k);
             assert!(speed < 1e-12, "{shape:?} phase {k}: {speed}");
         }
     }
@@ -124,7 +119,7 @@ fn the_volume_constraint_drives_water_out_of_overfilled_grains() {
                 .map(|(x, u)| (x - Vec2::new(0.05, 0.05)).dot(u))
                 .sum();
         let momentum = v.v.iter().fold(Vec2::zeros(), |a, u| a + u);
-        let speed = v.v.iter().map(|u| u.norm()).fold(0.0, f64::max);
+        let speed = max_speed(&mix, 1);
         if constrained {
             assert!(
                 outward > 0.0 && speed > 1e-3,
