@@ -6,7 +6,7 @@ use crate::particles::{Mat2, Particles, Vec2};
 use crate::Solver;
 
 const MAGIC: &[u8; 8] = b"KICKSTAT";
-pub const VERSION: u32 = 4;
+pub const VERSION: u32 = 5;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum CheckpointError {
@@ -274,6 +274,8 @@ pub fn save(s: &Solver) -> Vec<u8> {
     w.u64(l.inverted);
     w.f64(l.mass_escaped);
     w.f64(l.mass_inverted);
+    w.u64(l.drained);
+    w.f64(l.mass_drained);
     w.bool(l.t_first.is_some());
     w.f64(l.t_first.unwrap_or(0.0));
     w.u64(s.step);
@@ -318,14 +320,22 @@ pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
     let n = r.u64()?;
     let escaped = r.u64()?;
     let inverted = r.u64()?;
-    if n.checked_add(escaped).and_then(|k| k.checked_add(inverted)) != Some(n_initial) {
+    let mass_escaped = r.f64()?;
+    let mass_inverted = r.f64()?;
+    let drained = r.u64()?;
+    let mass_drained = r.f64()?;
+    let accounted = [escaped, inverted, drained]
+        .into_iter()
+        .try_fold(n, |sum, k| sum.checked_add(k));
+    if accounted != Some(n_initial) {
         return Err(CheckpointError::ParticleCount {
-            stored: n.saturating_add(escaped).saturating_add(inverted),
+            stored: n
+                .saturating_add(escaped)
+                .saturating_add(inverted)
+                .saturating_add(drained),
             expected,
         });
     }
-    let mass_escaped = r.f64()?;
-    let mass_inverted = r.f64()?;
     let has_first = r.bool()?;
     let t_first = r.f64()?;
     s.losses = crate::Losses {
@@ -334,6 +344,8 @@ pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
         mass_escaped,
         mass_inverted,
         t_first: has_first.then_some(t_first),
+        drained,
+        mass_drained,
     };
     s.culled.clear();
     s.step = r.u64()?;

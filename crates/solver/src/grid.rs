@@ -94,25 +94,17 @@ pub struct Grid {
     roles: [Vec<NodeRole>; 2],
     /// No-slip walls, [axis][low side, high side].
     no_slip: [[bool; 2]; 2],
+    /// Open sides, [axis][low side, high side]: no wall there; the nodes on
+    /// and beyond the box edge are plain nodes and particles may leave.
+    pub open: [[bool; 2]; 2],
 }
 
 impl Grid {
     pub fn new(origin: Vec2, h: f64, cells: [usize; 2], periodic: [bool; 2]) -> Self {
         let dims = [cells[0] + 1 + 2 * PAD, cells[1] + 1 + 2 * PAD];
-        let roles: [Vec<NodeRole>; 2] = [0, 1].map(|a| {
-            (0..dims[a])
-                .map(|i| role(i as i64 - PAD as i64, cells[a] as i64, periodic[a]))
-                .collect()
-        });
+        let open = [[false; 2]; 2];
+        let (roles, ghosts) = roles_and_ghosts(dims, cells, periodic, open);
         let n = dims[0] * dims[1];
-        let ghosts = [0, 1].map(|a: usize| {
-            (0..dims[a])
-                .filter_map(|i| match roles[a][i] {
-                    NodeRole::Ghost { partner, .. } => Some((i, partner)),
-                    _ => None,
-                })
-                .collect()
-        });
         let row_words = dims[0].div_ceil(64);
         Grid {
             ghosts,
@@ -137,7 +129,17 @@ impl Grid {
             fill_ops: [dims[1], dims[0]].map(|d| Vec::with_capacity(2 * (PAD + 1) * d)),
             roles,
             no_slip: [[false; 2]; 2],
+            open,
         }
+    }
+
+    /// Opens the sides marked [axis][low, high] (none on a periodic axis):
+    /// their nodes fold and fill nothing, so the material there meets no
+    /// mirror and may flow out of the box.
+    pub fn with_open(mut self, open: [[bool; 2]; 2]) -> Self {
+        (self.roles, self.ghosts) = roles_and_ghosts(self.dims, self.cells, self.periodic, open);
+        self.open = open;
+        self
     }
 
     /// Makes the walls marked [axis][low, high] no-slip (zero tangential
@@ -356,6 +358,40 @@ impl BoundaryOp {
     }
 }
 
+type Roles = ([Vec<NodeRole>; 2], [Vec<(usize, usize)>; 2]);
+
+/// Each padded index's role per axis, and the (ghost, partner) pairs.
+fn roles_and_ghosts(
+    dims: [usize; 2],
+    cells: [usize; 2],
+    periodic: [bool; 2],
+    open: [[bool; 2]; 2],
+) -> Roles {
+    let roles: [Vec<NodeRole>; 2] = [0, 1].map(|a| {
+        (0..dims[a])
+            .map(|i| {
+                let i = i as i64 - PAD as i64;
+                let n = cells[a] as i64;
+                let side_open = !periodic[a] && ((i <= 0 && open[a][0]) || (i >= n && open[a][1]));
+                if side_open {
+                    NodeRole::Interior
+                } else {
+                    role(i, n, periodic[a])
+                }
+            })
+            .collect()
+    });
+    let ghosts = [0, 1].map(|a: usize| {
+        (0..dims[a])
+            .filter_map(|i| match roles[a][i] {
+                NodeRole::Ghost { partner, .. } => Some((i, partner)),
+                _ => None,
+            })
+            .collect()
+    });
+    (roles, ghosts)
+}
+
 fn role(i: i64, n: i64, periodic: bool) -> NodeRole {
     if periodic {
         if (0..n).contains(&i) {
@@ -456,5 +492,29 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// An open side has no wall and no ghosts: its nodes are plain nodes,
+    /// nothing is projected there, while the other walls keep their mirrors.
+    #[test]
+    fn an_open_side_is_neither_wall_nor_ghost() {
+        let (cells, top) = ([4, 3], PAD + 3);
+        let grid =
+            Grid::new(Vec2::zeros(), 0.1, cells, [false; 2]).with_open([[false; 2], [false, true]]);
+        for j in top..grid.dims[1] {
+            assert_eq!(grid.roles[1][j], NodeRole::Interior, "row {j}");
+        }
+        assert_eq!(grid.roles[1][PAD], NodeRole::Wall);
+        assert_eq!(grid.ghosts[1].len(), PAD, "the floor's ghosts only");
+        assert_eq!(grid.ghosts[0].len(), 2 * PAD);
+        let v = Vec2::new(1.0, 2.0);
+        assert_eq!(grid.project_walls(grid.index(PAD + 1, top), v), v);
+        assert_eq!(
+            grid.project_walls(grid.index(PAD + 1, PAD), v),
+            Vec2::new(1.0, 0.0)
+        );
+        let closed = Grid::new(Vec2::zeros(), 0.1, cells, [false; 2]);
+        assert_eq!(closed.roles[1][top], NodeRole::Wall);
+        assert_eq!(closed.ghosts[1].len(), 2 * PAD);
     }
 }

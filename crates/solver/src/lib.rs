@@ -183,7 +183,7 @@ impl Solver {
             .with_no_slip(s.no_slip_mask());
         let n = particles.len();
         let chunks = par::chunk_count(n);
-        let cull_rules = CullRules::of(s, cfg.method.j_update);
+        let cull_rules = CullRules::of(s, cfg.method.j_update, [[false; 2]; 2]);
         let mut solver = Solver {
             shape: Shape::new(cfg.method.shape, s.ppc),
             gravity: Vec2::new(0.0, -s.gravity),
@@ -358,6 +358,17 @@ impl Solver {
         if stage_cull::cull(ps, rules, self.time, &mut self.losses, &mut self.culled) > 0 {
             self.stencils.truncate(ps.len());
         }
+    }
+
+    /// Opens the sides marked [axis][low, high]: no wall there (the grid
+    /// mirrors nothing) and particles that cross are deleted as outflow.
+    pub(crate) fn open_sides(&mut self, open: [[bool; 2]; 2]) {
+        let grid = std::mem::replace(
+            &mut self.grid,
+            Grid::new(Vec2::zeros(), 1.0, [1, 1], [false; 2]),
+        );
+        self.grid = grid.with_open(open);
+        self.cull_rules = CullRules::of(&self.cfg.scene, self.cfg.method.j_update, open);
     }
 
     /// Particles deleted since t = 0 (`on_escape` / `on_inversion = "delete"`).

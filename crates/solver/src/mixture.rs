@@ -7,6 +7,7 @@
 //! run is a plain `Solver` and is untouched by this.
 
 use crate::checkpoint::{unseal, CheckpointError, Reader, Writer};
+use crate::config::Wall;
 use crate::drag::{self, Coupling, Drag, DragUpdate};
 use crate::pore_pressure::{PoreMode, PorePressure, TopLoad};
 use crate::{ConfigError, Energy, Material, Solver, StepError, Vec2};
@@ -164,6 +165,50 @@ impl Mixture {
         self.pore_wave_speed = (water.k / water.rho0 * (1.0 + 1.0 / porosity)).sqrt();
         self.pore = Some(PorePressure::new(&fluid.grid, water, PoreMode::Constraint));
         self
+    }
+
+    /// Drained walls (docs/physics.md section 6): the pore pressure is
+    /// `pressure` (Pa) on each given wall, and the wall is open to both
+    /// phases (no mirror; what crosses flows out and is counted as outflow).
+    /// Needs the pore pressure (`with_pore_pressure`) and a wall on a
+    /// non-periodic axis.
+    pub fn with_drained(mut self, walls: &[Wall], pressure: f64) -> Result<Self, ConfigError> {
+        let err = |message: String| ConfigError {
+            key: "drag.drained".into(),
+            message,
+        };
+        let Some(pore) = self.pore.as_mut().filter(|p| p.mode == PoreMode::Balance) else {
+            return Err(err(
+                "needs the pore pressure (drag.pore_pressure = true)".into()
+            ));
+        };
+        if !pressure.is_finite() {
+            return Err(ConfigError {
+                key: "drag.drained_pressure".into(),
+                message: format!("{pressure} is not finite"),
+            });
+        }
+        let scene = &self.phases[0].cfg.scene;
+        let mut open = [[false; 2]; 2];
+        for w in walls {
+            let (axis, side) = (w.axis(), usize::from(matches!(w, Wall::Right | Wall::Top)));
+            if scene.periodic[axis] {
+                return Err(err(format!(
+                    "{w:?} is on a periodic axis: there is no wall there"
+                )));
+            }
+            if scene.no_slip.contains(w) {
+                return Err(err(format!(
+                    "{w:?} is also in scene.no_slip (allowed: one of them)"
+                )));
+            }
+            open[axis][side] = true;
+            pore.drained[axis][side] = Some(pressure);
+        }
+        for s in &mut self.phases {
+            s.open_sides(open);
+        }
+        Ok(self)
     }
 
     /// A downward traction q (Pa) on the solid's top surface, ramped over `ramp` s.

@@ -25,7 +25,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::config::Material;
-use crate::grid::Grid;
+use crate::grid::{Grid, PAD};
 use crate::particles::Vec2;
 use crate::Solver;
 
@@ -50,6 +50,8 @@ pub struct PorePressure {
     grains: Vec<f64>,
     water: Vec<f64>,
     force: Vec<Vec2>,
+    /// Drained walls [axis][low, high]: the pore pressure prescribed there.
+    pub(crate) drained: [[Option<f64>; 2]; 2],
 }
 
 impl PorePressure {
@@ -62,6 +64,18 @@ impl PorePressure {
             grains: vec![0.0; n],
             water: vec![0.0; n],
             force: vec![Vec2::zeros(); n],
+            drained: [[None; 2]; 2],
+        }
+    }
+
+    /// The prescribed pressure on each drained wall row, and beyond it the
+    /// odd image about it, so that the field interpolates to it at the wall.
+    fn impose_drained(&mut self, g: &Grid) {
+        for (wall, pairs, p_wall) in drained_nodes(g, self.drained) {
+            self.pressure[wall] = p_wall;
+            for (ghost, partner) in pairs {
+                self.pressure[ghost] = 2.0 * p_wall - self.pressure[partner];
+            }
         }
     }
 
@@ -92,6 +106,8 @@ impl PorePressure {
             return;
         }
         reference_volume(fluid, &mut self.water);
+        fold_drained(&solid.grid, self.drained, &mut self.grains);
+        fold_drained(g, self.drained, &mut self.water);
         for n in 0..self.pressure.len() {
             let w = self.water[n];
             self.pressure[n] = if w > 0.0 && g.is_active(n) {
@@ -107,6 +123,7 @@ impl PorePressure {
             };
         }
         g.fill(&mut self.pressure);
+        self.impose_drained(g);
     }
 
     /// Adds each phase's pore-pressure force over `dt` to its v^{n+1} (phase
@@ -144,6 +161,55 @@ impl PorePressure {
             3 => interpolate::<3>(&self.pressure, fluid),
             _ => interpolate::<4>(&self.pressure, fluid),
         }
+    }
+}
+
+/// Every node of the drained wall rows: (wall node, its (ghost, partner)
+/// pairs outward, the prescribed pressure).
+fn drained_nodes(
+    g: &Grid,
+    drained: [[Option<f64>; 2]; 2],
+) -> impl Iterator<Item = (usize, [(usize, usize); PAD], f64)> + '_ {
+    (0..2).flat_map(move |axis| {
+        (0..2).flat_map(move |side| {
+            let wall = (PAD + side * g.cells[axis]) as i64;
+            let out = if side == 1 { 1 } else { -1 };
+            let p_wall = drained[axis][side];
+            let along = if p_wall.is_some() {
+                g.dims[1 - axis]
+            } else {
+                0
+            };
+            (0..along).map(move |k| {
+                let at = |i: i64| {
+                    if axis == 0 {
+                        g.index(i as usize, k)
+                    } else {
+                        g.index(k, i as usize)
+                    }
+                };
+                let pairs = std::array::from_fn(|d| {
+                    let d = d as i64 + 1;
+                    (at(wall + out * d), at(wall - out * d))
+                });
+                (at(wall), pairs, p_wall.unwrap_or(0.0))
+            })
+        })
+    })
+}
+
+/// Mirrors a nodal sum across the drained walls (images of the material
+/// inside stand for the drained reservoir beyond): ghosts fold onto their
+/// partners and the wall row doubles, as at a symmetry wall.
+/// Only where `g` (the phase's grid) is open: a wall's own fold mirrors already.
+fn fold_drained(g: &Grid, drained: [[Option<f64>; 2]; 2], values: &mut [f64]) {
+    let open: [[Option<f64>; 2]; 2] =
+        std::array::from_fn(|a| std::array::from_fn(|s| drained[a][s].filter(|_| g.open[a][s])));
+    for (wall, pairs, _) in drained_nodes(g, open) {
+        for (ghost, partner) in pairs {
+            values[partner] += values[ghost];
+        }
+        values[wall] *= 2.0;
     }
 }
 

@@ -2,6 +2,8 @@
 //! inverted when the scene says so (`on_escape` / `on_inversion =
 //! "delete"`, Uintah's behaviour), keeping id order, and counts them. Under
 //! "stop" nothing is deleted: the monitor sees the particle and stops the run.
+//! A particle past an open side of the box (a drained wall) has flowed out:
+//! it is always deleted and counted apart, as outflow, not as a loss.
 
 use crate::config::{JUpdate, OnLoss, Scene};
 use crate::particles::{Particles, Vec2};
@@ -15,6 +17,8 @@ pub enum CullReason {
     Escaped,
     /// J <= 0 or det F <= 0.
     Inverted,
+    /// Flowed out through an open side (a drained wall).
+    Drained,
 }
 
 /// A particle deleted at the last step, as it was when deleted.
@@ -34,11 +38,17 @@ pub struct Losses {
     pub inverted: u64,
     pub mass_escaped: f64,
     pub mass_inverted: f64,
-    /// Time of the first deletion (None while none).
+    /// Time of the first loss (None while none; outflow is not a loss).
     pub t_first: Option<f64>,
+    /// Outflow through open sides: not counted by `count` or `mass`.
+    #[serde(default)]
+    pub drained: u64,
+    #[serde(default)]
+    pub mass_drained: f64,
 }
 
 impl Losses {
+    /// Particles lost (escaped or inverted; outflow excluded).
     pub fn count(&self) -> u64 {
         self.escaped + self.inverted
     }
@@ -48,11 +58,14 @@ impl Losses {
     }
 }
 
-/// Which deletions are on for a scene (None when both are "stop").
+/// Which deletions are on for a scene (None when both are "stop" and no
+/// side is open).
 #[derive(Clone, Copy, Debug)]
 pub struct CullRules {
     escape: bool,
     inversion: bool,
+    /// Open sides [axis][low, high]: outflow.
+    open: [[bool; 2]; 2],
     /// det F is checked apart from J (the exp J update keeps J > 0).
     det_apart: bool,
     lo: Vec2,
@@ -61,13 +74,15 @@ pub struct CullRules {
 }
 
 impl CullRules {
-    pub fn of(scene: &Scene, j_update: JUpdate) -> Option<Self> {
+    pub fn of(scene: &Scene, j_update: JUpdate, open: [[bool; 2]; 2]) -> Option<Self> {
         let escape = scene.on_escape == OnLoss::Delete;
         let inversion = scene.on_inversion == OnLoss::Delete;
         let lo = Vec2::from(scene.origin);
-        (escape || inversion).then_some(CullRules {
+        let any_open = open.iter().flatten().any(|&o| o);
+        (escape || inversion || any_open).then_some(CullRules {
             escape,
             inversion,
+            open,
             det_apart: j_update == JUpdate::Exp,
             lo,
             hi: lo + Vec2::from(scene.size),
@@ -82,6 +97,12 @@ impl CullRules {
             return Some(CullReason::Inverted);
         }
         let x = ps.x[p];
+        let past_open = |k: usize| {
+            (self.open[k][0] && x[k] < self.lo[k]) || (self.open[k][1] && x[k] > self.hi[k])
+        };
+        if past_open(0) || past_open(1) {
+            return Some(CullReason::Drained);
+        }
         // A non-finite position is not an escape: the monitor stops the run on it.
         if self.escape
             && (0..2).any(|k| !self.periodic[k] && (x[k] < self.lo[k] || x[k] > self.hi[k]))
@@ -128,8 +149,14 @@ pub fn cull(
                 losses.inverted += 1;
                 losses.mass_inverted += c.mass;
             }
+            CullReason::Drained => {
+                losses.drained += 1;
+                losses.mass_drained += c.mass;
+            }
         }
     }
-    losses.t_first.get_or_insert(time);
+    if culled.iter().any(|c| c.reason != CullReason::Drained) {
+        losses.t_first.get_or_insert(time);
+    }
     deleted
 }

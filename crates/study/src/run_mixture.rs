@@ -725,11 +725,16 @@ pub(crate) fn build(case: &Case, spec: &MixtureSpec) -> Result<Mixture, String> 
     if spec.top_traction > 0.0 {
         mix = mix.with_top_load(spec.top_traction, spec.traction_ramp);
     }
+    if !spec.drained.is_empty() {
+        mix = mix
+            .with_drained(&spec.drained, spec.drained_pressure)
+            .map_err(|e| format!("setup: {e}"))?;
+    }
     Ok(mix)
 }
 
 pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<Simulated> {
-    let spec = case.mixture.expect("a mixture case");
+    let spec = case.mixture.clone().expect("a mixture case");
     let mut mix = match build(case, &spec) {
         Ok(m) => m,
         Err(reason) => return Ok(Simulated::failed(reason)),
@@ -926,6 +931,9 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
     let lost = |f: fn(&Metrics) -> u64| phases.iter().map(|p| f(&p.metrics)).sum::<u64>();
     metrics.particles_escaped = lost(|m| m.particles_escaped);
     metrics.particles_inverted = lost(|m| m.particles_inverted);
+    metrics.particles_drained = lost(|m| m.particles_drained);
+    let drained_mass: f64 = (0..2).map(|k| mix.phase(k).losses().mass_drained).sum();
+    metrics.mass_drained_fraction = drained_mass / initial_mass;
     let lost_mass: f64 = (0..2).map(|k| mix.phase(k).losses().mass()).sum();
     metrics.mass_lost_fraction = lost_mass / initial_mass;
     metrics.t_first_loss = phases
@@ -995,6 +1003,8 @@ fn fill_losses(m: &mut Metrics, s: &Solver, initial_mass: f64) {
     m.particles_inverted = losses.inverted;
     m.mass_lost_fraction = losses.mass() / initial_mass;
     m.t_first_loss = losses.t_first;
+    m.particles_drained = losses.drained;
+    m.mass_drained_fraction = losses.mass_drained / initial_mass;
 }
 
 /// `kick reproduce` of a mixture's event: the mixture and both monitors
@@ -1009,7 +1019,7 @@ pub(crate) fn replay(
     opts: &crate::reproduce::ReproduceOptions,
     out: &Path,
 ) -> std::io::Result<Result<crate::reproduce::Replay, String>> {
-    let spec = case.mixture.expect("a mixture case");
+    let spec = case.mixture.clone().expect("a mixture case");
     let mut mix = match build(case, &spec) {
         Ok(m) => m,
         Err(e) => return Ok(Err(e)),

@@ -8,7 +8,7 @@ use indexmap::IndexMap;
 use monitor::MonitorConfig;
 use serde::{Deserialize, Serialize};
 use solver::drag::{Drag, DragModel, DragUpdate};
-use solver::{Material, Method, Perturb, Phase, Scene, SolverConfig};
+use solver::{Material, Method, Perturb, Phase, Scene, SolverConfig, Wall};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use toml::{Table, Value};
@@ -135,10 +135,17 @@ struct DragTable {
     /// Seconds over which that traction ramps up from 0.
     #[serde(default)]
     traction_ramp: f64,
+    /// Drained walls (e.g. ["top"]): the pore pressure is `drained_pressure`
+    /// there and the wall is open (what crosses it flows out).
+    #[serde(default)]
+    drained: Vec<Wall>,
+    /// The pore pressure (Pa) on the drained walls.
+    #[serde(default)]
+    drained_pressure: f64,
 }
 
 /// A mixture case's interaction: the resolved `[drag]` table.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct MixtureSpec {
     pub drag: Drag,
     pub fixed_solid: bool,
@@ -146,6 +153,8 @@ pub struct MixtureSpec {
     pub volume_constraint: bool,
     pub top_traction: f64,
     pub traction_ramp: f64,
+    pub drained: Vec<Wall>,
+    pub drained_pressure: f64,
 }
 
 /// One expanded case of a study.
@@ -453,6 +462,35 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
             "not with pore_pressure = true, whose volume balance holds the constraint already (allowed: one of them)".into(),
         ));
     }
+    if !t.drained.is_empty() && !t.pore_pressure {
+        return Err((
+            "drag.drained".into(),
+            "a drained wall prescribes the pore pressure: it needs pore_pressure = true".into(),
+        ));
+    }
+    for w in &t.drained {
+        if solver.scene.periodic[w.axis()] {
+            return Err((
+                "drag.drained".into(),
+                format!("{w:?} is on a periodic axis (scene.periodic): there is no wall there"),
+            ));
+        }
+        if solver.scene.no_slip.contains(w) {
+            return Err((
+                "drag.drained".into(),
+                format!("{w:?} is also in scene.no_slip (allowed: one of them)"),
+            ));
+        }
+    }
+    if !t.drained_pressure.is_finite() {
+        return Err((
+            "drag.drained_pressure".into(),
+            format!(
+                "{} is out of range (allowed: finite, Pa)",
+                t.drained_pressure
+            ),
+        ));
+    }
     if let Some(n0) = t.kozeny_carman {
         if !(n0 > 0.0 && n0 < 1.0) {
             return Err((
@@ -484,6 +522,8 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
         volume_constraint: t.volume_constraint,
         top_traction: t.top_traction,
         traction_ramp: t.traction_ramp,
+        drained: t.drained.clone(),
+        drained_pressure: t.drained_pressure,
     })
 }
 
@@ -766,7 +806,7 @@ mod tests {
     #[test]
     fn a_drag_table_makes_a_mixture_split_by_phase() {
         let c = mixture_case(MIXTURE).unwrap();
-        let spec = c.mixture.expect("a mixture");
+        let spec = c.mixture.clone().expect("a mixture");
         assert_eq!(spec.drag.coefficient, 1e5);
         assert_eq!(spec.drag.update, DragUpdate::Implicit);
         assert!(!spec.fixed_solid);
@@ -846,6 +886,37 @@ mod tests {
             bad(&MIXTURE.replace("coefficient = 1e5", "coefficient = 1e5\nupdate = \"rk4\""));
         assert_eq!(k, "drag.update");
         assert!(m.contains("explicit | implicit | exponential"), "{m}");
+        // Drained walls: with the pore pressure, on a wall that exists, not also no-slip.
+        let walled = MIXTURE.replace("periodic = [true, true]", "periodic = [true, false]");
+        let (k, m) = bad(&walled.replace(
+            "coefficient = 1e5",
+            "coefficient = 1e5\ndrained = [\"top\"]",
+        ));
+        assert_eq!(k, "drag.drained");
+        assert!(m.contains("pore_pressure"), "{m}");
+        let (k, m) = bad(&walled.replace(
+            "coefficient = 1e5",
+            "coefficient = 1e5\npore_pressure = true\ndrained = [\"left\"]",
+        ));
+        assert_eq!(k, "drag.drained");
+        assert!(m.contains("periodic"), "{m}");
+        let (k, m) = bad(&walled
+            .replace("cell = 0.01", "cell = 0.01\nno_slip = [\"top\"]")
+            .replace(
+                "coefficient = 1e5",
+                "coefficient = 1e5\npore_pressure = true\ndrained = [\"top\"]",
+            ));
+        assert_eq!(k, "drag.drained");
+        assert!(m.contains("no_slip"), "{m}");
+        let drained = mixture_case(&walled.replace(
+            "coefficient = 1e5",
+            "coefficient = 1e5\npore_pressure = true\ndrained = [\"top\"]\ndrained_pressure = 200.0",
+        ))
+        .unwrap()
+        .mixture
+        .unwrap();
+        assert_eq!(drained.drained, vec![Wall::Top]);
+        assert_eq!(drained.drained_pressure, 200.0);
     }
 
     #[test]

@@ -91,6 +91,12 @@ pub struct Metrics {
     pub particles_inverted: u64,
     pub mass_lost_fraction: f64,
     pub t_first_loss: Option<f64>,
+    /// Outflow through drained walls (not a loss): particles and their
+    /// share of the initial mass.
+    #[serde(default)]
+    pub particles_drained: u64,
+    #[serde(default)]
+    pub mass_drained_fraction: f64,
     /// Mixtures (docs/physics.md section 6). In a uniform periodic mixture
     /// without gravity (the drag-decay scene): the largest |dv(t) - dv0
     /// exp(-t/tau)| over the run relative to |dv0|, dv the difference of the
