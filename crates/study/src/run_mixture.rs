@@ -311,8 +311,9 @@ struct TerzaghiCheck {
 const MODES: usize = 400;
 
 impl TerzaghiCheck {
-    /// Compared only for T >= this (after the ramp's waves).
-    const T_FROM: f64 = 0.1;
+    /// Compared only for T >= this: the issue's window ("after the initial
+    /// wave has passed"); the ramp's ringing is still in it.
+    const T_FROM: f64 = 0.05;
 
     fn new(scene: &Scene, spec: &MixtureSpec, mix: &Mixture) -> Option<Self> {
         let [solid, fluid] = Phase::ALL.map(|ph| scene.bodies.iter().find(|b| b.phase == Some(ph)));

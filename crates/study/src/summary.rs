@@ -133,7 +133,7 @@ pub struct Metrics {
     pub drag_layer_error: Option<f64>,
     /// Terzaghi's column (pore pressure on, a top traction, no gravity): the
     /// largest |p - p_exact| / p0 over rows of half a cell and the samples
-    /// with T >= 0.1 (after the load ramp's waves), and the largest |U -
+    /// with T >= 0.05 (the window), and the largest |U -
     /// U_exact| there; both series are in terzaghi.parquet.
     #[serde(default)]
     pub terzaghi_max_error_over_p0: Option<f64>,
