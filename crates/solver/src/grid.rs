@@ -136,10 +136,9 @@ impl Grid {
     /// Opens the sides marked [axis][low, high] (none on a periodic axis):
     /// their nodes fold and fill nothing, so the material there meets no
     /// mirror and may flow out of the box.
-    pub fn with_open(mut self, open: [[bool; 2]; 2]) -> Self {
+    pub fn set_open(&mut self, open: [[bool; 2]; 2]) {
         (self.roles, self.ghosts) = roles_and_ghosts(self.dims, self.cells, self.periodic, open);
         self.open = open;
-        self
     }
 
     /// Makes the walls marked [axis][low, high] no-slip (zero tangential
@@ -499,8 +498,8 @@ mod tests {
     #[test]
     fn an_open_side_is_neither_wall_nor_ghost() {
         let (cells, top) = ([4, 3], PAD + 3);
-        let grid =
-            Grid::new(Vec2::zeros(), 0.1, cells, [false; 2]).with_open([[false; 2], [false, true]]);
+        let mut grid = Grid::new(Vec2::zeros(), 0.1, cells, [false; 2]);
+        grid.set_open([[false; 2], [false, true]]);
         for j in top..grid.dims[1] {
             assert_eq!(grid.roles[1][j], NodeRole::Interior, "row {j}");
         }

@@ -363,11 +363,7 @@ impl Solver {
     /// Opens the sides marked [axis][low, high]: no wall there (the grid
     /// mirrors nothing) and particles that cross are deleted as outflow.
     pub(crate) fn open_sides(&mut self, open: [[bool; 2]; 2]) {
-        let grid = std::mem::replace(
-            &mut self.grid,
-            Grid::new(Vec2::zeros(), 1.0, [1, 1], [false; 2]),
-        );
-        self.grid = grid.with_open(open);
+        self.grid.set_open(open);
         self.cull_rules = CullRules::of(&self.cfg.scene, self.cfg.method.j_update, open);
     }
 
