@@ -351,17 +351,22 @@ impl Wall {
             Wall::Floor | Wall::Top => 1,
         }
     }
+
+    /// Flags per [axis][low side, high side] of the given walls.
+    pub fn mask(walls: &[Wall]) -> [[bool; 2]; 2] {
+        let mut mask = [[false; 2]; 2];
+        for w in walls {
+            let side = usize::from(matches!(w, Wall::Right | Wall::Top));
+            mask[w.axis()][side] = true;
+        }
+        mask
+    }
 }
 
 impl Scene {
     /// No-slip flags per [axis][low side, high side].
     pub fn no_slip_mask(&self) -> [[bool; 2]; 2] {
-        let mut mask = [[false; 2]; 2];
-        for w in &self.no_slip {
-            let side = usize::from(matches!(w, Wall::Right | Wall::Top));
-            mask[w.axis()][side] = true;
-        }
-        mask
+        Wall::mask(&self.no_slip)
     }
 
     /// docs/physics.md section 1: 0.8 x 0.6 box, 0.2 x 0.4 water column, h = 1 cm, 2 x 2 ppc.

@@ -10,7 +10,7 @@ use crate::checkpoint::{unseal, CheckpointError, Reader, Writer};
 use crate::config::Wall;
 use crate::drag::{self, Coupling, Drag, DragUpdate};
 use crate::pore_pressure::{PoreMode, PorePressure, TopLoad};
-use crate::{ConfigError, Energy, Material, Solver, StepError, Vec2};
+use crate::{ConfigError, Energy, Material, Scene, Solver, StepError, Vec2};
 
 const MAGIC: &[u8; 8] = b"KICKMIX1";
 
@@ -170,40 +170,21 @@ impl Mixture {
     /// Drained walls (docs/physics.md section 6): the pore pressure is
     /// `pressure` (Pa) on each given wall, and the wall is open to both
     /// phases (no mirror; what crosses flows out and is counted as outflow).
-    /// Needs the pore pressure (`with_pore_pressure`) and a wall on a
-    /// non-periodic axis.
+    /// Needs the pore pressure (`with_pore_pressure`); see `check_drained`.
     pub fn with_drained(mut self, walls: &[Wall], pressure: f64) -> Result<Self, ConfigError> {
-        let err = |message: String| ConfigError {
-            key: "drag.drained".into(),
-            message,
-        };
-        let Some(pore) = self.pore.as_mut().filter(|p| p.mode == PoreMode::Balance) else {
-            return Err(err(
-                "needs the pore pressure (drag.pore_pressure = true)".into()
-            ));
-        };
-        if !pressure.is_finite() {
-            return Err(ConfigError {
-                key: "drag.drained_pressure".into(),
-                message: format!("{pressure} is not finite"),
-            });
-        }
-        let scene = &self.phases[0].cfg.scene;
-        let mut open = [[false; 2]; 2];
-        for w in walls {
-            let (axis, side) = (w.axis(), usize::from(matches!(w, Wall::Right | Wall::Top)));
-            if scene.periodic[axis] {
-                return Err(err(format!(
-                    "{w:?} is on a periodic axis: there is no wall there"
-                )));
+        let balance = self.pore_fluid().is_some();
+        check_drained(&self.phases[0].cfg.scene, walls, pressure, balance)?;
+        let pore = self
+            .pore
+            .as_mut()
+            .expect("checked: the pore pressure is on");
+        let open = Wall::mask(walls);
+        for (axis, sides) in open.iter().enumerate() {
+            for (side, &is_open) in sides.iter().enumerate() {
+                if is_open {
+                    pore.drained[axis][side] = Some(pressure);
+                }
             }
-            if scene.no_slip.contains(w) {
-                return Err(err(format!(
-                    "{w:?} is also in scene.no_slip (allowed: one of them)"
-                )));
-            }
-            open[axis][side] = true;
-            pore.drained[axis][side] = Some(pressure);
         }
         for s in &mut self.phases {
             s.open_sides(open);
@@ -361,4 +342,49 @@ impl Mixture {
             })
             .fold(Vec2::zeros(), |a, b| a + b)
     }
+}
+
+/// Whether drained walls at `pressure` fit the scene: the pore pressure on
+/// (`pore_pressure`), each wall on a non-periodic axis and not also no-slip,
+/// a finite pressure. The study file asks the same before a run.
+pub fn check_drained(
+    scene: &Scene,
+    walls: &[Wall],
+    pressure: f64,
+    pore_pressure: bool,
+) -> Result<(), ConfigError> {
+    let err = |message: String| {
+        Err(ConfigError {
+            key: "drag.drained".into(),
+            message,
+        })
+    };
+    if walls.is_empty() {
+        return Ok(());
+    }
+    if !pore_pressure {
+        return err(
+            "a drained wall prescribes the pore pressure: it needs drag.pore_pressure = true"
+                .into(),
+        );
+    }
+    for w in walls {
+        if scene.periodic[w.axis()] {
+            return err(format!(
+                "{w:?} is on a periodic axis (scene.periodic): there is no wall there"
+            ));
+        }
+        if scene.no_slip.contains(w) {
+            return err(format!(
+                "{w:?} is also in scene.no_slip (allowed: one of them)"
+            ));
+        }
+    }
+    if !pressure.is_finite() {
+        return Err(ConfigError {
+            key: "drag.drained_pressure".into(),
+            message: format!("{pressure} is out of range (allowed: finite, Pa)"),
+        });
+    }
+    Ok(())
 }

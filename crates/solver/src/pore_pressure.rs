@@ -106,7 +106,7 @@ impl PorePressure {
             return;
         }
         reference_volume(fluid, &mut self.water);
-        fold_drained(&solid.grid, self.drained, &mut self.grains);
+        fold_drained(g, self.drained, &mut self.grains);
         fold_drained(g, self.drained, &mut self.water);
         for n in 0..self.pressure.len() {
             let w = self.water[n];
@@ -170,42 +170,35 @@ fn drained_nodes(
     g: &Grid,
     drained: [[Option<f64>; 2]; 2],
 ) -> impl Iterator<Item = (usize, [(usize, usize); PAD], f64)> + '_ {
-    (0..2).flat_map(move |axis| {
-        (0..2).flat_map(move |side| {
-            let wall = (PAD + side * g.cells[axis]) as i64;
-            let out = if side == 1 { 1 } else { -1 };
-            let p_wall = drained[axis][side];
-            let along = if p_wall.is_some() {
-                g.dims[1 - axis]
-            } else {
-                0
+    let sides = (0..2).flat_map(move |axis| {
+        (0..2).filter_map(move |side| drained[axis][side].map(|p| (axis, side, p)))
+    });
+    sides.flat_map(move |(axis, side, p_wall)| {
+        let wall = (PAD + side * g.cells[axis]) as i64;
+        let out = if side == 1 { 1 } else { -1 };
+        (0..g.dims[1 - axis]).map(move |k| {
+            let at = |i: i64| {
+                if axis == 0 {
+                    g.index(i as usize, k)
+                } else {
+                    g.index(k, i as usize)
+                }
             };
-            (0..along).map(move |k| {
-                let at = |i: i64| {
-                    if axis == 0 {
-                        g.index(i as usize, k)
-                    } else {
-                        g.index(k, i as usize)
-                    }
-                };
-                let pairs = std::array::from_fn(|d| {
-                    let d = d as i64 + 1;
-                    (at(wall + out * d), at(wall - out * d))
-                });
-                (at(wall), pairs, p_wall.unwrap_or(0.0))
-            })
+            let pairs = std::array::from_fn(|d| {
+                let d = d as i64 + 1;
+                (at(wall + out * d), at(wall - out * d))
+            });
+            (at(wall), pairs, p_wall)
         })
     })
 }
 
 /// Mirrors a nodal sum across the drained walls (images of the material
-/// inside stand for the drained reservoir beyond): ghosts fold onto their
-/// partners and the wall row doubles, as at a symmetry wall.
-/// Only where `g` (the phase's grid) is open: a wall's own fold mirrors already.
+/// inside stand for the drained reservoir beyond; the walls are open, so
+/// the grid's own fold left them alone): ghosts fold onto their partners
+/// and the wall row doubles, as at a symmetry wall.
 fn fold_drained(g: &Grid, drained: [[Option<f64>; 2]; 2], values: &mut [f64]) {
-    let open: [[Option<f64>; 2]; 2] =
-        std::array::from_fn(|a| std::array::from_fn(|s| drained[a][s].filter(|_| g.open[a][s])));
-    for (wall, pairs, _) in drained_nodes(g, open) {
+    for (wall, pairs, _) in drained_nodes(g, drained) {
         for (ghost, partner) in pairs {
             values[partner] += values[ghost];
         }

@@ -462,35 +462,13 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
             "not with pore_pressure = true, whose volume balance holds the constraint already (allowed: one of them)".into(),
         ));
     }
-    if !t.drained.is_empty() && !t.pore_pressure {
-        return Err((
-            "drag.drained".into(),
-            "a drained wall prescribes the pore pressure: it needs pore_pressure = true".into(),
-        ));
-    }
-    for w in &t.drained {
-        if solver.scene.periodic[w.axis()] {
-            return Err((
-                "drag.drained".into(),
-                format!("{w:?} is on a periodic axis (scene.periodic): there is no wall there"),
-            ));
-        }
-        if solver.scene.no_slip.contains(w) {
-            return Err((
-                "drag.drained".into(),
-                format!("{w:?} is also in scene.no_slip (allowed: one of them)"),
-            ));
-        }
-    }
-    if !t.drained_pressure.is_finite() {
-        return Err((
-            "drag.drained_pressure".into(),
-            format!(
-                "{} is out of range (allowed: finite, Pa)",
-                t.drained_pressure
-            ),
-        ));
-    }
+    solver::mixture::check_drained(
+        &solver.scene,
+        &t.drained,
+        t.drained_pressure,
+        t.pore_pressure,
+    )
+    .map_err(|e| (e.key, e.message))?;
     if let Some(n0) = t.kozeny_carman {
         if !(n0 > 0.0 && n0 < 1.0) {
             return Err((
