@@ -41,6 +41,12 @@ impl Hydrostatic {
     pub fn compute(&mut self, geom: &Geometry, x: &[Vec2], mass: &[f64]) {
         let nx = geom.cells[0];
         let strip = |xp: &Vec2| geom.cell_of(*xp).0;
+        if x.len() > self.order.len() {
+            // Particles entered through an inflow wall.
+            self.order.resize(x.len(), 0);
+            self.suffix.resize(x.len() + 1, 0.0);
+            self.reference.resize(x.len(), 0.0);
+        }
         self.start.fill(0);
         for xp in x {
             self.start[strip(xp) + 1] += 1;

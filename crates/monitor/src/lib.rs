@@ -457,11 +457,16 @@ impl Monitor {
     pub fn observe(&mut self, v: &StateView) -> &StepReport {
         let g = self.g_ref();
         let dt = v.dt.max(1e-300);
-        if v.id.len() != self.ids.len() {
-            // The solver deleted particles: keep the history of the others.
-            self.history.compact(&self.ids, v.id);
+        if v.id.len() != self.ids.len() || v.id.last() != self.ids.last() {
+            // The solver deleted particles, or some entered through an
+            // inflow wall: keep the history of the others.
+            self.history.compact(&self.ids, v.id, self.prev_time);
             self.ids.clear();
             self.ids.extend_from_slice(v.id);
+            let ids = v.id.last().map_or(0, |&id| id as usize + 1);
+            if ids > self.event_mark.len() {
+                self.event_mark.resize(ids, 0);
+            }
         }
         let scan = self.scan_particles(v, g, dt);
         self.prev_time = v.time;

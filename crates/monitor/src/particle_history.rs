@@ -105,11 +105,20 @@ impl ParticleHistory {
         }
     }
 
-    /// Keeps the entries of the particles still present: `old_ids` were the
-    /// ids per slot before, `new_ids` after deletions (both in id order).
-    pub fn compact(&mut self, old_ids: &[u32], new_ids: &[u32]) {
+    /// Keeps the entries of the particles still present and opens entries
+    /// for new ones: `old_ids` were the ids per slot before, `new_ids` after
+    /// deletions and appends (both in id order; an appended particle has a
+    /// larger id than any before it). A new particle (one that entered
+    /// through an inflow wall at `t`) starts active at `t` with no quiet
+    /// spell before it, as an already moving body does at t = 0: its entry
+    /// is not a burst out of calm.
+    pub fn compact(&mut self, old_ids: &[u32], new_ids: &[u32], t: f64) {
         let mut from = 0;
-        for (to, &id) in new_ids.iter().enumerate() {
+        let kept = new_ids
+            .iter()
+            .take_while(|&&id| old_ids.last().is_some_and(|&last| id <= last))
+            .count();
+        for (to, &id) in new_ids[..kept].iter().enumerate() {
             while old_ids[from] != id {
                 from += 1;
             }
@@ -124,14 +133,22 @@ impl ParticleHistory {
             from += 1;
         }
         let n = new_ids.len();
-        self.ke_recent.truncate(n);
-        self.last_active.truncate(n);
-        self.active_since.truncate(n);
-        self.quiet_before.truncate(n);
-        self.peak_rate.truncate(n);
-        self.peak_rate_t.truncate(n);
-        self.settled_peak.truncate(n);
-        self.settled_peak_t.truncate(n);
+        self.ke_recent.resize(kept, 0.0);
+        self.ke_recent.resize(n, 0.0);
+        self.last_active.resize(kept, NEVER);
+        self.last_active.resize(n, t);
+        self.active_since.resize(kept, NEVER);
+        self.active_since.resize(n, t);
+        self.quiet_before.resize(kept, 0.0);
+        self.quiet_before.resize(n, 0.0);
+        self.peak_rate.resize(kept, 0.0);
+        self.peak_rate.resize(n, 0.0);
+        self.peak_rate_t.resize(kept, NEVER);
+        self.peak_rate_t.resize(n, NEVER);
+        self.settled_peak.resize(kept, 0.0);
+        self.settled_peak.resize(n, 0.0);
+        self.settled_peak_t.resize(kept, NEVER);
+        self.settled_peak_t.resize(n, NEVER);
     }
 
     /// Every array, in checkpoint order.

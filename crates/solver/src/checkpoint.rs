@@ -6,7 +6,7 @@ use crate::particles::{Mat2, Particles, Vec2};
 use crate::Solver;
 
 const MAGIC: &[u8; 8] = b"KICKSTAT";
-pub const VERSION: u32 = 5;
+pub const VERSION: u32 = 6;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum CheckpointError {
@@ -276,6 +276,8 @@ pub fn save(s: &Solver) -> Vec<u8> {
     w.f64(l.mass_inverted);
     w.u64(l.drained);
     w.f64(l.mass_drained);
+    w.u64(l.injected);
+    w.f64(l.mass_injected);
     w.bool(l.t_first.is_some());
     w.f64(l.t_first.unwrap_or(0.0));
     w.u64(s.step);
@@ -324,10 +326,12 @@ pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
     let mass_inverted = r.f64()?;
     let drained = r.u64()?;
     let mass_drained = r.f64()?;
+    let injected = r.u64()?;
+    let mass_injected = r.f64()?;
     let accounted = [escaped, inverted, drained]
         .into_iter()
         .try_fold(n, |sum, k| sum.checked_add(k));
-    if accounted != Some(n_initial) {
+    if accounted != n_initial.checked_add(injected) {
         return Err(CheckpointError::ParticleCount {
             stored: n
                 .saturating_add(escaped)
@@ -346,6 +350,8 @@ pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
         t_first: has_first.then_some(t_first),
         drained,
         mass_drained,
+        injected,
+        mass_injected,
     };
     s.culled.clear();
     s.step = r.u64()?;

@@ -165,13 +165,19 @@ fn nodal_presence(s: &Solver, per_particle: &mut Vec<f64>, out: &mut [f64]) {
 /// sum_p N_ip q_p over a phase's particles on its active raw nodes, folded
 /// (a wall or periodic node then looks like an interior one).
 pub(crate) fn scatter_folded(q: &[f64], s: &Solver, out: &mut [f64]) {
+    scatter_raw(q, s, out);
+    s.grid.fold(out);
+}
+
+/// sum_p N_ip q_p over a phase's particles on its active raw nodes (zeroed
+/// first), not folded.
+pub(crate) fn scatter_raw(q: &[f64], s: &Solver, out: &mut [f64]) {
     let (st, shape, g) = (&s.stencils, &s.shape, &s.grid);
     match shape.width() {
         2 => scatter_scalar::<2>(q, st, shape, g, out),
         3 => scatter_scalar::<3>(q, st, shape, g, out),
         _ => scatter_scalar::<4>(q, st, shape, g, out),
     }
-    g.fold(out);
 }
 
 /// V_i = sum_p N_ip V_p on the raw nodes, folded, ghosts filled (particles

@@ -5,6 +5,7 @@
 //! sort, P2G, grid update, G2P, stress. The monitor sees the state only
 //! through [`StateView`].
 
+pub mod boundary_inflow;
 pub mod checkpoint;
 pub mod config;
 pub mod drag;
@@ -142,6 +143,8 @@ pub struct Solver {
     n_nonfinite: usize,
     /// Particle count at t = 0 (deleted particles included).
     n_initial: usize,
+    /// One past the largest id at t = 0: injected particles take the ids on from it.
+    id_base: u32,
     /// None unless `on_escape` or `on_inversion` is "delete".
     cull_rules: Option<CullRules>,
     losses: Losses,
@@ -209,6 +212,7 @@ impl Solver {
             n_outside: 0,
             n_nonfinite: 0,
             n_initial: n,
+            id_base: 0,
             cull_rules,
             losses: Losses::default(),
             culled: Vec::with_capacity(n),
@@ -246,6 +250,7 @@ impl Solver {
         self.dissipated = 0.0;
         // Particles deleted while relaxing to equilibrium are not losses of the run.
         self.n_initial = self.particles.len();
+        self.id_base = self.particles.id.iter().max().map_or(0, |&i| i + 1);
         self.losses = Losses::default();
         self.culled.clear();
         self.measure();
@@ -367,6 +372,53 @@ impl Solver {
         self.cull_rules = CullRules::of(&self.cfg.scene, self.cfg.method.j_update, open);
     }
 
+    /// Room for `extra` more particles, reserved at set-up so that an inflow
+    /// appends them without reallocating.
+    pub(crate) fn reserve_particles(&mut self, extra: usize) {
+        self.particles.reserve(extra);
+        self.stencils.reserve(extra);
+        self.culled.reserve(extra);
+        self.fit_scratch(self.particles.len() + extra);
+    }
+
+    /// Every per-particle scratch sized for at least `n` particles.
+    fn fit_scratch(&mut self, n: usize) {
+        if self.bins.order.len() < n {
+            self.bins.order.resize(n, 0);
+        }
+        let chunks = par::chunk_count(n);
+        if self.measure_partials.len() < chunks {
+            self.measure_partials
+                .resize(chunks, measure::Partial::default());
+            self.partials1.resize(chunks, [0.0; 1]);
+        }
+        self.volumetric.fit_particles(n);
+        self.xpic.fit_particles(n);
+        self.null_space.fit_particles(n);
+    }
+
+    /// Appends a particle that enters through an inflow wall: the next free
+    /// id, J = 1, no stress. It is counted as injected, and the energy it
+    /// brings from outside is booked as exchanged (like a load's work), so
+    /// that the budget does not read it as an injection.
+    pub(crate) fn inject(&mut self, x: Vec2, v: Vec2, mass: f64, vol0: f64, material: u16) {
+        let id = self.id_base + self.losses.injected as u32;
+        let ps = &mut self.particles;
+        ps.push(x, v, mass, vol0, material);
+        let p = ps.len() - 1;
+        ps.id[p] = id;
+        timestep::refresh_eos_of(ps, &self.cfg.scene.materials, p);
+        self.stencils.push(Stencil::default());
+        self.fit_scratch(self.particles.len());
+        self.losses.injected += 1;
+        self.losses.mass_injected += mass;
+        let floor = self.cfg.scene.origin[1];
+        let brought = 0.5 * mass * v.norm_squared()
+            + mass * self.cfg.scene.gravity * (x.y - floor)
+            + self.particles.stored_energy[p];
+        self.dissipated -= brought;
+    }
+
     /// Particles deleted since t = 0 (`on_escape` / `on_inversion = "delete"`).
     pub fn losses(&self) -> Losses {
         self.losses
@@ -472,6 +524,8 @@ impl Solver {
     /// Restores a state saved from a solver built from the same configuration.
     pub fn restore(&mut self, bytes: &[u8]) -> Result<(), CheckpointError> {
         checkpoint::load(self, bytes)?;
+        // An inflow may have left more particles than there were at t = 0.
+        self.fit_scratch(self.particles.len());
         timestep::refresh_eos_cache(&mut self.particles, &self.cfg.scene.materials);
         self.measure();
         Ok(())

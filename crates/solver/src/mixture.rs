@@ -6,13 +6,14 @@
 //! solid, phase 1 the fluid (its volume fraction is the porosity). A single-phase
 //! run is a plain `Solver` and is untouched by this.
 
+use crate::boundary_inflow::Inflow;
 use crate::checkpoint::{unseal, CheckpointError, Reader, Writer};
 use crate::config::Wall;
 use crate::drag::{self, Coupling, Drag, DragUpdate};
 use crate::pore_pressure::{PoreMode, PorePressure, TopLoad};
 use crate::{ConfigError, Energy, Material, Scene, Solver, StepError, Vec2};
 
-const MAGIC: &[u8; 8] = b"KICKMIX1";
+const MAGIC: &[u8; 8] = b"KICKMIX2";
 
 pub struct Mixture {
     phases: [Solver; 2],
@@ -28,6 +29,7 @@ pub struct Mixture {
     /// Longitudinal wave speed of the pore pressure (bounds the step).
     pore_wave_speed: f64,
     load: Option<TopLoad>,
+    inflow: Option<Inflow>,
 }
 
 impl Mixture {
@@ -92,6 +94,7 @@ impl Mixture {
             pore: None,
             pore_wave_speed: 0.0,
             load: None,
+            inflow: None,
             last: Coupling {
                 stable_dt: f64::INFINITY,
                 ..Coupling::default()
@@ -192,6 +195,36 @@ impl Mixture {
         Ok(self)
     }
 
+    /// Inflow walls (docs/physics.md section 6, `boundary_inflow.rs`): the
+    /// fluid enters through each at `velocity` (m/s, into the box), a row of
+    /// particles at a time; the wall is open to the fluid and a wall to the
+    /// solid. Needs the pore pressure; see `check_inflow`.
+    pub fn with_inflow(mut self, walls: &[Wall], velocity: f64) -> Result<Self, ConfigError> {
+        let balance = self.pore_fluid().is_some();
+        let drained = self.pore.as_ref().map_or([[false; 2]; 2], |p| {
+            p.drained.map(|sides| sides.map(|d| d.is_some()))
+        });
+        check_inflow(&self.phases[1].cfg.scene, walls, velocity, balance, drained)?;
+        if walls.is_empty() {
+            return Ok(self);
+        }
+        let fluid = &mut self.phases[1];
+        let inflow = Inflow::new(fluid, walls, velocity).ok_or_else(|| ConfigError {
+            key: "drag.inflow".into(),
+            message: "the fluid holds no particles to copy the inflow's from".into(),
+        })?;
+        let mut open = fluid.grid.open;
+        for (axis, sides) in inflow.mask().iter().enumerate() {
+            for (side, &on) in sides.iter().enumerate() {
+                open[axis][side] |= on;
+            }
+        }
+        fluid.open_sides(open);
+        fluid.reserve_particles(inflow.expected_entries(fluid));
+        self.inflow = Some(inflow);
+        Ok(self)
+    }
+
     /// A downward traction q (Pa) on the solid's top surface, ramped over `ramp` s.
     pub fn with_top_load(mut self, traction: f64, ramp: f64) -> Self {
         self.load = Some(TopLoad::new(&self.phases[0], traction, ramp));
@@ -255,14 +288,24 @@ impl Mixture {
             }
         }
         if let Some(pore) = self.pore.as_mut() {
-            let gained = pore.apply(a, b, dt, self.fixed_solid);
+            let gained = pore.apply(a, b, dt, self.fixed_solid, self.inflow.as_ref());
             a.dissipated -= gained[0];
             b.dissipated -= gained[1];
         }
         self.last = drag::couple(a, b, &self.drag, &mut self.scratch, dt, self.fixed_solid);
         self.drag_dissipated += self.last.dissipated;
+        if let Some(inflow) = self.inflow.as_mut() {
+            // The wall's work on the fluid is exchange, like the pore force's.
+            b.dissipated -= inflow.impose(b);
+        }
         a.finish_step();
         b.finish_step();
+        if let Some(inflow) = self.inflow.as_mut() {
+            if inflow.enter(b, dt) > 0 {
+                // The step's energies then count the rows that entered.
+                b.measure();
+            }
+        }
         if let Some(pore) = &self.pore {
             pore.show_on(b);
         }
@@ -311,6 +354,9 @@ impl Mixture {
         }
         w.f64(self.drag_dissipated);
         w.f64(self.last.stable_dt);
+        if let Some(inflow) = &self.inflow {
+            inflow.save(&mut w);
+        }
         w.seal()
     }
 
@@ -319,6 +365,9 @@ impl Mixture {
         let mut r = Reader(unseal(bytes, MAGIC)?);
         let (a, b) = (r.bytes()?, r.bytes()?);
         let (dissipated, stable_dt) = (r.f64()?, r.f64()?);
+        if let Some(inflow) = self.inflow.as_mut() {
+            inflow.load(&mut r)?;
+        }
         r.finish()?;
         self.phases[0].restore(a)?;
         self.phases[1].restore(b)?;
@@ -384,6 +433,61 @@ pub fn check_drained(
         return Err(ConfigError {
             key: "drag.drained_pressure".into(),
             message: format!("{pressure} is out of range (allowed: finite, Pa)"),
+        });
+    }
+    Ok(())
+}
+
+/// Whether inflow walls at `velocity` fit the scene: the pore pressure on
+/// (`pore_pressure`), each wall on a non-periodic axis, neither no-slip nor
+/// drained (`drained` [axis][low, high]), a finite velocity > 0. The study
+/// file asks the same before a run.
+pub fn check_inflow(
+    scene: &Scene,
+    walls: &[Wall],
+    velocity: f64,
+    pore_pressure: bool,
+    drained: [[bool; 2]; 2],
+) -> Result<(), ConfigError> {
+    let err = |message: String| {
+        Err(ConfigError {
+            key: "drag.inflow".into(),
+            message,
+        })
+    };
+    if walls.is_empty() {
+        return Ok(());
+    }
+    if !pore_pressure {
+        return err(
+            "an inflow wall's entering water takes the grid's pore pressure: it needs drag.pore_pressure = true"
+                .into(),
+        );
+    }
+    let inflow_walls = Wall::mask(walls);
+    for w in walls {
+        if scene.periodic[w.axis()] {
+            return err(format!(
+                "{w:?} is on a periodic axis (scene.periodic): there is no wall there"
+            ));
+        }
+        if scene.no_slip.contains(w) {
+            return err(format!(
+                "{w:?} is also in scene.no_slip (allowed: one of them)"
+            ));
+        }
+    }
+    for axis in 0..2 {
+        for side in 0..2 {
+            if inflow_walls[axis][side] && drained[axis][side] {
+                return err("a wall is both drained and an inflow (allowed: one of them)".into());
+            }
+        }
+    }
+    if !(velocity > 0.0 && velocity.is_finite()) {
+        return Err(ConfigError {
+            key: "drag.inflow_velocity".into(),
+            message: format!("{velocity} is out of range (allowed: finite, > 0 m/s into the box)"),
         });
     }
     Ok(())

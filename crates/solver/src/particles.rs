@@ -133,6 +133,28 @@ impl Particles {
         self.id.resize(n, 0);
     }
 
+    /// Room for `extra` more particles in every array (no reallocation
+    /// while appending that many).
+    pub fn reserve(&mut self, extra: usize) {
+        self.x.reserve(extra);
+        self.v.reserve(extra);
+        self.v_prev.reserve(extra);
+        self.accel.reserve(extra);
+        self.affine.reserve(extra);
+        self.f.reserve(extra);
+        self.j.reserve(extra);
+        self.mass.reserve(extra);
+        self.vol0.reserve(extra);
+        self.vol.reserve(extra);
+        self.stress.reserve(extra);
+        self.pressure.reserve(extra);
+        self.dev_rate.reserve(extra);
+        self.wave_speed.reserve(extra);
+        self.stored_energy.reserve(extra);
+        self.material.reserve(extra);
+        self.id.reserve(extra);
+    }
+
     /// Drops every particle from slot `n` on (capacity is kept).
     pub fn truncate(&mut self, n: usize) {
         self.x.truncate(n);

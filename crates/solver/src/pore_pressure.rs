@@ -24,6 +24,7 @@
 // The loops walk the weights and the stencil rows in step.
 #![allow(clippy::needless_range_loop)]
 
+use crate::boundary_inflow::{add_point, Inflow};
 use crate::config::Material;
 use crate::grid::{Grid, PAD};
 use crate::particles::Vec2;
@@ -52,6 +53,8 @@ pub struct PorePressure {
     force: Vec<Vec2>,
     /// Drained walls [axis][low, high]: the pore pressure prescribed there.
     pub(crate) drained: [[Option<f64>; 2]; 2],
+    /// Per lattice column along a drained wall: its outermost particle.
+    outer: Vec<f64>,
 }
 
 impl PorePressure {
@@ -65,6 +68,7 @@ impl PorePressure {
             water: vec![0.0; n],
             force: vec![Vec2::zeros(); n],
             drained: [[None; 2]; 2],
+            outer: Vec::with_capacity(grid.dims[0].max(grid.dims[1]) * 4),
         }
     }
 
@@ -85,7 +89,7 @@ impl PorePressure {
     /// short or spread thin, the pressure is cut at zero; inside, a wave's
     /// tension is kept, so that the water does not cavitate and open a
     /// drained gap inside a saturated body.
-    fn nodal_pressure(&mut self, solid: &Solver, fluid: &Solver) {
+    fn nodal_pressure(&mut self, solid: &Solver, fluid: &Solver, inflow: Option<&Inflow>) {
         reference_volume(solid, &mut self.grains);
         let g = &fluid.grid;
         let capacity = g.h * g.h;
@@ -105,9 +109,14 @@ impl PorePressure {
             g.fill(&mut self.pressure);
             return;
         }
-        reference_volume(fluid, &mut self.water);
+        self.water.fill(0.0);
+        crate::drag::scatter_raw(&fluid.particles.vol0, fluid, &mut self.water);
+        if let Some(inflow) = inflow {
+            inflow.add_outside_rows(fluid, &mut self.water);
+        }
+        self.add_drained_images(fluid);
+        g.fold(&mut self.water);
         fold_drained(g, self.drained, &mut self.grains);
-        fold_drained(g, self.drained, &mut self.water);
         for n in 0..self.pressure.len() {
             let w = self.water[n];
             self.pressure[n] = if w > 0.0 && g.is_active(n) {
@@ -124,18 +133,84 @@ impl PorePressure {
         }
         g.fill(&mut self.pressure);
         self.impose_drained(g);
+        if let Some(inflow) = inflow {
+            // Beyond an inflow wall: the odd image about the wall row's own
+            // pressure, which carries the gradient through the wall.
+            for (axis, sides) in inflow.mask().iter().enumerate() {
+                for side in (0..2).filter(|&side| sides[side]) {
+                    for (wall, pairs) in wall_rows(g, axis, side) {
+                        let p_wall = self.pressure[wall];
+                        for (ghost, partner) in pairs {
+                            self.pressure[ghost] = 2.0 * p_wall - self.pressure[partner];
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// The water's images beyond each drained wall, added to the raw nodal
+    /// sums: each lattice column (particles one spacing l apart along the
+    /// wall) is mirrored about the plane l/2 beyond its outermost particle,
+    /// which continues its rows past the wall. At rest that plane is the
+    /// wall; while water flows out it moves with the rows, so the nodes
+    /// beside the wall read as full whatever the phase of the outflow (a
+    /// mirror about the wall itself opens a gap of up to 2 l there).
+    fn add_drained_images(&mut self, fluid: &Solver) {
+        let g = &fluid.grid;
+        let scene = &fluid.cfg.scene;
+        let l = g.h / scene.ppc as f64;
+        let reach = PAD as f64 * g.h + l;
+        let ps = &fluid.particles;
+        let half = fluid.shape.half_widths(&crate::particles::Mat2::identity());
+        for axis in 0..2 {
+            for side in 0..2 {
+                if self.drained[axis][side].is_none() {
+                    continue;
+                }
+                let along = 1 - axis;
+                let columns = (scene.size[along] / l).round() as usize;
+                let out_sign = if side == 1 { 1.0 } else { -1.0 };
+                let wall = scene.origin[axis] + side as f64 * scene.size[axis];
+                let column = |x: &Vec2| {
+                    (((x[along] - scene.origin[along]) / l).floor().max(0.0) as usize)
+                        .min(columns - 1)
+                };
+                self.outer.clear();
+                self.outer.resize(columns, f64::NEG_INFINITY);
+                for x in &ps.x {
+                    let c = column(x);
+                    self.outer[c] = self.outer[c].max(out_sign * x[axis]);
+                }
+                for (x, &v0) in ps.x.iter().zip(&ps.vol0) {
+                    if (wall - x[axis]).abs() > reach {
+                        continue;
+                    }
+                    let plane = out_sign * self.outer[column(x)] + out_sign * 0.5 * l;
+                    let mut image = *x;
+                    image[axis] = 2.0 * plane - x[axis];
+                    match fluid.shape.width() {
+                        2 => add_point::<2>(g, &fluid.shape, half, image, v0, &mut self.water),
+                        3 => add_point::<3>(g, &fluid.shape, half, image, v0, &mut self.water),
+                        _ => add_point::<4>(g, &fluid.shape, half, image, v0, &mut self.water),
+                    }
+                }
+            }
+        }
     }
 
     /// Adds each phase's pore-pressure force over `dt` to its v^{n+1} (phase
-    /// a held when `fixed_a`); returns the kinetic energy each phase gained.
+    /// a held when `fixed_a`; the rows still outside an inflow wall counted
+    /// in the balance); returns the kinetic energy each phase gained.
     pub(crate) fn apply(
         &mut self,
         a: &mut Solver,
         b: &mut Solver,
         dt: f64,
         fixed_a: bool,
+        inflow: Option<&Inflow>,
     ) -> [f64; 2] {
-        self.nodal_pressure(a, b);
+        self.nodal_pressure(a, b, inflow);
         let mut gained = [0.0; 2];
         for (k, s) in [a, b].into_iter().enumerate() {
             if k == 0 && fixed_a {
@@ -174,29 +249,40 @@ fn drained_nodes(
         (0..2).filter_map(move |side| drained[axis][side].map(|p| (axis, side, p)))
     });
     sides.flat_map(move |(axis, side, p_wall)| {
-        let wall = (PAD + side * g.cells[axis]) as i64;
-        let out = if side == 1 { 1 } else { -1 };
-        (0..g.dims[1 - axis]).map(move |k| {
-            let at = |i: i64| {
-                if axis == 0 {
-                    g.index(i as usize, k)
-                } else {
-                    g.index(k, i as usize)
-                }
-            };
-            let pairs = std::array::from_fn(|d| {
-                let d = d as i64 + 1;
-                (at(wall + out * d), at(wall - out * d))
-            });
-            (at(wall), pairs, p_wall)
-        })
+        wall_rows(g, axis, side).map(move |(wall, pairs)| (wall, pairs, p_wall))
     })
 }
 
-/// Mirrors a nodal sum across the drained walls (images of the material
-/// inside stand for the drained reservoir beyond; the walls are open, so
-/// the grid's own fold left them alone): ghosts fold onto their partners
-/// and the wall row doubles, as at a symmetry wall.
+/// Every node of the wall row normal to `axis` on `side` (0 low, 1 high),
+/// with its (ghost, partner) pairs outward: the nodes d beyond the wall and
+/// d inside it, d = 1..PAD.
+fn wall_rows(
+    g: &Grid,
+    axis: usize,
+    side: usize,
+) -> impl Iterator<Item = (usize, [(usize, usize); PAD])> + '_ {
+    let wall = (PAD + side * g.cells[axis]) as i64;
+    let out = if side == 1 { 1 } else { -1 };
+    (0..g.dims[1 - axis]).map(move |k| {
+        let at = |i: i64| {
+            if axis == 0 {
+                g.index(i as usize, k)
+            } else {
+                g.index(k, i as usize)
+            }
+        };
+        let pairs = std::array::from_fn(|d| {
+            let d = d as i64 + 1;
+            (at(wall + out * d), at(wall - out * d))
+        });
+        (at(wall), pairs)
+    })
+}
+
+/// Mirrors a nodal sum across the drained walls (images of the grains
+/// inside stand for the skeleton beyond; the walls are open, so the grid's
+/// own fold left them alone): ghosts fold onto their partners and the wall
+/// row doubles, as at a symmetry wall.
 fn fold_drained(g: &Grid, drained: [[Option<f64>; 2]; 2], values: &mut [f64]) {
     for (wall, pairs, _) in drained_nodes(g, drained) {
         for (ghost, partner) in pairs {

@@ -57,6 +57,14 @@ impl Scratch {
             last_iterations: 0,
         }
     }
+
+    /// Per-particle room for `n` particles (an inflow appends them); a
+    /// scratch not in use (empty) stays empty.
+    pub(crate) fn fit_particles(&mut self, n: usize) {
+        if !self.at_particles.is_empty() && self.at_particles.len() < n {
+            self.at_particles.resize(n, Vec2::zeros());
+        }
+    }
 }
 
 /// out_i = (M_C field)_i = sum_p m_p N_ip sum_j N_jp field_j, through the

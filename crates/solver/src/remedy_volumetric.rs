@@ -65,6 +65,18 @@ impl Scratch {
             ratio: vec![0.0; particles],
         }
     }
+
+    /// Per-particle room for `n` particles (an inflow appends them); a
+    /// scratch not in use (empty) stays empty.
+    pub(crate) fn fit_particles(&mut self, n: usize) {
+        if self.averaged.is_empty() || self.averaged.len() >= n {
+            return;
+        }
+        self.averaged.resize(n, 0.0);
+        self.own_j.resize(n, 0.0);
+        self.own_f.resize(n, Mat2::zeros());
+        self.ratio.resize(n, 0.0);
+    }
 }
 
 fn cell_of(grid: &Grid, x: crate::Vec2) -> usize {

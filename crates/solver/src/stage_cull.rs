@@ -45,6 +45,11 @@ pub struct Losses {
     pub drained: u64,
     #[serde(default)]
     pub mass_drained: f64,
+    /// Inflow: particles appended through inflow walls (not losses either).
+    #[serde(default)]
+    pub injected: u64,
+    #[serde(default)]
+    pub mass_injected: f64,
 }
 
 impl Losses {

@@ -14,22 +14,27 @@ pub fn max_signal_speed(particles: &Particles) -> f64 {
 /// Recomputes the cached c(J) and V0 U(J) of every particle (after seeding or a restore).
 pub fn refresh_eos_cache(particles: &mut Particles, materials: &[Material]) {
     for p in 0..particles.len() {
-        let m = &materials[particles.material[p] as usize];
-        let j = particles.j[p];
-        let state = m.eos(j);
-        particles.wave_speed[p] = m.wave_speed_of(&state, j);
-        particles.stored_energy[p] = particles.vol0[p] * state.energy;
-        // The stress itself is the stress stage's (restored, or zero at seeding).
-        let mut unused = crate::particles::Mat2::zeros();
-        crate::solid_neo_hookean::add_to(
-            m,
-            &particles.f[p],
-            particles.vol0[p],
-            &mut unused,
-            &mut particles.wave_speed[p],
-            &mut particles.stored_energy[p],
-        );
+        refresh_eos_of(particles, materials, p);
     }
+}
+
+/// The cached c(J) and V0 U(J) of particle `p` (also for one just injected).
+pub fn refresh_eos_of(particles: &mut Particles, materials: &[Material], p: usize) {
+    let m = &materials[particles.material[p] as usize];
+    let j = particles.j[p];
+    let state = m.eos(j);
+    particles.wave_speed[p] = m.wave_speed_of(&state, j);
+    particles.stored_energy[p] = particles.vol0[p] * state.energy;
+    // The stress itself is the stress stage's (restored, or zero at seeding).
+    let mut unused = crate::particles::Mat2::zeros();
+    crate::solid_neo_hookean::add_to(
+        m,
+        &particles.f[p],
+        particles.vol0[p],
+        &mut unused,
+        &mut particles.wave_speed[p],
+        &mut particles.stored_energy[p],
+    );
 }
 
 pub fn cfl_step(cfl: f64, h: f64, signal_speed: f64) -> f64 {

@@ -34,6 +34,14 @@ impl Scratch {
             at_particles: vec![Vec2::zeros(); particles],
         }
     }
+
+    /// Per-particle room for `n` particles (an inflow appends them); a
+    /// scratch not in use (empty) stays empty.
+    pub(crate) fn fit_particles(&mut self, n: usize) {
+        if !self.at_particles.is_empty() && self.at_particles.len() < n {
+            self.at_particles.resize(n, Vec2::zeros());
+        }
+    }
 }
 
 /// field_i = sum_p m_p N_ip u_p / m_i (folded like momentum, ghosts refilled).

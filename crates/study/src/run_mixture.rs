@@ -731,6 +731,11 @@ pub(crate) fn build(case: &Case, spec: &MixtureSpec) -> Result<Mixture, String> 
             .with_drained(&spec.drained, spec.drained_pressure)
             .map_err(|e| format!("setup: {e}"))?;
     }
+    if !spec.inflow.is_empty() {
+        mix = mix
+            .with_inflow(&spec.inflow, spec.inflow_velocity)
+            .map_err(|e| format!("setup: {e}"))?;
+    }
     Ok(mix)
 }
 
@@ -935,6 +940,9 @@ pub(crate) fn simulate(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::R
     metrics.particles_drained = lost(|m| m.particles_drained);
     let drained_mass: f64 = (0..2).map(|k| mix.phase(k).losses().mass_drained).sum();
     metrics.mass_drained_fraction = drained_mass / initial_mass;
+    metrics.particles_injected = lost(|m| m.particles_injected);
+    let injected_mass: f64 = (0..2).map(|k| mix.phase(k).losses().mass_injected).sum();
+    metrics.mass_injected_fraction = injected_mass / initial_mass;
     let lost_mass: f64 = (0..2).map(|k| mix.phase(k).losses().mass()).sum();
     metrics.mass_lost_fraction = lost_mass / initial_mass;
     metrics.t_first_loss = phases
@@ -1006,6 +1014,8 @@ fn fill_losses(m: &mut Metrics, s: &Solver, initial_mass: f64) {
     m.t_first_loss = losses.t_first;
     m.particles_drained = losses.drained;
     m.mass_drained_fraction = losses.mass_drained / initial_mass;
+    m.particles_injected = losses.injected;
+    m.mass_injected_fraction = losses.mass_injected / initial_mass;
 }
 
 /// `kick reproduce` of a mixture's event: the mixture and both monitors

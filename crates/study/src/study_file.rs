@@ -142,6 +142,13 @@ struct DragTable {
     /// The pore pressure (Pa) on the drained walls.
     #[serde(default)]
     drained_pressure: f64,
+    /// Inflow walls (e.g. ["floor"]): the water enters through them at
+    /// `inflow_velocity`; open to the water, a wall to the grains.
+    #[serde(default)]
+    inflow: Vec<Wall>,
+    /// The water's speed into the box (m/s) through the inflow walls.
+    #[serde(default)]
+    inflow_velocity: f64,
 }
 
 /// A mixture case's interaction: the resolved `[drag]` table.
@@ -155,6 +162,8 @@ pub struct MixtureSpec {
     pub traction_ramp: f64,
     pub drained: Vec<Wall>,
     pub drained_pressure: f64,
+    pub inflow: Vec<Wall>,
+    pub inflow_velocity: f64,
 }
 
 /// One expanded case of a study.
@@ -469,6 +478,14 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
         t.pore_pressure,
     )
     .map_err(|e| (e.key, e.message))?;
+    solver::mixture::check_inflow(
+        &solver.scene,
+        &t.inflow,
+        t.inflow_velocity,
+        t.pore_pressure,
+        Wall::mask(&t.drained),
+    )
+    .map_err(|e| (e.key, e.message))?;
     if let Some(n0) = t.kozeny_carman {
         if !(n0 > 0.0 && n0 < 1.0) {
             return Err((
@@ -502,6 +519,8 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
         traction_ramp: t.traction_ramp,
         drained: t.drained.clone(),
         drained_pressure: t.drained_pressure,
+        inflow: t.inflow.clone(),
+        inflow_velocity: t.inflow_velocity,
     })
 }
 
@@ -895,6 +914,34 @@ mod tests {
         .unwrap();
         assert_eq!(drained.drained, vec![Wall::Top]);
         assert_eq!(drained.drained_pressure, 200.0);
+        // Inflow walls: with the pore pressure, a speed > 0, not also drained.
+        let inflow =
+            |keys: &str| walled.replace("coefficient = 1e5", &format!("coefficient = 1e5\n{keys}"));
+        for (keys, key, says) in [
+            ("inflow = [\"floor\"]\ninflow_velocity = 0.1", "drag.inflow", "pore_pressure"),
+            (
+                "pore_pressure = true\ninflow = [\"floor\"]\ninflow_velocity = 0.0",
+                "drag.inflow_velocity",
+                "> 0",
+            ),
+            (
+                "pore_pressure = true\ndrained = [\"floor\"]\ninflow = [\"floor\"]\ninflow_velocity = 0.1",
+                "drag.inflow",
+                "both drained and an inflow",
+            ),
+        ] {
+            let (k, m) = bad(&inflow(keys));
+            assert_eq!(k, key, "{keys}: {m}");
+            assert!(m.contains(says), "{m}");
+        }
+        let fed = mixture_case(&inflow(
+            "pore_pressure = true\ndrained = [\"top\"]\ninflow = [\"floor\"]\ninflow_velocity = 0.1",
+        ))
+        .unwrap()
+        .mixture
+        .unwrap();
+        assert_eq!(fed.inflow, vec![Wall::Floor]);
+        assert_eq!(fed.inflow_velocity, 0.1);
     }
 
     #[test]

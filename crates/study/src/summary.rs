@@ -97,6 +97,12 @@ pub struct Metrics {
     pub particles_drained: u64,
     #[serde(default)]
     pub mass_drained_fraction: f64,
+    /// Inflow through inflow walls: particles that entered and their mass
+    /// as a share of the initial mass.
+    #[serde(default)]
+    pub particles_injected: u64,
+    #[serde(default)]
+    pub mass_injected_fraction: f64,
     /// Mixtures (docs/physics.md section 6). In a uniform periodic mixture
     /// without gravity (the drag-decay scene): the largest |dv(t) - dv0
     /// exp(-t/tau)| over the run relative to |dv0|, dv the difference of the
