@@ -402,34 +402,14 @@ pub fn check_drained(
     pressure: f64,
     pore_pressure: bool,
 ) -> Result<(), ConfigError> {
-    let err = |message: String| {
-        Err(ConfigError {
-            key: "drag.drained".into(),
-            message,
-        })
-    };
-    if walls.is_empty() {
-        return Ok(());
-    }
-    if !pore_pressure {
-        return err(
-            "a drained wall prescribes the pore pressure: it needs drag.pore_pressure = true"
-                .into(),
-        );
-    }
-    for w in walls {
-        if scene.periodic[w.axis()] {
-            return err(format!(
-                "{w:?} is on a periodic axis (scene.periodic): there is no wall there"
-            ));
-        }
-        if scene.no_slip.contains(w) {
-            return err(format!(
-                "{w:?} is also in scene.no_slip (allowed: one of them)"
-            ));
-        }
-    }
-    if !pressure.is_finite() {
+    check_walls(
+        "drag.drained",
+        "a drained wall prescribes the pore pressure",
+        scene,
+        walls,
+        pore_pressure,
+    )?;
+    if !walls.is_empty() && !pressure.is_finite() {
         return Err(ConfigError {
             key: "drag.drained_pressure".into(),
             message: format!("{pressure} is out of range (allowed: finite, Pa)"),
@@ -449,9 +429,45 @@ pub fn check_inflow(
     pore_pressure: bool,
     drained: [[bool; 2]; 2],
 ) -> Result<(), ConfigError> {
+    check_walls(
+        "drag.inflow",
+        "an inflow wall's entering water takes the grid's pore pressure",
+        scene,
+        walls,
+        pore_pressure,
+    )?;
+    if walls.is_empty() {
+        return Ok(());
+    }
+    let inflow = Wall::mask(walls);
+    if (0..2).any(|axis| (0..2).any(|side| inflow[axis][side] && drained[axis][side])) {
+        return Err(ConfigError {
+            key: "drag.inflow".into(),
+            message: "a wall is both drained and an inflow (allowed: one of them)".into(),
+        });
+    }
+    if !(velocity > 0.0 && velocity.is_finite()) {
+        return Err(ConfigError {
+            key: "drag.inflow_velocity".into(),
+            message: format!("{velocity} is out of range (allowed: finite, > 0 m/s into the box)"),
+        });
+    }
+    Ok(())
+}
+
+/// What drained and inflow walls both need: the pore pressure on (`why`
+/// says what for), each wall on a non-periodic axis and not also no-slip;
+/// refused under `key`.
+fn check_walls(
+    key: &str,
+    why: &str,
+    scene: &Scene,
+    walls: &[Wall],
+    pore_pressure: bool,
+) -> Result<(), ConfigError> {
     let err = |message: String| {
         Err(ConfigError {
-            key: "drag.inflow".into(),
+            key: key.into(),
             message,
         })
     };
@@ -459,12 +475,8 @@ pub fn check_inflow(
         return Ok(());
     }
     if !pore_pressure {
-        return err(
-            "an inflow wall's entering water takes the grid's pore pressure: it needs drag.pore_pressure = true"
-                .into(),
-        );
+        return err(format!("{why}: it needs drag.pore_pressure = true"));
     }
-    let inflow_walls = Wall::mask(walls);
     for w in walls {
         if scene.periodic[w.axis()] {
             return err(format!(
@@ -476,19 +488,6 @@ pub fn check_inflow(
                 "{w:?} is also in scene.no_slip (allowed: one of them)"
             ));
         }
-    }
-    for axis in 0..2 {
-        for side in 0..2 {
-            if inflow_walls[axis][side] && drained[axis][side] {
-                return err("a wall is both drained and an inflow (allowed: one of them)".into());
-            }
-        }
-    }
-    if !(velocity > 0.0 && velocity.is_finite()) {
-        return Err(ConfigError {
-            key: "drag.inflow_velocity".into(),
-            message: format!("{velocity} is out of range (allowed: finite, > 0 m/s into the box)"),
-        });
     }
     Ok(())
 }
