@@ -103,12 +103,6 @@ impl Inflow {
         x
     }
 
-    fn inward(&self, axis: usize, side: usize) -> Vec2 {
-        let mut v = Vec2::zeros();
-        v[axis] = if side == 0 { 1.0 } else { -1.0 };
-        v
-    }
-
     /// Sets the fluid's v^{n+1} on and beyond each inflow wall row to the
     /// inflow velocity (its nodal acceleration with it); returns the grid
     /// kinetic energy this gave.
@@ -127,7 +121,7 @@ impl Inflow {
                 let wall = PAD + side * g.cells[axis];
                 let on_or_beyond = if side == 0 { k <= wall } else { k >= wall };
                 if on_or_beyond {
-                    let target = self.velocity * self.inward(axis, side);
+                    let target = self.velocity * inward(axis, side);
                     g.accel[n] += (target - g.vel_new[n]) / dt;
                     g.vel_new[n] = target;
                 }
@@ -150,7 +144,7 @@ impl Inflow {
                 while fed >= self.spacing {
                     fed -= self.spacing;
                     let depth = 0.5 * self.spacing + fed;
-                    let v = self.velocity * self.inward(axis, side);
+                    let v = self.velocity * inward(axis, side);
                     for k in 0..self.row_len(fluid, axis) {
                         let x = self.row_point(fluid, axis, side, depth, k);
                         fluid.inject(x, v, self.mass, self.vol0, self.material);
@@ -204,6 +198,13 @@ impl Inflow {
         }
         Ok(())
     }
+}
+
+/// The unit normal into the box of the wall normal to `axis` on `side`.
+fn inward(axis: usize, side: usize) -> Vec2 {
+    let mut v = Vec2::zeros();
+    v[axis] = if side == 0 { 1.0 } else { -1.0 };
+    v
 }
 
 /// q N_i(x) added to each node of x's stencil that lies on the padded grid.

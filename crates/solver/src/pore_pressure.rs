@@ -75,10 +75,11 @@ impl PorePressure {
     /// The prescribed pressure on each drained wall row, and beyond it the
     /// odd image about it, so that the field interpolates to it at the wall.
     fn impose_drained(&mut self, g: &Grid) {
-        for (wall, pairs, p_wall) in drained_nodes(g, self.drained) {
-            self.pressure[wall] = p_wall;
-            for (ghost, partner) in pairs {
-                self.pressure[ghost] = 2.0 * p_wall - self.pressure[partner];
+        for axis in 0..2 {
+            for side in 0..2 {
+                if let Some(p_wall) = self.drained[axis][side] {
+                    odd_image(&mut self.pressure, g, axis, side, Some(p_wall));
+                }
             }
         }
     }
@@ -138,12 +139,7 @@ impl PorePressure {
             // pressure, which carries the gradient through the wall.
             for (axis, sides) in inflow.mask().iter().enumerate() {
                 for side in (0..2).filter(|&side| sides[side]) {
-                    for (wall, pairs) in wall_rows(g, axis, side) {
-                        let p_wall = self.pressure[wall];
-                        for (ghost, partner) in pairs {
-                            self.pressure[ghost] = 2.0 * p_wall - self.pressure[partner];
-                        }
-                    }
+                    odd_image(&mut self.pressure, g, axis, side, None);
                 }
             }
         }
@@ -239,18 +235,30 @@ impl PorePressure {
     }
 }
 
-/// Every node of the drained wall rows: (wall node, its (ghost, partner)
-/// pairs outward, the prescribed pressure).
+/// Every node of the drained wall rows, with its (ghost, partner) pairs outward.
 fn drained_nodes(
     g: &Grid,
     drained: [[Option<f64>; 2]; 2],
-) -> impl Iterator<Item = (usize, [(usize, usize); PAD], f64)> + '_ {
+) -> impl Iterator<Item = (usize, [(usize, usize); PAD])> + '_ {
     let sides = (0..2).flat_map(move |axis| {
-        (0..2).filter_map(move |side| drained[axis][side].map(|p| (axis, side, p)))
+        (0..2).filter_map(move |side| drained[axis][side].map(|_| (axis, side)))
     });
-    sides.flat_map(move |(axis, side, p_wall)| {
-        wall_rows(g, axis, side).map(move |(wall, pairs)| (wall, pairs, p_wall))
-    })
+    sides.flat_map(move |(axis, side)| wall_rows(g, axis, side))
+}
+
+/// Beyond the wall normal to `axis` on `side`, each node takes the odd
+/// image 2 p_wall - p_partner about its wall node, whose pressure is set to
+/// `wall_value` when given (a drained wall) or kept (an inflow wall).
+fn odd_image(pressure: &mut [f64], g: &Grid, axis: usize, side: usize, wall_value: Option<f64>) {
+    for (wall, pairs) in wall_rows(g, axis, side) {
+        if let Some(p) = wall_value {
+            pressure[wall] = p;
+        }
+        let p_wall = pressure[wall];
+        for (ghost, partner) in pairs {
+            pressure[ghost] = 2.0 * p_wall - pressure[partner];
+        }
+    }
 }
 
 /// Every node of the wall row normal to `axis` on `side` (0 low, 1 high),
@@ -284,7 +292,7 @@ fn wall_rows(
 /// own fold left them alone): ghosts fold onto their partners and the wall
 /// row doubles, as at a symmetry wall.
 fn fold_drained(g: &Grid, drained: [[Option<f64>; 2]; 2], values: &mut [f64]) {
-    for (wall, pairs, _) in drained_nodes(g, drained) {
+    for (wall, pairs) in drained_nodes(g, drained) {
         for (ghost, partner) in pairs {
             values[partner] += values[ghost];
         }

@@ -142,19 +142,10 @@ fn the_volume_constraint_drives_water_out_of_overfilled_grains() {
 /// there, nothing flows out, and the water comes to rest.
 #[test]
 fn a_drained_top_wall_holds_the_water_hydrostatic_from_its_pressure() {
-    use solver::{Material, Wall};
+    use solver::Wall;
     let (height, g, rho_f) = (0.1, 9.81, 1000.0);
     for p_drained in [0.0, 500.0] {
-        let phase = |rho: f64, n: f64| {
-            let mut material = Material::tait(1e5);
-            material.rho0 = rho;
-            let mut scene =
-                common::box_scene([0.05, height], [0.0, 0.0, 0.05, height], material, g);
-            scene.periodic = [true, false];
-            scene.bodies[0].fraction = n;
-            let method = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
-            common::solver(scene, method)
-        };
+        let phase = |rho: f64, n: f64| column_phase([0.05, height], 0.01, g, rho, n, 1e5, 0.0);
         let mut mix = Mixture::new([phase(2650.0, 0.6), phase(rho_f, 0.4)], bang_bang())
             .unwrap()
             .fix_solid()
@@ -206,18 +197,10 @@ fn a_drained_wall_is_refused_without_pore_pressure_or_on_a_periodic_axis() {
 /// checkpoint taken after it restores bit for bit.
 #[test]
 fn water_crossing_a_drained_wall_flows_out_and_restores_bit_for_bit() {
-    use solver::{Material, Wall};
+    use solver::Wall;
     let build = || {
-        let phase = |rho: f64, n: f64, up: f64| {
-            let mut material = Material::tait(1e5);
-            material.rho0 = rho;
-            let mut scene = common::box_scene([0.05, 0.1], [0.0, 0.0, 0.05, 0.1], material, 0.0);
-            scene.periodic = [true, false];
-            scene.bodies[0].fraction = n;
-            scene.bodies[0].velocity = [0.0, up];
-            let method = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
-            common::solver(scene, method)
-        };
+        let phase =
+            |rho: f64, n: f64, up: f64| column_phase([0.05, 0.1], 0.01, 0.0, rho, n, 1e5, up);
         let free = Drag {
             coefficient: 0.0,
             ..bang_bang()
@@ -268,23 +251,13 @@ fn inflow_column() -> Mixture {
 }
 
 fn inflow_column_with(walls: &[solver::Wall], speed: f64) -> Result<Mixture, solver::ConfigError> {
-    use solver::{Material, Wall};
-    let phase = |rho: f64, n: f64, k_f: f64| {
-        let mut material = Material::tait(k_f);
-        material.rho0 = rho;
-        let mut scene = common::box_scene([0.01, 0.1], [0.0, 0.0, 0.01, 0.1], material, 0.0);
-        scene.cell = 0.0025;
-        scene.periodic = [true, false];
-        scene.bodies[0].fraction = n;
-        scene.bodies[0].velocity = [0.0, if rho < 2000.0 { 0.1 } else { 0.0 }];
-        let method = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
-        common::solver(scene, method)
-    };
+    use solver::Wall;
+    let phase = |rho: f64, n: f64, up: f64| column_phase([0.01, 0.1], 0.0025, 0.0, rho, n, 1e6, up);
     let drag = Drag {
         coefficient: Drag::from_permeability(1e-3, 1e-9, 0.4),
         ..bang_bang()
     };
-    Mixture::new([phase(2650.0, 0.6, 1e6), phase(1000.0, 0.4, 1e6)], drag)
+    Mixture::new([phase(2650.0, 0.6, 0.0), phase(1000.0, 0.4, 0.1)], drag)
         .unwrap()
         .fix_solid()
         .with_pore_pressure()
@@ -403,4 +376,27 @@ fn an_inflow_wall_is_refused_where_it_cannot_work() {
         let err = inflow_column_with(walls, speed).err().expect("refused");
         assert_eq!(err.key, key, "{walls:?} at {speed}: {}", err.message);
     }
+}
+
+/// One phase of a column periodic in x and walled in y, filling the box
+/// `size` (cell `cell`, gravity `g`): density rho at volume fraction n, a
+/// Tait EOS of modulus k_f, moving up at `up`; quadratic B-splines, APIC, USL.
+fn column_phase(
+    size: [f64; 2],
+    cell: f64,
+    g: f64,
+    rho: f64,
+    n: f64,
+    k_f: f64,
+    up: f64,
+) -> solver::Solver {
+    let mut material = solver::Material::tait(k_f);
+    material.rho0 = rho;
+    let mut scene = common::box_scene(size, [0.0, 0.0, size[0], size[1]], material, g);
+    scene.cell = cell;
+    scene.periodic = [true, false];
+    scene.bodies[0].fraction = n;
+    scene.bodies[0].velocity = [0.0, up];
+    let method = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
+    common::solver(scene, method)
 }
