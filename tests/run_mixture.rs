@@ -311,10 +311,10 @@ fn drag_convergence_writes_each_models_observed_order() {
 }
 
 /// Terzaghi's consolidation, coarse (h = 2.5 mm) and short (T <= 0.17):
-/// the pore pressure on the grid carries the load undrained and drains
-/// through the free top; U(T) follows the exact degree of consolidation and
-/// the pore pressure the series solution, within what the undrained
-/// column's ringing (about 5 % of p0 at this h) leaves.
+/// the node-averaged pore pressure on the grid carries the load undrained
+/// and drains through the drained top wall; U(T) follows the exact degree
+/// of consolidation and the pore pressure the series solution, and neither
+/// phase's monitor logs an event (the load's work is booked as exchange).
 #[test]
 fn terzaghi_column_consolidates_like_the_series_solution() {
     let out = scratch("terzaghi");
@@ -353,14 +353,25 @@ fn terzaghi_column_consolidates_like_the_series_solution() {
             .fold(f64::NEG_INFINITY, f64::max)
     };
     assert_eq!(p, worst_from(0.05));
+    // Measured: 4.1 % from T = 0.05, 2.7 % from T = 0.1 (the free top
+    // without averaging: under 10 %).
+    assert!(p < 0.06, "pore pressure off by {p} of p0 from T = 0.05");
     let late = worst_from(0.1);
-    assert!(late < 0.1, "pore pressure off by {late} of p0 from T = 0.1");
+    assert!(
+        late < 0.04,
+        "pore pressure off by {late} of p0 from T = 0.1"
+    );
+    // The load's work booked as the skeleton's kinetic gain alone read as
+    // an injection of about the load's work (10 events on the full run).
+    assert!(s.events.is_empty(), "{:?}", s.events);
 }
 
 /// The filter stone, short (1.5 s, one member each): water over a dry
-/// porous stone. With its own particle pressure the water kicks and its
-/// pressure checkerboards (the slides' locking problem); with J-bar
-/// (anti-locking) it does neither and stays near hydrostatic. The surface's
+/// porous stone. With its own particle pressure the water's pressure
+/// checkerboards and departs from hydrostatic (the slides' locking
+/// problem); with J-bar (anti-locking) it does neither. Neither kicks: the
+/// 12 `injection` kicks once logged without J-bar were the drag's work
+/// booked as the kinetic energy it alone adds (see `exchange_cross_term`). The surface's
 /// levelling needs the study's 3 s (README "Multiphase").
 #[test]
 fn filter_stone_locks_without_anti_locking_and_not_with_it() {
@@ -385,7 +396,7 @@ fn filter_stone_locks_without_anti_locking_and_not_with_it() {
         );
     }
     let fluid = |s: &Summary| s.phases[1].metrics.clone();
-    assert!(locked.metrics.n_kicks > 0);
+    assert_eq!(locked.metrics.n_kicks, 0, "{:?}", locked.events);
     assert_eq!(anti.metrics.n_kicks, 0, "{:?}", anti.events);
     assert!(fluid(&locked).checkerboard_late.unwrap() > 0.2);
     assert!(fluid(&anti).checkerboard_late.unwrap() < 0.05);

@@ -55,6 +55,11 @@ pub struct PorePressure {
     pub(crate) drained: [[Option<f64>; 2]; 2],
     /// Per lattice column along a drained wall: its outermost particle.
     outer: Vec<f64>,
+    /// Node-averaged pressure (`with_node_average`): each node's pressure
+    /// the [1 2 1] / 4 average along each axis, which removes the
+    /// node-to-node mode the particles' gradients hardly see.
+    pub(crate) node_average: bool,
+    scratch: Vec<f64>,
 }
 
 impl PorePressure {
@@ -69,6 +74,8 @@ impl PorePressure {
             force: vec![Vec2::zeros(); n],
             drained: [[None; 2]; 2],
             outer: Vec::with_capacity(grid.dims[0].max(grid.dims[1]) * 4),
+            node_average: false,
+            scratch: vec![0.0; n],
         }
     }
 
@@ -133,6 +140,10 @@ impl PorePressure {
             };
         }
         g.fill(&mut self.pressure);
+        if self.node_average {
+            self.average_nodes(g);
+            g.fill(&mut self.pressure);
+        }
         self.impose_drained(g);
         if let Some(inflow) = inflow {
             // Beyond an inflow wall: the odd image about the wall row's own
@@ -141,6 +152,38 @@ impl PorePressure {
                 for side in (0..2).filter(|&side| sides[side]) {
                     odd_image(&mut self.pressure, g, axis, side, None);
                 }
+            }
+        }
+    }
+
+    /// Each wet node's pressure becomes the [1 2 1] / 4 average of its
+    /// neighbours along x, then along y (linear fields kept, the
+    /// node-to-node mode removed). Beyond a wall the odd image about the
+    /// wall row (prescribed on a drained wall), so that the walls' values
+    /// and slopes stay; dry nodes keep zero.
+    fn average_nodes(&mut self, g: &Grid) {
+        for axis in (0..2).filter(|&a| !g.periodic[a]) {
+            for side in 0..2 {
+                odd_image(&mut self.pressure, g, axis, side, self.drained[axis][side]);
+            }
+        }
+        let [nx, ny] = g.dims;
+        let (p, tmp) = (&mut self.pressure, &mut self.scratch);
+        tmp.copy_from_slice(p);
+        for j in 0..ny {
+            for i in 1..nx - 1 {
+                let n = g.index(i, j);
+                tmp[n] = 0.25 * (p[n - 1] + 2.0 * p[n] + p[n + 1]);
+            }
+        }
+        for j in 1..ny - 1 {
+            for i in 0..nx {
+                let n = g.index(i, j);
+                p[n] = if self.water[n] > 0.0 && g.is_active(n) {
+                    0.25 * (tmp[n - nx] + 2.0 * tmp[n] + tmp[n + nx])
+                } else {
+                    0.0
+                };
             }
         }
     }

@@ -720,6 +720,11 @@ pub(crate) fn build(case: &Case, spec: &MixtureSpec) -> Result<Mixture, String> 
     if spec.pore_pressure {
         mix = mix.with_pore_pressure();
     }
+    if spec.pore_node_average {
+        mix = mix
+            .with_pore_node_average()
+            .map_err(|e| format!("setup: {e}"))?;
+    }
     if spec.volume_constraint {
         mix = mix.with_volume_constraint();
     }

@@ -125,6 +125,10 @@ struct DragTable {
     /// (grains incompressible; the fluid's material is the pore fluid).
     #[serde(default)]
     pore_pressure: bool,
+    /// The pore pressure averaged over each node's neighbours ([1 2 1] / 4
+    /// per axis), which removes its node-to-node mode (needs pore_pressure).
+    #[serde(default)]
+    pore_node_average: bool,
     /// The volume constraint n_s + n_f <= 1 per node (the fluid keeps its
     /// own pressure; not with pore_pressure, which balances volumes already).
     #[serde(default)]
@@ -157,6 +161,7 @@ pub struct MixtureSpec {
     pub drag: Drag,
     pub fixed_solid: bool,
     pub pore_pressure: bool,
+    pub pore_node_average: bool,
     pub volume_constraint: bool,
     pub top_traction: f64,
     pub traction_ramp: f64,
@@ -471,6 +476,12 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
             "not with pore_pressure = true, whose volume balance holds the constraint already (allowed: one of them)".into(),
         ));
     }
+    if t.pore_node_average && !t.pore_pressure {
+        return Err((
+            "drag.pore_node_average".into(),
+            "it needs drag.pore_pressure = true (allowed: false without it)".into(),
+        ));
+    }
     solver::mixture::check_drained(
         &solver.scene,
         &t.drained,
@@ -514,6 +525,7 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
         },
         fixed_solid: t.fixed_solid,
         pore_pressure: t.pore_pressure,
+        pore_node_average: t.pore_node_average,
         volume_constraint: t.volume_constraint,
         top_traction: t.top_traction,
         traction_ramp: t.traction_ramp,
@@ -871,6 +883,12 @@ mod tests {
         ));
         assert_eq!(k, "drag.volume_constraint");
         assert!(m.contains("pore_pressure"), "{m}");
+        let (k, m) = bad(&MIXTURE.replace(
+            "coefficient = 1e5",
+            "coefficient = 1e5\npore_node_average = true",
+        ));
+        assert_eq!(k, "drag.pore_node_average");
+        assert!(m.contains("pore_pressure = true"), "{m}");
         for model in ["bang_bang_particle", "svf_particle"] {
             let (k, m) = bad(&MIXTURE.replace(
                 "coefficient = 1e5",
