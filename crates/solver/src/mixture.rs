@@ -31,7 +31,7 @@ pub struct Mixture {
     load: Option<TopLoad>,
     inflow: Option<Inflow>,
     /// Each phase's grid velocity after its own update, before the
-    /// exchange (see `book_exchange`).
+    /// exchange, on its active nodes (see `exchange_cross_term`).
     before_exchange: [Vec<Vec2>; 2],
 }
 
@@ -303,7 +303,9 @@ impl Mixture {
         a.begin_step(dt)?;
         b.begin_step(dt)?;
         for (s, v) in [&*a, &*b].into_iter().zip(&mut self.before_exchange) {
-            v.copy_from_slice(&s.grid.vel_new);
+            for &n in &s.grid.active {
+                v[n as usize] = s.grid.vel_new[n as usize];
+            }
         }
         // External and pore forces first (each phase's budget books the
         // energy they give as exchange, like the drag's), then the drag.

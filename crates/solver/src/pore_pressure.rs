@@ -55,7 +55,7 @@ pub struct PorePressure {
     pub(crate) drained: [[Option<f64>; 2]; 2],
     /// Per lattice column along a drained wall: its outermost particle.
     outer: Vec<f64>,
-    /// Node-averaged pressure (`with_node_average`): each node's pressure
+    /// Node-averaged pressure (`Mixture::with_pore_node_average`): each node's pressure
     /// the [1 2 1] / 4 average along each axis, which removes the
     /// node-to-node mode the particles' gradients hardly see.
     pub(crate) node_average: bool,
