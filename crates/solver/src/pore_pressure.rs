@@ -53,8 +53,8 @@ pub struct PorePressure {
     force: Vec<Vec2>,
     /// Drained walls [axis][low, high]: the pore pressure prescribed there.
     pub(crate) drained: [[Option<f64>; 2]; 2],
-    /// Per lattice column along a drained wall: its outermost particle.
-    outer: Vec<f64>,
+    /// Per lattice column along a drained wall: its outermost particles.
+    tops: Vec<ColumnTop>,
     /// Node-averaged pressure (`Mixture::with_pore_node_average`): each node's pressure
     /// the [1 2 1] / 4 average along each axis, which removes the
     /// node-to-node mode the particles' gradients hardly see.
@@ -73,7 +73,7 @@ impl PorePressure {
             water: vec![0.0; n],
             force: vec![Vec2::zeros(); n],
             drained: [[None; 2]; 2],
-            outer: Vec::with_capacity(grid.dims[0].max(grid.dims[1]) * 4),
+            tops: Vec::with_capacity(grid.dims[0].max(grid.dims[1]) * 4),
             node_average: false,
             scratch: vec![0.0; n],
         }
@@ -98,10 +98,10 @@ impl PorePressure {
     /// tension is kept, so that the water does not cavitate and open a
     /// drained gap inside a saturated body.
     fn nodal_pressure(&mut self, solid: &Solver, fluid: &Solver, inflow: Option<&Inflow>) {
-        reference_volume(solid, &mut self.grains);
         let g = &fluid.grid;
         let capacity = g.h * g.h;
         if self.mode == PoreMode::Constraint {
+            reference_volume(solid, &mut self.grains);
             self.water.fill(0.0);
             crate::drag::scatter_folded(&fluid.particles.vol, fluid, &mut self.water);
             let k = self.fluid.k;
@@ -122,9 +122,12 @@ impl PorePressure {
         if let Some(inflow) = inflow {
             inflow.add_outside_rows(fluid, &mut self.water);
         }
-        self.add_drained_images(fluid);
+        add_outer_images(fluid, self.drained, &mut self.tops, &mut self.water);
         g.fold(&mut self.water);
-        fold_drained(g, self.drained, &mut self.grains);
+        self.grains.fill(0.0);
+        crate::drag::scatter_raw(&solid.particles.vol0, solid, &mut self.grains);
+        add_outer_images(solid, self.drained, &mut self.tops, &mut self.grains);
+        solid.grid.fold(&mut self.grains);
         for n in 0..self.pressure.len() {
             let w = self.water[n];
             self.pressure[n] = if w > 0.0 && g.is_active(n) {
@@ -188,56 +191,6 @@ impl PorePressure {
         }
     }
 
-    /// The water's images beyond each drained wall, added to the raw nodal
-    /// sums: each lattice column (particles one spacing l apart along the
-    /// wall) is mirrored about the plane l/2 beyond its outermost particle,
-    /// which continues its rows past the wall. At rest that plane is the
-    /// wall; while water flows out it moves with the rows, so the nodes
-    /// beside the wall read as full whatever the phase of the outflow (a
-    /// mirror about the wall itself opens a gap of up to 2 l there).
-    fn add_drained_images(&mut self, fluid: &Solver) {
-        let g = &fluid.grid;
-        let scene = &fluid.cfg.scene;
-        let l = g.h / scene.ppc as f64;
-        let reach = PAD as f64 * g.h + l;
-        let ps = &fluid.particles;
-        let half = fluid.shape.half_widths(&crate::particles::Mat2::identity());
-        for axis in 0..2 {
-            for side in 0..2 {
-                if self.drained[axis][side].is_none() {
-                    continue;
-                }
-                let along = 1 - axis;
-                let columns = (scene.size[along] / l).round() as usize;
-                let out_sign = if side == 1 { 1.0 } else { -1.0 };
-                let wall = scene.origin[axis] + side as f64 * scene.size[axis];
-                let column = |x: &Vec2| {
-                    (((x[along] - scene.origin[along]) / l).floor().max(0.0) as usize)
-                        .min(columns - 1)
-                };
-                self.outer.clear();
-                self.outer.resize(columns, f64::NEG_INFINITY);
-                for x in &ps.x {
-                    let c = column(x);
-                    self.outer[c] = self.outer[c].max(out_sign * x[axis]);
-                }
-                for (x, &v0) in ps.x.iter().zip(&ps.vol0) {
-                    if (wall - x[axis]).abs() > reach {
-                        continue;
-                    }
-                    let plane = out_sign * self.outer[column(x)] + out_sign * 0.5 * l;
-                    let mut image = *x;
-                    image[axis] = 2.0 * plane - x[axis];
-                    match fluid.shape.width() {
-                        2 => add_point::<2>(g, &fluid.shape, half, image, v0, &mut self.water),
-                        3 => add_point::<3>(g, &fluid.shape, half, image, v0, &mut self.water),
-                        _ => add_point::<4>(g, &fluid.shape, half, image, v0, &mut self.water),
-                    }
-                }
-            }
-        }
-    }
-
     /// Adds each phase's pore-pressure force over `dt` to its v^{n+1} (phase
     /// a held when `fixed_a`; the rows still outside an inflow wall counted
     /// in the balance); returns the kinetic energy each phase gained.
@@ -278,15 +231,110 @@ impl PorePressure {
     }
 }
 
-/// Every node of the drained wall rows, with its (ghost, partner) pairs outward.
-fn drained_nodes(
-    g: &Grid,
+/// The two outermost particles of a lattice column along a drained wall
+/// (distances measured outward) and the index of the outermost.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ColumnTop {
+    first: f64,
+    second: f64,
+    index: usize,
+}
+
+impl ColumnTop {
+    const EMPTY: ColumnTop = ColumnTop {
+        first: f64::NEG_INFINITY,
+        second: f64::NEG_INFINITY,
+        index: usize::MAX,
+    };
+
+    fn push(&mut self, at: f64, index: usize) {
+        if at > self.first {
+            self.second = self.first;
+            self.first = at;
+            self.index = index;
+        } else if at > self.second {
+            self.second = at;
+        }
+    }
+}
+
+/// Each phase's images beyond each drained wall, added to its raw nodal
+/// sums `out`: each lattice column (particles one spacing l apart along the
+/// wall) is mirrored about the plane l/2 beyond its outermost particle,
+/// which continues its rows past the wall. At rest that plane is the wall;
+/// while water flows out or the skeleton settles it moves with the rows, so
+/// that the nodes beside the wall read as full of both phases (a mirror
+/// about the wall itself opens a gap of up to 2 l there for the water, and
+/// of twice the settlement for the grains).
+///
+/// Outflow: a particle leaves the sums when it crosses the wall, and the
+/// next one's plane then takes over. Over the outermost particle's last
+/// l/2 before the wall, both planes blend (weight theta of the next one,
+/// 0 at l/2 from the wall, 1 at the wall, the outermost particle itself
+/// weighted 1 - theta), so the sums do not jump when it leaves: a jump
+/// of a tenth of a particle's volume is 10 kPa in water.
+fn add_outer_images(
+    s: &Solver,
     drained: [[Option<f64>; 2]; 2],
-) -> impl Iterator<Item = (usize, [(usize, usize); PAD])> + '_ {
-    let sides = (0..2).flat_map(move |axis| {
-        (0..2).filter_map(move |side| drained[axis][side].map(|_| (axis, side)))
-    });
-    sides.flat_map(move |(axis, side)| wall_rows(g, axis, side))
+    tops: &mut Vec<ColumnTop>,
+    out: &mut [f64],
+) {
+    let g = &s.grid;
+    let scene = &s.cfg.scene;
+    let l = g.h / scene.ppc as f64;
+    let reach = PAD as f64 * g.h + l;
+    let ps = &s.particles;
+    let half = s.shape.half_widths(&crate::particles::Mat2::identity());
+    let add = |x: Vec2, q: f64, out: &mut [f64]| match s.shape.width() {
+        2 => add_point::<2>(g, &s.shape, half, x, q, out),
+        3 => add_point::<3>(g, &s.shape, half, x, q, out),
+        _ => add_point::<4>(g, &s.shape, half, x, q, out),
+    };
+    for axis in 0..2 {
+        for side in 0..2 {
+            if drained[axis][side].is_none() {
+                continue;
+            }
+            let along = 1 - axis;
+            let columns = (scene.size[along] / l).round() as usize;
+            let out_sign = if side == 1 { 1.0 } else { -1.0 };
+            // The wall's outward distance.
+            let wall = out_sign * (scene.origin[axis] + side as f64 * scene.size[axis]);
+            let column = |x: &Vec2| {
+                (((x[along] - scene.origin[along]) / l).floor().max(0.0) as usize).min(columns - 1)
+            };
+            tops.clear();
+            tops.resize(columns, ColumnTop::EMPTY);
+            for (p, x) in ps.x.iter().enumerate() {
+                tops[column(x)].push(out_sign * x[axis], p);
+            }
+            for (p, (x, &v0)) in ps.x.iter().zip(&ps.vol0).enumerate() {
+                let top = tops[column(x)];
+                let at = out_sign * x[axis];
+                let theta = ((top.first - (wall - 0.5 * l)) / (0.5 * l)).clamp(0.0, 1.0);
+                let mirror = |plane: f64, weight: f64, out: &mut [f64]| {
+                    // Measured from the plane, not the wall: a settling
+                    // skeleton's rows then enter the images only where
+                    // their image stays beyond the wall's reach.
+                    if plane - at <= reach {
+                        let mut image = *x;
+                        image[axis] = out_sign * (2.0 * plane - at);
+                        add(image, weight * v0, out);
+                    }
+                };
+                if theta < 1.0 {
+                    mirror(top.first + 0.5 * l, 1.0 - theta, out);
+                }
+                if theta > 0.0 {
+                    if p == top.index {
+                        add(*x, -theta * v0, out);
+                    } else {
+                        mirror(top.second + 0.5 * l, theta, out);
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// Beyond the wall normal to `axis` on `side`, each node takes the odd
@@ -328,19 +376,6 @@ fn wall_rows(
         });
         (at(wall), pairs)
     })
-}
-
-/// Mirrors a nodal sum across the drained walls (images of the grains
-/// inside stand for the skeleton beyond; the walls are open, so the grid's
-/// own fold left them alone): ghosts fold onto their partners and the wall
-/// row doubles, as at a symmetry wall.
-fn fold_drained(g: &Grid, drained: [[Option<f64>; 2]; 2], values: &mut [f64]) {
-    for (wall, pairs) in drained_nodes(g, drained) {
-        for (ghost, partner) in pairs {
-            values[partner] += values[ghost];
-        }
-        values[wall] *= 2.0;
-    }
 }
 
 /// sum_p N_ip V_p^0 on the raw nodes, folded.

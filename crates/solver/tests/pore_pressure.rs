@@ -373,8 +373,16 @@ fn an_inflow_wall_drives_steady_darcy_flow_with_a_linear_pressure_drop() {
         let v = mix.phase(1).view();
         (v.x.len() as u64, v.mass.iter().sum::<f64>())
     };
+    // The water's mean speed over the last 10 ms: at an instant it carries
+    // the flow's acoustic ringing (band means 2 % apart at 0.05 s).
+    let (mut speed_sum, mut speed_steps) = (0.0, 0.0);
     while mix.time() < 0.05 {
         mix.step().unwrap();
+        if mix.time() >= 0.04 {
+            let v = mix.phase(1).view();
+            speed_sum += v.v.iter().map(|u| u.y).sum::<f64>() / v.v.len() as f64;
+            speed_steps += 1.0;
+        }
     }
     let v = mix.phase(1).view();
     // Least-squares line p = a + b y over the water's particles.
@@ -406,7 +414,9 @@ fn an_inflow_wall_drives_steady_darcy_flow_with_a_linear_pressure_drop() {
         .values()
         .map(|(sum, count)| (sum / *count as f64).abs())
         .fold(0.0, f64::max);
-    // Measured: floor 2.8 % high, top 0.3 %, windows 3.4 %; without the
+    // Measured: floor 2.5 % high, top 0.3 %, windows 3.5 %, speed 0.0995
+    // (2.8 %, 0.3 %, 3.4 %, 0.0994 with the drained wall's grains folded
+    // about the wall and no outflow blend); without the
     // rows still outside counted in the balance the floor reads -145 %.
     assert!(
         (at_floor - drop).abs() < 0.05 * drop,
@@ -420,7 +430,7 @@ fn an_inflow_wall_drives_steady_darcy_flow_with_a_linear_pressure_drop() {
         worst_window < 0.05 * drop,
         "two-cell means off the exact line by {worst_window}"
     );
-    let mean_v = v.v.iter().map(|u| u.y).sum::<f64>() / n;
+    let mean_v = speed_sum / speed_steps;
     assert!((mean_v - 0.1).abs() < 1e-3, "mean water speed {mean_v}");
     let l = mix.phase(1).losses();
     assert!(l.injected >= 3 * 8, "rows entered: {}", l.injected);
