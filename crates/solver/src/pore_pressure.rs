@@ -234,7 +234,7 @@ impl PorePressure {
 /// The two outermost particles of a lattice column along a drained wall
 /// (distances measured outward) and the index of the outermost.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct ColumnTop {
+struct ColumnTop {
     first: f64,
     second: f64,
     index: usize,
