@@ -300,6 +300,10 @@ impl Mixture {
     pub fn step_with_dt(&mut self, dt: f64) -> Result<(), StepError> {
         let t = self.time();
         let [a, b] = &mut self.phases;
+        if let Some(pore) = self.pore.as_mut() {
+            pore.drain_outflow(a);
+            pore.drain_outflow(b);
+        }
         a.begin_step(dt)?;
         b.begin_step(dt)?;
         for (s, v) in [&*a, &*b].into_iter().zip(&mut self.before_exchange) {

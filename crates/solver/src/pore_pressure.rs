@@ -216,6 +216,54 @@ impl PorePressure {
         gained
     }
 
+    /// Outflow through a drained wall, gradual (each phase, each step
+    /// before P2G): over its last l/2 before the wall, a column's outermost
+    /// particle gives its mass and volumes away, keeping 1 - theta of the
+    /// share the next particle of its column has (as in the balance's
+    /// sums). Deleted whole as it crossed, it took its mass off the nodes
+    /// beside the wall at once: their drag per unit mass jumped by half and
+    /// sent the column a wave (+1.6 % of p0 at the top of Terzaghi's
+    /// column at each row's departure). What it gives away is counted as
+    /// drained, and its kinetic and stored energy leave with it.
+    pub(crate) fn drain_outflow(&mut self, s: &mut Solver) {
+        for axis in 0..2 {
+            for side in 0..2 {
+                if self.drained[axis][side].is_none() {
+                    continue;
+                }
+                let w = DrainedWall::of(s, axis, side);
+                w.find_tops(s, axis, &mut self.tops);
+                for top in self.tops.iter().filter(|t| t.drains()) {
+                    let keep = 1.0 - top.theta(w.wall, w.l);
+                    let (p, full) = (top.index, top.second_index);
+                    let ps = &mut s.particles;
+                    let (mass, vol0) = (keep * ps.mass[full], keep * ps.vol0[full]);
+                    if mass == ps.mass[p] && vol0 == ps.vol0[p] {
+                        continue;
+                    }
+                    let j = if ps.vol0[p] > 0.0 {
+                        ps.vol[p] / ps.vol0[p]
+                    } else {
+                        ps.j[p]
+                    };
+                    let ratio = if ps.vol0[p] > 0.0 {
+                        vol0 / ps.vol0[p]
+                    } else {
+                        0.0
+                    };
+                    let given = ps.mass[p] - mass;
+                    s.energy.kinetic -= 0.5 * given * ps.v[p].norm_squared();
+                    s.energy.stored -= (1.0 - ratio) * ps.stored_energy[p];
+                    ps.stored_energy[p] *= ratio;
+                    s.losses.mass_drained += given;
+                    ps.mass[p] = mass;
+                    ps.vol0[p] = vol0;
+                    ps.vol[p] = j * vol0;
+                }
+            }
+        }
+    }
+
     /// Each fluid particle's pressure set to the grid pressure (of the
     /// step's start) at its current position, so that views and files show
     /// it (the balance only: under the constraint the particles keep their own).
@@ -232,12 +280,13 @@ impl PorePressure {
 }
 
 /// The two outermost particles of a lattice column along a drained wall
-/// (distances measured outward) and the index of the outermost.
+/// (distances measured outward) and their indices.
 #[derive(Clone, Copy, Debug)]
 struct ColumnTop {
     first: f64,
     second: f64,
     index: usize,
+    second_index: usize,
 }
 
 impl ColumnTop {
@@ -245,15 +294,70 @@ impl ColumnTop {
         first: f64::NEG_INFINITY,
         second: f64::NEG_INFINITY,
         index: usize::MAX,
+        second_index: usize::MAX,
     };
 
     fn push(&mut self, at: f64, index: usize) {
         if at > self.first {
             self.second = self.first;
+            self.second_index = self.index;
             self.first = at;
             self.index = index;
         } else if at > self.second {
             self.second = at;
+            self.second_index = index;
+        }
+    }
+
+    /// The outermost particle's progress over its last l/2 before the
+    /// wall: 0 at l/2 from it, 1 on it.
+    fn theta(&self, wall: f64, l: f64) -> f64 {
+        ((self.first - (wall - 0.5 * l)) / (0.5 * l)).clamp(0.0, 1.0)
+    }
+
+    /// Whether the outermost particle drains (a second one in its column
+    /// gives its full share).
+    fn drains(&self) -> bool {
+        self.second_index != usize::MAX
+    }
+}
+
+/// A drained wall's geometry for a phase: the lattice spacing l, the
+/// axis along the wall, the outward sign and the wall's outward distance.
+struct DrainedWall {
+    l: f64,
+    along: usize,
+    columns: usize,
+    out_sign: f64,
+    wall: f64,
+}
+
+impl DrainedWall {
+    fn of(s: &Solver, axis: usize, side: usize) -> Self {
+        let scene = &s.cfg.scene;
+        let l = s.grid.h / scene.ppc as f64;
+        let along = 1 - axis;
+        let out_sign = if side == 1 { 1.0 } else { -1.0 };
+        DrainedWall {
+            l,
+            along,
+            columns: (scene.size[along] / l).round() as usize,
+            out_sign,
+            wall: out_sign * (scene.origin[axis] + side as f64 * scene.size[axis]),
+        }
+    }
+
+    fn column(&self, s: &Solver, x: &Vec2) -> usize {
+        let origin = s.cfg.scene.origin[self.along];
+        (((x[self.along] - origin) / self.l).floor().max(0.0) as usize).min(self.columns - 1)
+    }
+
+    /// Each lattice column's two outermost particles into `tops`.
+    fn find_tops(&self, s: &Solver, axis: usize, tops: &mut Vec<ColumnTop>) {
+        tops.clear();
+        tops.resize(self.columns, ColumnTop::EMPTY);
+        for (p, x) in s.particles.x.iter().enumerate() {
+            tops[self.column(s, x)].push(self.out_sign * x[axis], p);
         }
     }
 }
@@ -270,9 +374,10 @@ impl ColumnTop {
 /// Outflow: a particle leaves the sums when it crosses the wall, and the
 /// next one's plane then takes over. Over the outermost particle's last
 /// l/2 before the wall, both planes blend (weight theta of the next one,
-/// 0 at l/2 from the wall, 1 at the wall, the outermost particle itself
-/// weighted 1 - theta), so the sums do not jump when it leaves: a jump
-/// of a tenth of a particle's volume is 10 kPa in water.
+/// 0 at l/2 from the wall, 1 at the wall; the outermost particle itself
+/// keeps 1 - theta of its volume, `drain_outflow`), so the sums do not
+/// jump when it leaves: a jump of a tenth of a particle's volume is 10 kPa
+/// in water.
 fn add_outer_images(
     s: &Solver,
     drained: [[Option<f64>; 2]; 2],
@@ -280,9 +385,7 @@ fn add_outer_images(
     out: &mut [f64],
 ) {
     let g = &s.grid;
-    let scene = &s.cfg.scene;
-    let l = g.h / scene.ppc as f64;
-    let reach = PAD as f64 * g.h + l;
+    let reach = PAD as f64 * g.h + g.h / s.cfg.scene.ppc as f64;
     let ps = &s.particles;
     let half = s.shape.half_widths(&crate::particles::Mat2::identity());
     let add = |x: Vec2, q: f64, out: &mut [f64]| match s.shape.width() {
@@ -295,41 +398,38 @@ fn add_outer_images(
             if drained[axis][side].is_none() {
                 continue;
             }
-            let along = 1 - axis;
-            let columns = (scene.size[along] / l).round() as usize;
-            let out_sign = if side == 1 { 1.0 } else { -1.0 };
-            // The wall's outward distance.
-            let wall = out_sign * (scene.origin[axis] + side as f64 * scene.size[axis]);
-            let column = |x: &Vec2| {
-                (((x[along] - scene.origin[along]) / l).floor().max(0.0) as usize).min(columns - 1)
-            };
-            tops.clear();
-            tops.resize(columns, ColumnTop::EMPTY);
-            for (p, x) in ps.x.iter().enumerate() {
-                tops[column(x)].push(out_sign * x[axis], p);
-            }
+            let w = DrainedWall::of(s, axis, side);
+            w.find_tops(s, axis, tops);
             for (p, (x, &v0)) in ps.x.iter().zip(&ps.vol0).enumerate() {
-                let top = tops[column(x)];
-                let at = out_sign * x[axis];
-                let theta = ((top.first - (wall - 0.5 * l)) / (0.5 * l)).clamp(0.0, 1.0);
-                let mirror = |plane: f64, weight: f64, out: &mut [f64]| {
+                let top = tops[w.column(s, x)];
+                let at = w.out_sign * x[axis];
+                let theta = top.theta(w.wall, w.l);
+                let mirror = |plane: f64, weight: f64, v0: f64, out: &mut [f64]| {
                     // Measured from the plane, not the wall: a settling
                     // skeleton's rows then enter the images only where
                     // their image stays beyond the wall's reach.
                     if plane - at <= reach {
                         let mut image = *x;
-                        image[axis] = out_sign * (2.0 * plane - at);
+                        image[axis] = w.out_sign * (2.0 * plane - at);
                         add(image, weight * v0, out);
                     }
                 };
+                let outermost = p == top.index;
                 if theta < 1.0 {
-                    mirror(top.first + 0.5 * l, 1.0 - theta, out);
+                    // A draining particle's own volume is already down to
+                    // 1 - theta of its share; its image takes the full one.
+                    let v0 = if outermost && top.drains() {
+                        ps.vol0[top.second_index]
+                    } else {
+                        v0
+                    };
+                    mirror(top.first + 0.5 * w.l, 1.0 - theta, v0, out);
                 }
                 if theta > 0.0 {
-                    if p == top.index {
+                    if !outermost {
+                        mirror(top.second + 0.5 * w.l, theta, v0, out);
+                    } else if !top.drains() {
                         add(*x, -theta * v0, out);
-                    } else {
-                        mirror(top.second + 0.5 * l, theta, out);
                     }
                 }
             }
