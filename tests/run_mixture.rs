@@ -353,14 +353,16 @@ fn terzaghi_column_consolidates_like_the_series_solution() {
             .fold(f64::NEG_INFINITY, f64::max)
     };
     assert_eq!(p, worst_from(0.05));
-    // Measured: 2.3 % from T = 0.05 (at T = 0.066, the ramp's end) and
-    // 2.0 % from T = 0.1 (10 ms ramp, rows deleted as they crossed: 3.4 %
-    // and 3.4 %; the drained wall's grains folded about the wall: 4.1 % and
-    // 2.7 %; the free top without averaging: under 10 %).
-    assert!(p < 0.04, "pore pressure off by {p} of p0 from T = 0.05");
+    // Measured: 1.9 % from T = 0.05 (at T = 0.066, the ramp's end) and
+    // 1.5 % from T = 0.1; with the drained pressure held at the wall
+    // rather than at the settling skeleton's surface, 2.9 % and 2.6 % (2.3 %
+    // and 2.0 % compared at the depth below the fixed wall rather than in
+    // the skeleton; rows deleted as they crossed: 3.4 % and 3.4 %; the free
+    // top without averaging: under 10 %).
+    assert!(p < 0.022, "pore pressure off by {p} of p0 from T = 0.05");
     let late = worst_from(0.1);
     assert!(
-        late < 0.03,
+        late < 0.018,
         "pore pressure off by {late} of p0 from T = 0.1"
     );
     // The load's work booked as the skeleton's kinetic gain alone read as

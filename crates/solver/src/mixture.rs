@@ -151,10 +151,12 @@ impl Mixture {
             m.k = 0.0;
         }
         crate::timestep::refresh_eos_cache(&mut fluid.particles, &fluid.cfg.scene.materials);
+        let gravity = fluid.cfg.scene.gravity;
         self.pore = Some(PorePressure::new(
             &fluid.grid,
             pore_fluid,
             PoreMode::Balance,
+            gravity,
         ));
         self
     }
@@ -188,7 +190,13 @@ impl Mixture {
         let water = scene.materials[index].clone();
         let porosity = (1.0 - solid.cfg.scene.bodies[0].fraction).max(1e-3);
         self.pore_wave_speed = (water.k / water.rho0 * (1.0 + 1.0 / porosity)).sqrt();
-        self.pore = Some(PorePressure::new(&fluid.grid, water, PoreMode::Constraint));
+        let gravity = scene.gravity;
+        self.pore = Some(PorePressure::new(
+            &fluid.grid,
+            water,
+            PoreMode::Constraint,
+            gravity,
+        ));
         self
     }
 

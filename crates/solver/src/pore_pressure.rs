@@ -47,6 +47,8 @@ pub enum PoreMode {
 pub struct PorePressure {
     pub(crate) fluid: Material,
     pub(crate) mode: PoreMode,
+    /// The scene's gravity (m/s^2, in -y).
+    gravity: f64,
     pressure: Vec<f64>,
     grains: Vec<f64>,
     water: Vec<f64>,
@@ -55,6 +57,9 @@ pub struct PorePressure {
     pub(crate) drained: [[Option<f64>; 2]; 2],
     /// Per lattice column along a drained wall: its outermost particles.
     tops: Vec<ColumnTop>,
+    /// Per drained wall [axis][side], per node along it: how far in from
+    /// the wall the skeleton's surface lies (0 against it).
+    gaps: [[Vec<f64>; 2]; 2],
     /// Node-averaged pressure (`Mixture::with_pore_node_average`): each node's pressure
     /// the [1 2 1] / 4 average along each axis, which removes the
     /// node-to-node mode the particles' gradients hardly see.
@@ -63,29 +68,98 @@ pub struct PorePressure {
 }
 
 impl PorePressure {
-    pub fn new(grid: &Grid, fluid: Material, mode: PoreMode) -> Self {
+    pub fn new(grid: &Grid, fluid: Material, mode: PoreMode, gravity: f64) -> Self {
         let n = grid.dims[0] * grid.dims[1];
         PorePressure {
             fluid,
             mode,
+            gravity,
             pressure: vec![0.0; n],
             grains: vec![0.0; n],
             water: vec![0.0; n],
             force: vec![Vec2::zeros(); n],
             drained: [[None; 2]; 2],
             tops: Vec::with_capacity(grid.dims[0].max(grid.dims[1]) * 4),
+            gaps: std::array::from_fn(|axis| {
+                std::array::from_fn(|_| vec![0.0; grid.dims[1 - axis]])
+            }),
             node_average: false,
             scratch: vec![0.0; n],
         }
     }
 
-    /// The prescribed pressure on each drained wall row, and beyond it the
-    /// odd image about it, so that the field interpolates to it at the wall.
+    /// The prescribed pressure at each drained wall, imposed at the
+    /// skeleton's surface where it has settled in from the wall (see
+    /// `drained_image`), and beyond it the odd image about it.
     fn impose_drained(&mut self, g: &Grid) {
         for axis in 0..2 {
             for side in 0..2 {
                 if let Some(p_wall) = self.drained[axis][side] {
-                    odd_image(&mut self.pressure, g, axis, side, Some(p_wall));
+                    let rise = self.hydrostatic_rise(axis, side);
+                    drained_image(
+                        &mut self.pressure,
+                        g,
+                        axis,
+                        side,
+                        p_wall,
+                        rise,
+                        &self.gaps[axis][side],
+                    );
+                }
+            }
+        }
+    }
+
+    /// The pressure gained per metre in from a drained wall through the
+    /// free water between it and the skeleton (gravity acts in -y).
+    fn hydrostatic_rise(&self, axis: usize, side: usize) -> f64 {
+        if axis == 1 {
+            let out_sign = if side == 1 { 1.0 } else { -1.0 };
+            out_sign * self.fluid.rho0 * self.gravity
+        } else {
+            0.0
+        }
+    }
+
+    /// Per drained wall and node along it, the gap between the wall and
+    /// the skeleton's surface (the plane l/2 beyond each lattice column's
+    /// outermost grain particle, interpolated between the columns' centres;
+    /// 0 where a column holds no grains).
+    fn find_gaps(&mut self, solid: &Solver) {
+        let g = &solid.grid;
+        for axis in 0..2 {
+            for side in 0..2 {
+                if self.drained[axis][side].is_none() {
+                    continue;
+                }
+                let w = DrainedWall::of(solid, axis, side);
+                w.find_tops(solid, axis, &mut self.tops);
+                let n = self.tops.len() as i64;
+                // Deep enough that the images stay on the grid.
+                let deepest = 0.5 * (g.cells[axis] as f64 - PAD as f64 - 2.0) * g.h;
+                let gap_of = |c: i64| {
+                    let c = if g.periodic[w.along] {
+                        c.rem_euclid(n)
+                    } else {
+                        c.clamp(0, n - 1)
+                    };
+                    let top = self.tops[c as usize];
+                    if top.index == usize::MAX {
+                        0.0
+                    } else {
+                        (w.wall - top.first - 0.5 * w.l).clamp(0.0, deepest)
+                    }
+                };
+                let origin = solid.cfg.scene.origin[w.along];
+                for (k, slot) in self.gaps[axis][side].iter_mut().enumerate() {
+                    let x = g.origin[w.along] + (k as f64 - PAD as f64) * g.h;
+                    let u = (x - origin) / w.l - 0.5;
+                    let c = u.floor();
+                    let t = u - c;
+                    let (a, b) = (gap_of(c as i64), gap_of(c as i64 + 1));
+                    let gap = a + t * (b - a);
+                    // Seeded against the wall, round-off is no gap.
+                    *slot = if gap > 1e-9 * g.h { gap } else { 0.0 };
                 }
             }
         }
@@ -128,6 +202,7 @@ impl PorePressure {
         crate::drag::scatter_raw(&solid.particles.vol0, solid, &mut self.grains);
         add_outer_images(solid, self.drained, &mut self.tops, &mut self.grains);
         solid.grid.fold(&mut self.grains);
+        self.find_gaps(solid);
         for n in 0..self.pressure.len() {
             let w = self.water[n];
             self.pressure[n] = if w > 0.0 && g.is_active(n) {
@@ -167,7 +242,21 @@ impl PorePressure {
     fn average_nodes(&mut self, g: &Grid) {
         for axis in (0..2).filter(|&a| !g.periodic[a]) {
             for side in 0..2 {
-                odd_image(&mut self.pressure, g, axis, side, self.drained[axis][side]);
+                match self.drained[axis][side] {
+                    Some(p_wall) => {
+                        let rise = self.hydrostatic_rise(axis, side);
+                        drained_image(
+                            &mut self.pressure,
+                            g,
+                            axis,
+                            side,
+                            p_wall,
+                            rise,
+                            &self.gaps[axis][side],
+                        );
+                    }
+                    None => odd_image(&mut self.pressure, g, axis, side, None),
+                }
             }
         }
         let [nx, ny] = g.dims;
@@ -433,6 +522,67 @@ fn add_outer_images(
                     }
                 }
             }
+        }
+    }
+}
+
+/// A drained wall's condition, imposed where the water meets the skeleton.
+/// A skeleton that settles away from a drained wall (Terzaghi's column
+/// under its load) leaves free water between them, in which the pressure
+/// hardly changes; held at the wall instead, the pressure fell across that
+/// gap through the grains' drag on the grid, the skeleton's surface stayed
+/// above the prescribed value, and the column carried it on top of its
+/// load (+2 % of p0 under Terzaghi's ramp). So along each node column the
+/// pressure at the surface, `gap` in from the wall row, is the wall's plus
+/// the free water's hydrostatic `rise` per metre, and every node at or
+/// beyond it takes the odd image about it of the field inside (piecewise
+/// linear through the inner nodes and the surface value). Against the wall
+/// (gap 0) this is the wall row's value and the odd image about it.
+fn drained_image(
+    pressure: &mut [f64],
+    g: &Grid,
+    axis: usize,
+    side: usize,
+    p_wall: f64,
+    rise: f64,
+    gaps: &[f64],
+) {
+    let out: i64 = if side == 1 { 1 } else { -1 };
+    let wall = (PAD + side * g.cells[axis]) as i64;
+    for (k, (wall_node, pairs)) in wall_rows(g, axis, side).enumerate() {
+        let gap = gaps[k];
+        if gap == 0.0 {
+            pressure[wall_node] = p_wall;
+            for (ghost, partner) in pairs {
+                pressure[ghost] = 2.0 * p_wall - pressure[partner];
+            }
+            continue;
+        }
+        // Node m steps outward from the wall row (m <= 0 inside).
+        let node = |m: i64| {
+            let i = (wall + out * m) as usize;
+            if axis == 0 {
+                g.index(i, k)
+            } else {
+                g.index(k, i)
+            }
+        };
+        let p_surface = p_wall + rise * gap;
+        let s = -gap / g.h;
+        let m0 = s.ceil() as i64 - 1;
+        let p_m0 = pressure[node(m0)];
+        let inside = |y: f64, pressure: &[f64]| {
+            if y >= m0 as f64 {
+                p_m0 + (y - m0 as f64) / (s - m0 as f64) * (p_surface - p_m0)
+            } else {
+                let j = y.floor();
+                let (a, b) = (pressure[node(j as i64)], pressure[node(j as i64 + 1)]);
+                a + (y - j) * (b - a)
+            }
+        };
+        for m in m0 + 1..=PAD as i64 {
+            let mirrored = inside(2.0 * s - m as f64, pressure);
+            pressure[node(m)] = 2.0 * p_surface - mirrored;
         }
     }
 }
