@@ -305,9 +305,6 @@ struct TerzaghiCheck {
     s0: f64,
     s_inf: f64,
     row: f64,
-    /// Ids of the solid's top row (by id) and their mean height at t = 0.
-    top: Vec<bool>,
-    top_y0: f64,
     /// The solid's lattice row of each particle (by id) and each row's
     /// height at t = 0.
     solid_row: Vec<usize>,
@@ -349,15 +346,6 @@ impl TerzaghiCheck {
         let v = mix.phase(0).view();
         let l = scene.cell / scene.ppc as f64;
         let y_max = v.x.iter().map(|x| x.y).fold(f64::NEG_INFINITY, f64::max);
-        let mut top = vec![false; v.n_initial];
-        let (mut sum, mut count) = (0.0, 0.0);
-        for (x, &id) in v.x.iter().zip(v.id) {
-            if x.y > y_max - 0.5 * l {
-                top[id as usize] = true;
-                sum += x.y;
-                count += 1.0;
-            }
-        }
         let y_min = v.x.iter().map(|x| x.y).fold(f64::INFINITY, f64::min);
         let row_of = |y: f64| ((y - y_min) / l).round().max(0.0) as usize;
         let rows = row_of(y_max) + 1;
@@ -383,8 +371,6 @@ impl TerzaghiCheck {
             s0: q * height / (m + k_f / n),
             s_inf: q * height / m,
             row: 0.5 * scene.cell,
-            top,
-            top_y0: sum / count,
             samples: vec![],
         })
     }
@@ -497,15 +483,8 @@ impl TerzaghiCheck {
             })
             .fold(0.0, f64::max)
             / self.p0;
-        let solid = mix.phase(0).view();
-        let (mut sum, mut count) = (0.0, 0.0_f64);
-        for (x, &id) in solid.x.iter().zip(solid.id) {
-            if self.top.get(id as usize).copied().unwrap_or(false) {
-                sum += x.y;
-                count += 1.0;
-            }
-        }
-        let settlement = self.top_y0 - sum / count.max(1.0);
+        // The top row's settlement.
+        let settlement = skeleton.last().map_or(0.0, |&(y, y0)| y0 - y);
         let u = (settlement - self.s0 * ramp_share(t, self.ramp)) / (self.s_inf - self.s0);
         self.samples
             .push([t, big_t, error, u, self.exact_u(t, &history)]);
