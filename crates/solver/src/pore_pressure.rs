@@ -94,20 +94,27 @@ impl PorePressure {
     fn impose_drained(&mut self, g: &Grid) {
         for axis in 0..2 {
             for side in 0..2 {
-                if let Some(p_wall) = self.drained[axis][side] {
-                    let rise = self.hydrostatic_rise(axis, side);
-                    drained_image(
-                        &mut self.pressure,
-                        g,
-                        axis,
-                        side,
-                        p_wall,
-                        rise,
-                        &self.gaps[axis][side],
-                    );
-                }
+                self.image_drained_wall(g, axis, side);
             }
         }
+    }
+
+    /// A drained wall's condition (`drained_image`); false on any other wall.
+    fn image_drained_wall(&mut self, g: &Grid, axis: usize, side: usize) -> bool {
+        let Some(p_wall) = self.drained[axis][side] else {
+            return false;
+        };
+        let rise = self.hydrostatic_rise(axis, side);
+        drained_image(
+            &mut self.pressure,
+            g,
+            axis,
+            side,
+            p_wall,
+            rise,
+            &self.gaps[axis][side],
+        );
+        true
     }
 
     /// The pressure gained per metre in from a drained wall through the
@@ -242,20 +249,8 @@ impl PorePressure {
     fn average_nodes(&mut self, g: &Grid) {
         for axis in (0..2).filter(|&a| !g.periodic[a]) {
             for side in 0..2 {
-                match self.drained[axis][side] {
-                    Some(p_wall) => {
-                        let rise = self.hydrostatic_rise(axis, side);
-                        drained_image(
-                            &mut self.pressure,
-                            g,
-                            axis,
-                            side,
-                            p_wall,
-                            rise,
-                            &self.gaps[axis][side],
-                        );
-                    }
-                    None => odd_image(&mut self.pressure, g, axis, side, None),
+                if !self.image_drained_wall(g, axis, side) {
+                    odd_image(&mut self.pressure, g, axis, side, None);
                 }
             }
         }
