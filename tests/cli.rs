@@ -257,6 +257,26 @@ fn bad_study_files_exit_2_naming_file_key_and_range() {
         e.contains("scene.body[0].rect") && e.contains("inside the box"),
         "{e}"
     );
+    // The unified model's softening: a fluid has no shear modulus to soften.
+    let e = bad(
+        &GOOD.replace("K = 1.5e5", "K = 1.5e5\nsoftening_strain = 0.01"),
+        &[],
+    );
+    assert!(
+        e.contains("materials.water.softening_strain") && e.contains("shear_modulus > 0"),
+        "{e}"
+    );
+    let e = bad(
+        &GOOD.replace(
+            "K = 1.5e5",
+            "K = 1.5e5\nshear_modulus = 1e4\nsoftening_strain = -1",
+        ),
+        &[],
+    );
+    assert!(
+        e.contains("materials.water.softening_strain") && e.contains("allowed 0 ..= 1000000"),
+        "{e}"
+    );
     let e = bad(GOOD, &["--set", "scene.ppc=99"]);
     assert!(e.contains("scene.ppc") && e.contains("1 ..= 8"), "{e}");
     let e = bad(GOOD, &["--case", "nope"]);

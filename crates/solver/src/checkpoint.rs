@@ -6,7 +6,7 @@ use crate::particles::{Mat2, Particles, Vec2};
 use crate::Solver;
 
 const MAGIC: &[u8; 8] = b"KICKSTAT";
-pub const VERSION: u32 = 6;
+pub const VERSION: u32 = 7;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum CheckpointError {
@@ -298,6 +298,7 @@ pub fn save(s: &Solver) -> Vec<u8> {
     w.f64s(&ps.vol0);
     w.f64s(&ps.pressure);
     w.f64s(&ps.dev_rate);
+    w.f64s(&ps.history);
     w.u32s(&ps.id);
     let material: Vec<u32> = ps.material.iter().map(|&m| m as u32).collect();
     w.u32s(&material);
@@ -375,6 +376,7 @@ pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
     r.f64s(&mut ps.vol0)?;
     r.f64s(&mut ps.pressure)?;
     r.f64s(&mut ps.dev_rate)?;
+    r.f64s(&mut ps.history)?;
     r.u32s(&mut ps.id)?;
     let mut material = vec![0u32; n as usize];
     r.u32s(&mut material)?;

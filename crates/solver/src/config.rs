@@ -162,6 +162,12 @@ pub struct Material {
     /// Shear modulus G (Pa) of the neo-Hookean shear part: 0 = a fluid.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub shear_modulus: f64,
+    /// Shear softening (the unified model's history variable xi, the
+    /// accumulated equivalent shear strain): G(xi) = G exp(-xi /
+    /// softening_strain), so a solid sheared far enough becomes the fluid
+    /// U(J) + 2 mu dev D. 0 = none (G stays G).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub softening_strain: f64,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -198,6 +204,7 @@ impl Material {
             j_res: defaults::j_res(),
             pressure_floor: None,
             shear_modulus: 0.0,
+            softening_strain: 0.0,
         }
     }
 
@@ -784,6 +791,12 @@ impl SolverConfig {
                 m.shear_modulus == 0.0 || !self.method.f_reset,
                 &m.key(i, "shear_modulus"),
                 "a solid (shear_modulus > 0) cannot be run with method.f_reset = true (the reset F forgets the shear)",
+            )?;
+            within(m.softening_strain, 0.0, 1e6, &m.key(i, "softening_strain"))?;
+            check(
+                m.softening_strain == 0.0 || m.shear_modulus > 0.0,
+                &m.key(i, "softening_strain"),
+                "softens a solid's shear modulus: it needs shear_modulus > 0 (got 0, a fluid)",
             )?;
         }
         Ok(())

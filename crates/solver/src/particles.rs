@@ -29,6 +29,10 @@ pub struct Particles {
     pub pressure: Vec<f64>,
     /// |dev D| (3D deviator, plane strain), 1/s.
     pub dev_rate: Vec<f64>,
+    /// The unified model's history variable xi: the accumulated equivalent
+    /// shear strain, integral of sqrt(2 dev D : dev D) dt (3D deviator). It
+    /// grows only in a softening solid (`softening_strain > 0`); 0 elsewhere.
+    pub history: Vec<f64>,
     /// EOS figures of the current J, cached by the stress stage so the time
     /// step and the energy need no second EOS evaluation: c(J) and V0 U(J).
     pub wave_speed: Vec<f64>,
@@ -62,6 +66,7 @@ impl Particles {
         self.stress.push(Mat2::zeros());
         self.pressure.push(0.0);
         self.dev_rate.push(0.0);
+        self.history.push(0.0);
         self.wave_speed.push(0.0);
         self.stored_energy.push(0.0);
         self.material.push(material);
@@ -102,6 +107,7 @@ impl Particles {
         self.stress[to] = self.stress[from];
         self.pressure[to] = self.pressure[from];
         self.dev_rate[to] = self.dev_rate[from];
+        self.history[to] = self.history[from];
         self.wave_speed[to] = self.wave_speed[from];
         self.stored_energy[to] = self.stored_energy[from];
         self.material[to] = self.material[from];
@@ -127,6 +133,7 @@ impl Particles {
         self.stress.resize(n, Mat2::zeros());
         self.pressure.resize(n, 0.0);
         self.dev_rate.resize(n, 0.0);
+        self.history.resize(n, 0.0);
         self.wave_speed.resize(n, 0.0);
         self.stored_energy.resize(n, 0.0);
         self.material.resize(n, 0);
@@ -149,6 +156,7 @@ impl Particles {
         self.stress.reserve(extra);
         self.pressure.reserve(extra);
         self.dev_rate.reserve(extra);
+        self.history.reserve(extra);
         self.wave_speed.reserve(extra);
         self.stored_energy.reserve(extra);
         self.material.reserve(extra);
@@ -170,6 +178,7 @@ impl Particles {
         self.stress.truncate(n);
         self.pressure.truncate(n);
         self.dev_rate.truncate(n);
+        self.history.truncate(n);
         self.wave_speed.truncate(n);
         self.stored_energy.truncate(n);
         self.material.truncate(n);

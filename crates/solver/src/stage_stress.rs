@@ -1,6 +1,7 @@
 //! Stress stage: velocity gradient from the grid, deformation-gradient and J
 //! update, EOS pressure plus Newtonian viscosity (plane strain, 3D deviator)
-//! plus a solid's neo-Hookean shear stress, and the EOS figures the time step and the energy need (one EOS call).
+//! plus a solid's neo-Hookean shear stress (softened by its history xi), and
+//! the EOS figures the time step and the energy need (one EOS call).
 
 use crate::config::{JUpdate, Material};
 use crate::grid::Grid;
@@ -31,7 +32,8 @@ pub struct Inputs<'a> {
     pub drop_inverted: bool,
 }
 
-/// Updates F, J, V, stress, pressure and |dev D|; returns the viscous work of this step.
+/// Updates F, J, V, stress, pressure, |dev D| and xi; returns the energy
+/// dissipated this step (viscous work and what softening released).
 pub fn update(inputs: &Inputs, particles: &mut Particles, partials: &mut [[f64; 1]]) -> f64 {
     match inputs.shape.width() {
         2 => run::<2>(inputs, particles, partials),
@@ -97,7 +99,10 @@ fn run<const W: usize>(
         particles.vol.par_chunks_mut(CHUNK),
         particles.stress.par_chunks_mut(CHUNK),
         particles.pressure.par_chunks_mut(CHUNK),
-        particles.dev_rate.par_chunks_mut(CHUNK),
+        particles
+            .dev_rate
+            .par_chunks_mut(CHUNK)
+            .zip(particles.history.par_chunks_mut(CHUNK)),
         particles.wave_speed.par_chunks_mut(CHUNK),
         particles.stored_energy.par_chunks_mut(CHUNK),
         particles.vol0.par_chunks(CHUNK),
@@ -116,7 +121,7 @@ fn run<const W: usize>(
                 vol,
                 stress,
                 pressure,
-                dev_rate,
+                (dev_rate, history),
                 wave,
                 stored,
                 vol0,
@@ -125,6 +130,8 @@ fn run<const W: usize>(
                 work,
             )| {
                 let mut acc = 0.0;
+                // This step's history increments (softening solids only).
+                let mut dxi = [0.0; CHUNK];
                 for k in 0..f.len() {
                     let l = if mls {
                         affine[k]
@@ -154,6 +161,9 @@ fn run<const W: usize>(
                     let visc = viscosity::newtonian(m.viscosity, &d);
                     stress[k] = visc.stress;
                     dev_rate[k] = visc.dev_rate;
+                    if m.softening_strain > 0.0 {
+                        dxi[k] = crate::solid_neo_hookean::history_increment(&d, dt);
+                    }
                     acc += visc.power * vol[k] * dt;
                     if bulk_damping > 0.0 {
                         // The wave speed is the previous step's (the EOS runs below).
@@ -177,7 +187,13 @@ fn run<const W: usize>(
                     for k in 0..f.len() {
                         let m = &materials[mat[k] as usize];
                         let (s, w, e) = (&mut stress[k], &mut wave[k], &mut stored[k]);
-                        crate::solid_neo_hookean::add_to(m, &f[k], vol0[k], s, w, e);
+                        let xi_before = history[k];
+                        history[k] += dxi[k];
+                        let xi = history[k];
+                        // The energy softening released is dissipated.
+                        acc += crate::solid_neo_hookean::add_to(
+                            m, &f[k], vol0[k], xi_before, xi, s, w, e,
+                        );
                     }
                 }
                 if drop_inverted {

@@ -31,6 +31,8 @@ pub fn refresh_eos_of(particles: &mut Particles, materials: &[Material], p: usiz
         m,
         &particles.f[p],
         particles.vol0[p],
+        particles.history[p],
+        particles.history[p],
         &mut unused,
         &mut particles.wave_speed[p],
         &mut particles.stored_energy[p],

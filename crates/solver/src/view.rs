@@ -58,6 +58,9 @@ pub struct StateView<'a> {
     pub stress: &'a [Mat2],
     /// |dev D| of the last step (1/s).
     pub dev_rate: &'a [f64],
+    /// The history variable xi, accumulated equivalent shear strain (0 but
+    /// in a softening solid).
+    pub history: &'a [f64],
     pub material: &'a [u16],
     pub id: &'a [u32],
     pub grid: GridView<'a>,
@@ -105,6 +108,7 @@ pub fn make(s: &Solver) -> StateView<'_> {
         pressure: &ps.pressure,
         stress: &ps.stress,
         dev_rate: &ps.dev_rate,
+        history: &ps.history,
         material: &ps.material,
         id: &ps.id,
         grid: GridView {

@@ -14,6 +14,8 @@ pub struct Snapshot {
     /// Force-driven |a_p| of the last step (m/s^2).
     pub accel: Vec<f64>,
     pub j: Vec<f64>,
+    /// The history variable xi; empty unless a material softens.
+    pub history: Vec<f64>,
     pub id: Vec<u32>,
 }
 
@@ -42,6 +44,10 @@ impl Snapshot {
         self.pressure.extend_from_slice(v.pressure);
         self.j.clear();
         self.j.extend_from_slice(v.j);
+        self.history.clear();
+        if v.materials.iter().any(|m| m.softening_strain > 0.0) {
+            self.history.extend_from_slice(v.history);
+        }
         self.id.clear();
         self.id.extend_from_slice(v.id);
         // The force-driven acceleration the monitor scores.
@@ -82,6 +88,9 @@ impl Snapshot {
         scalar("pressure", &|p| self.pressure[p]);
         scalar("accel", &|p| self.accel[p]);
         scalar("J", &|p| self.j[p]);
+        if !self.history.is_empty() {
+            scalar("xi", &|p| self.history[p]);
+        }
         scalar("id", &|p| self.id[p] as f64);
         let _ = writeln!(s, "VECTORS velocity double");
         for u in &self.v {
@@ -133,6 +142,7 @@ impl Snapshot {
                         "pressure" => snap.pressure = vals,
                         "accel" => snap.accel = vals,
                         "J" => snap.j = vals,
+                        "xi" => snap.history = vals,
                         "id" => snap.id = vals.iter().map(|v| *v as u32).collect(),
                         _ => {}
                     }
@@ -156,9 +166,43 @@ impl Snapshot {
         };
         fill(&mut snap.accel, 0.0);
         fill(&mut snap.j, 1.0);
+        if snap.history.len() != n {
+            snap.history.clear();
+        }
         if snap.v.len() != n {
             snap.v = vec![Vec2::zeros(); n];
         }
         Ok(snap)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn snapshot(history: Vec<f64>) -> Snapshot {
+        Snapshot {
+            step: 7,
+            t: 0.25,
+            x: vec![Vec2::new(0.1, 0.2), Vec2::new(0.3, 0.4)],
+            v: vec![Vec2::new(1.0, -1.0), Vec2::new(0.5, 0.0)],
+            pressure: vec![10.0, -2.5],
+            accel: vec![0.0, 9.81],
+            j: vec![1.0, 0.99],
+            history,
+            id: vec![4, 9],
+        }
+    }
+
+    /// Every field round-trips through the VTK text; xi is written only for
+    /// a softening solid, and a file without it reads back with none.
+    #[test]
+    fn vtk_round_trips_and_writes_xi_only_when_captured() {
+        for history in [vec![0.0, 1.5e-3], vec![]] {
+            let s = snapshot(history.clone());
+            let text = String::from_utf8(s.vtk()).unwrap();
+            assert_eq!(text.contains("SCALARS xi"), !history.is_empty());
+            assert_eq!(Snapshot::from_vtk(&text).unwrap(), s);
+        }
     }
 }
