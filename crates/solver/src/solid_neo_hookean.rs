@@ -45,9 +45,7 @@ pub fn shear(f: &Mat2, g: f64) -> Shear {
 /// deviator, so simple shear at rate gamma' adds gamma' dt.
 #[inline]
 pub fn history_increment(d: &Mat2, dt: f64) -> f64 {
-    let third = d.trace() / 3.0;
-    let dev = d - third * Mat2::identity();
-    (2.0 * (dev.norm_squared() + third * third)).sqrt() * dt
+    (2.0 * crate::viscosity::deviator_3d(d).1).sqrt() * dt
 }
 
 impl Material {

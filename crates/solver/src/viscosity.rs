@@ -14,11 +14,19 @@ pub struct Viscous {
     pub power: f64,
 }
 
+/// The 3D deviator of an in-plane rate of deformation (D_zz = 0): its
+/// in-plane block D - tr(D)/3 I and dev D : dev D (the zz entry -tr(D)/3
+/// included).
 #[inline]
-pub fn newtonian(mu: f64, d: &Mat2) -> Viscous {
+pub fn deviator_3d(d: &Mat2) -> (Mat2, f64) {
     let third = (d[(0, 0)] + d[(1, 1)]) / 3.0;
     let dev = d - third * Mat2::identity();
-    let norm2 = dev.norm_squared() + third * third;
+    (dev, dev.norm_squared() + third * third)
+}
+
+#[inline]
+pub fn newtonian(mu: f64, d: &Mat2) -> Viscous {
+    let (dev, norm2) = deviator_3d(d);
     Viscous {
         stress: 2.0 * mu * dev,
         dev_rate: in_plane_dev_rate(d),
