@@ -277,6 +277,20 @@ fn bad_study_files_exit_2_naming_file_key_and_range() {
         e.contains("materials.water.softening_strain") && e.contains("allowed 0 ..= 1000000"),
         "{e}"
     );
+    // A gate must stand on a cell line.
+    let e = bad(
+        &GOOD
+            .replace(
+                "t_end = 0.01",
+                "t_end = 0.01\ninitial = \"hydrostatic_gate\"",
+            )
+            .replace("[0.0, 0.0, 0.2, 0.4]", "[0.0, 0.0, 0.205, 0.4]"),
+        &[],
+    );
+    assert!(
+        e.contains("scene.initial") && e.contains("not on a cell line"),
+        "{e}"
+    );
     let e = bad(GOOD, &["--set", "scene.ppc=99"]);
     assert!(e.contains("scene.ppc") && e.contains("1 ..= 8"), "{e}");
     let e = bad(GOOD, &["--case", "nope"]);

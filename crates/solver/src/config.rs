@@ -84,6 +84,11 @@ pub enum InitialState {
     ZeroStress,
     /// Discrete hydrostatic equilibrium (spaced by J, then damped relaxation).
     Hydrostatic,
+    /// The same equilibrium reached behind gates at the bodies' left and right
+    /// edges, lifted at t = 0: a dam-break column standing at rest before its
+    /// release, as in the experiments (zero stress would add a fall under
+    /// gravity that the experiment does not have).
+    HydrostaticGate,
 }
 
 /// How the internal force and the velocity gradient are discretised.
@@ -389,6 +394,24 @@ impl Scene {
             materials: vec![material],
             ..Scene::default()
         }
+    }
+
+    /// The bodies' extent in x, [left, right]: where `hydrostatic_gate` holds them.
+    pub fn gated_span(&self) -> [f64; 2] {
+        self.bodies
+            .iter()
+            .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], body| {
+                [a.min(body.rect[0]), b.max(body.rect[2])]
+            })
+    }
+
+    /// The box cut to the gates: walls at the bodies' left and right edges.
+    pub fn gated(&self) -> Scene {
+        let [x0, x1] = self.gated_span();
+        let mut held = self.clone();
+        held.origin[0] = x0;
+        held.size[0] = ((x1 - x0) / self.cell).round() * self.cell;
+        held
     }
 
     /// Number of cells along each axis.
@@ -767,6 +790,42 @@ impl SolverConfig {
                 "must be finite",
             )?;
         }
+        if s.initial == InitialState::HydrostaticGate {
+            self.validate_gates()?;
+        }
+        Ok(())
+    }
+
+    /// Gates stand at the bodies' outer left and right edges: on cell lines,
+    /// with the x axis walled.
+    fn validate_gates(&self) -> Result<(), ConfigError> {
+        let s = &self.scene;
+        check(
+            !s.periodic[0],
+            "scene.initial",
+            "\"hydrostatic_gate\" needs walls in x (scene.periodic[0] is true)",
+        )?;
+        let [x0, x1] = s.gated_span();
+        for (edge, x) in [("left", x0), ("right", x1)] {
+            let n = (x - s.origin[0]) / s.cell;
+            check(
+                (n - n.round()).abs() < 1e-6,
+                "scene.initial",
+                format!(
+                    "\"hydrostatic_gate\" puts a gate at the bodies' {edge} edge, x = {x} m, \
+                     which is not on a cell line (cell {} m from x = {} m)",
+                    s.cell, s.origin[0]
+                ),
+            )?;
+        }
+        check(
+            x1 - x0 >= 2.0 * s.cell - 1e-9,
+            "scene.initial",
+            format!(
+                "\"hydrostatic_gate\": the bodies span {} m in x, less than two cells",
+                x1 - x0
+            ),
+        )?;
         Ok(())
     }
 

@@ -3,8 +3,9 @@
 //! then removes what the discretisation (walls, free surface) leaves out of
 //! balance, before the clock starts at t = 0 with the particles at rest.
 
+use crate::config::SolverConfig;
 use crate::config::{DtMode, TransferKind};
-use crate::particles::{Mat2, Vec2};
+use crate::particles::{Mat2, Particles, Vec2};
 use crate::{Solver, StepError};
 
 /// Lowest-mode periods of damped relaxation.
@@ -51,4 +52,14 @@ pub fn relax(s: &mut Solver) -> Result<(), StepError> {
     ps.accel.iter_mut().for_each(|a| *a = Vec2::zeros());
     ps.affine.iter_mut().for_each(|c| *c = Mat2::zeros());
     result
+}
+
+/// Relaxes the particles in the box cut to the bodies' left and right edges
+/// (free-slip gates), then hands them, at rest, to a solver over the whole box.
+pub fn relax_behind_gates(cfg: SolverConfig, particles: Particles) -> Result<Solver, StepError> {
+    let mut held_cfg = cfg.clone();
+    held_cfg.scene = cfg.scene.gated();
+    let mut held = Solver::with_particles(held_cfg, particles);
+    relax(&mut held)?;
+    Ok(Solver::with_particles(cfg, held.particles))
 }

@@ -168,13 +168,21 @@ impl Solver {
                 message: "the bodies hold no particles".into(),
             });
         }
-        let mut solver = Self::with_particles(cfg, particles);
-        if solver.cfg.scene.initial == InitialState::Hydrostatic {
-            init_hydrostatic::relax(&mut solver).map_err(|e| ConfigError {
-                key: "scene.initial".into(),
-                message: format!("hydrostatic relaxation failed: {e}"),
-            })?;
-        }
+        let failed = |e: StepError| ConfigError {
+            key: "scene.initial".into(),
+            message: format!("hydrostatic relaxation failed: {e}"),
+        };
+        let mut solver = match cfg.scene.initial {
+            InitialState::ZeroStress => Self::with_particles(cfg, particles),
+            InitialState::Hydrostatic => {
+                let mut solver = Self::with_particles(cfg, particles);
+                init_hydrostatic::relax(&mut solver).map_err(failed)?;
+                solver
+            }
+            InitialState::HydrostaticGate => {
+                init_hydrostatic::relax_behind_gates(cfg, particles).map_err(failed)?
+            }
+        };
         solver.start_clock();
         Ok(solver)
     }

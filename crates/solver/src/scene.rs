@@ -36,7 +36,7 @@ pub fn seed(scene: &Scene) -> Particles {
                         );
                     }
                 }
-                InitialState::Hydrostatic => {
+                InitialState::Hydrostatic | InitialState::HydrostaticGate => {
                     // Row k from the top carries p = rho0 g l (k + 1/2): exactly the
                     // clamped mass-above reference of docs/physics.md on this lattice.
                     let mut y = scene.origin[1] + iy0 as f64 * l;

@@ -64,3 +64,67 @@ fn hydrostatic_column_stays_at_rest() {
     assert!(interior < 0.02, "interior relative RMS {interior}");
     assert!(all < 0.10, "overall relative RMS {all}");
 }
+
+/// The dam-break column of docs/physics.md section 1 (0.8 m tank), Tait 1.5 MPa.
+fn dam_break_scene(initial: InitialState) -> Scene {
+    let mut mat = Material::tait(1.5e6);
+    mat.eos = EosKind::Tait;
+    mat.viscosity = 0.5;
+    let mut scene = common::box_scene([0.8, 0.6], [0.0, 0.0, 0.2, 0.4], mat, 9.81);
+    scene.initial = initial;
+    scene.t_end = 0.05;
+    scene
+}
+
+#[test]
+fn a_gated_column_stands_hydrostatic_at_rest_until_the_gate_is_lifted() {
+    let method = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
+    let mut s = common::solver(
+        dam_break_scene(InitialState::HydrostaticGate),
+        method.clone(),
+    );
+    let v = s.view();
+    let reference = reference_pressure(&v);
+    let x_max = v.x.iter().map(|x| x.x).fold(f64::MIN, f64::max);
+    let speed = v.v.iter().map(|u| u.norm()).fold(0.0, f64::max);
+    let all = relative_rms(&v, &reference, |_| true);
+    eprintln!("gated: x_max {x_max:.5} m, speed {speed:.1e}, pressure rel RMS {all:.4}");
+    // Behind the gate at x = 0.2 m (the last particle column sits l / 2 inside it).
+    assert!(x_max < 0.2 - 0.2 * v.scene.cell, "x_max {x_max}");
+    assert_eq!(speed, 0.0);
+    assert!(all < 0.005, "relative RMS {all}");
+
+    // Relaxed without the gate the column has already begun to slump, and its
+    // pressure is nowhere near hydrostatic: what the gate is for.
+    let open = common::solver(dam_break_scene(InitialState::Hydrostatic), method);
+    let v = open.view();
+    let open_rms = relative_rms(&v, &reference_pressure(&v), |_| true);
+    let open_x = v.x.iter().map(|x| x.x).fold(f64::MIN, f64::max);
+    eprintln!("no gate: x_max {open_x:.5} m, pressure rel RMS {open_rms:.4}");
+    assert!(open_x > 0.2 && open_rms > 0.2);
+
+    // Lifted at t = 0: the column collapses.
+    while !s.finished() {
+        s.step().unwrap();
+    }
+    let x_max = s.view().x.iter().map(|x| x.x).fold(f64::MIN, f64::max);
+    assert!(
+        x_max > 0.2 + s.view().scene.cell,
+        "front after 0.05 s: {x_max}"
+    );
+}
+
+#[test]
+fn a_gate_off_the_cell_lines_is_refused() {
+    let mut scene = dam_break_scene(InitialState::HydrostaticGate);
+    scene.bodies[0].rect[2] = 0.205;
+    let err = Solver::new(SolverConfig {
+        scene,
+        method: Method::baseline(),
+        perturb: vec![],
+    })
+    .err()
+    .unwrap();
+    assert_eq!(err.key, "scene.initial");
+    assert!(err.message.contains("right edge"), "{}", err.message);
+}
