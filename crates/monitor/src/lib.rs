@@ -115,6 +115,9 @@ pub struct FieldMetrics {
     pub pressure_spread: f64,
     pub hydro_rel_rms: f64,
     pub hydro_max: f64,
+    /// Departure from the pressure that the weight and the vertical
+    /// accelerations above demand, relative to the hydrostatic pressure.
+    pub hydro_unexplained_rel_rms: f64,
     pub front_x: Option<f64>,
     pub front_z: Option<f64>,
     pub front_t: f64,
@@ -1114,7 +1117,7 @@ impl Monitor {
         self.field.accumulate(geom, v.x, v.pressure);
         let checkerboard = checkerboard::index(geom, &self.field);
         let pressure_spread = checkerboard::intra_cell_spread(geom, &self.field, v.x, v.pressure);
-        self.hydro.compute(geom, v.x, v.mass);
+        self.hydro.compute(geom, v.x, v.mass, v.accel);
         let dep = self.hydro.departure(geom, v.volume, v.pressure);
         let front_x = self.front.position(geom, &self.field);
         let (front_z, front_t) = match front_x {
@@ -1129,6 +1132,7 @@ impl Monitor {
             pressure_spread,
             hydro_rel_rms: dep.rel_rms,
             hydro_max: dep.max,
+            hydro_unexplained_rel_rms: dep.unexplained_rel_rms,
             front_x,
             front_z,
             front_t,

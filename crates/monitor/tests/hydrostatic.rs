@@ -26,7 +26,7 @@ fn exact_on_hydrostatic_lattices() {
             let j_min = ps.j.iter().cloned().fold(1.0, f64::min);
             let g = Geometry::from_scene(&sc);
             let mut h = Hydrostatic::new(&g, ps.len());
-            h.compute(&g, &ps.x, &ps.mass);
+            h.compute(&g, &ps.x, &ps.mass, &vec![Vec2::zeros(); ps.len()]);
             let d = h.departure(&g, &ps.vol, &ps.pressure);
             assert!(
                 d.rel_rms < 1e-13,
@@ -60,7 +60,7 @@ fn matches_hand_computation_on_a_perturbed_column() {
     ];
     let mass = vec![m; 3];
     let mut hyd = Hydrostatic::new(&g, 3);
-    hyd.compute(&g, &x, &mass);
+    hyd.compute(&g, &x, &mass, &[Vec2::zeros(); 3]);
     let gh = 9.81 / h;
     // bottom: 1/2 (self) + 1 + 1; middle: 1/2 + clamp(0.25 + 0.5) = 1.25;
     // top: 1/2 + clamp(-0.25 + 0.5) = 0.75.
@@ -80,4 +80,36 @@ fn matches_hand_computation_on_a_perturbed_column() {
     // max |p - p_h| = 0.25 m g / h over rho0 g H with H = 0.03 m.
     let max = 0.25 * m * gh / (1000.0 * 9.81 * 0.03);
     assert!((d.max - max).abs() < 1e-12, "{} vs {max}", d.max);
+}
+
+#[test]
+fn vertical_acceleration_scales_the_explained_pressure() {
+    // A hydrostatic lattice in a lift accelerating at a: p = rho (g + a) depth.
+    // The hydrostatic departure is |a| / g; the accelerations explain all of it.
+    let mut sc = Scene::dam_break(Material::tait(1.5e6));
+    sc.initial = InitialState::Hydrostatic;
+    let ps = scene::seed(&sc);
+    let g = Geometry::from_scene(&sc);
+    let mut h = Hydrostatic::new(&g, ps.len());
+    for a in [-9.81, -3.0, 4.5] {
+        let accel = vec![Vec2::new(0.7, a); ps.len()];
+        h.compute(&g, &ps.x, &ps.mass, &accel);
+        let scale = (9.81 + a) / 9.81;
+        for (pa, ph) in h.with_accel.iter().zip(&h.reference) {
+            assert!(
+                (pa - scale * ph).abs() <= 1e-12 * ph.abs().max(1.0),
+                "{pa} vs {scale} x {ph}"
+            );
+        }
+        let pressure: Vec<f64> = ps.pressure.iter().map(|p| scale * p).collect();
+        let d = h.departure(&g, &ps.vol, &pressure);
+        assert!((d.rel_rms - (a / 9.81).abs()).abs() < 1e-12, "a {a}: {d:?}");
+        assert!(d.unexplained_rel_rms < 1e-12, "a {a}: {d:?}");
+        // At rest-level pressure in a falling lift, all of the departure is unexplained.
+        let d = h.departure(&g, &ps.vol, &ps.pressure);
+        assert!(
+            (d.unexplained_rel_rms - (a / 9.81).abs()).abs() < 1e-12,
+            "a {a}: {d:?}"
+        );
+    }
 }

@@ -251,6 +251,7 @@ pub fn summarise(
     let count = |k: EventKind| events.iter().filter(|e| e.kind == k).count();
     let (hydro_rel_rms_late, hydro_rel_rms_pre_failure) = split("hydro_rel_rms");
     let (hydro_max_late, hydro_max_pre_failure) = split("hydro_max");
+    let (hydro_unexplained_rel_rms_late, _) = split("hydro_unexplained_rel_rms");
     let (checkerboard_late, checkerboard_pre_failure) = split("checkerboard");
     let front = z_wall.map_or(FrontErrors::default(), |z| {
         front_errors(&front_track(ts), &martin_moyce(), z)
@@ -258,6 +259,7 @@ pub fn summarise(
     Metrics {
         hydro_rel_rms_late,
         hydro_max_late,
+        hydro_unexplained_rel_rms_late,
         checkerboard_late,
         hydro_rel_rms_pre_failure,
         hydro_max_pre_failure,

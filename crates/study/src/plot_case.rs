@@ -123,6 +123,10 @@ impl TimeseriesFigure<'_> {
                 lines: vec![
                     ("hydro rel. RMS", col("hydro_rel_rms")),
                     ("hydro max / rho0 g H", col("hydro_max")),
+                    (
+                        "not explained by accelerations",
+                        col("hydro_unexplained_rel_rms"),
+                    ),
                 ],
                 log: true,
             },

@@ -318,12 +318,17 @@ fn particles_section(c: &CaseInputs, page: &mut Page) -> Res {
         rho0: scene.materials.first().map_or(1000.0, |m| m.rho0),
         gravity: c.gravity(),
         title: format!(
-            "{}, t = {:.2} s: late hydrostatic rel. RMS {}",
+            "{}, t = {:.2} s: late hydrostatic rel. RMS {} ({} not explained by the accelerations)",
             c.name(),
             last.t,
             c.summary
                 .metrics
                 .hydro_rel_rms_late
+                .map(short)
+                .unwrap_or("-".into()),
+            c.summary
+                .metrics
+                .hydro_unexplained_rel_rms_late
                 .map(short)
                 .unwrap_or("-".into())
         ),

@@ -41,6 +41,10 @@ pub struct Metrics {
     pub hydro_rel_rms_late: Option<f64>,
     /// Mean largest hydrostatic departure over the same window.
     pub hydro_max_late: Option<f64>,
+    /// Mean departure over the same window from the pressure that the weight
+    /// and the vertical accelerations above demand (relative to the
+    /// hydrostatic pressure): what the motion does not explain.
+    pub hydro_unexplained_rel_rms_late: Option<f64>,
     /// Mean checkerboard index over the same window.
     pub checkerboard_late: Option<f64>,
     /// The three figures above over the second before a run stopped (blew up).
