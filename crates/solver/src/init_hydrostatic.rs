@@ -3,8 +3,7 @@
 //! then removes what the discretisation (walls, free surface) leaves out of
 //! balance, before the clock starts at t = 0 with the particles at rest.
 
-use crate::config::SolverConfig;
-use crate::config::{DtMode, TransferKind};
+use crate::config::{DtMode, SolverConfig, TransferKind};
 use crate::particles::{Mat2, Particles, Vec2};
 use crate::{Solver, StepError};
 

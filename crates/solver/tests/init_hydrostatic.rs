@@ -118,13 +118,7 @@ fn a_gated_column_stands_hydrostatic_at_rest_until_the_gate_is_lifted() {
 fn a_gate_off_the_cell_lines_is_refused() {
     let mut scene = dam_break_scene(InitialState::HydrostaticGate);
     scene.bodies[0].rect[2] = 0.205;
-    let err = Solver::new(SolverConfig {
-        scene,
-        method: Method::baseline(),
-        perturb: vec![],
-    })
-    .err()
-    .unwrap();
+    let err = common::refusal(scene, Method::baseline()).unwrap();
     assert_eq!(err.key, "scene.initial");
     assert!(err.message.contains("right edge"), "{}", err.message);
 }

@@ -453,13 +453,8 @@ fn j_bar_fit_without_j_bar_and_a_negative_relaxation_time_are_refused() {
             "method.volume_relaxation_time",
         ),
     ] {
-        let err = Solver::new(SolverConfig {
-            scene: scene.clone(),
-            method,
-            perturb: vec![],
-        })
-        .err()
-        .unwrap_or_else(|| panic!("{key}: accepted"));
+        let err =
+            common::refusal(scene.clone(), method).unwrap_or_else(|| panic!("{key}: accepted"));
         assert_eq!(err.key, key, "{err:?}");
     }
 }

@@ -283,19 +283,13 @@ fn cpgimp_half_widths_follow_f() {
 /// The F reset would reshape cpGIMP's particle domains: refused by key.
 #[test]
 fn cpgimp_with_f_reset_is_refused() {
-    use solver::{Material, Method, SchemeKind, Solver, SolverConfig, TransferKind};
+    use solver::{Material, Method, SchemeKind, TransferKind};
     let scene = common::box_scene([1.0, 1.0], [0.4, 0.4, 0.6, 0.6], Material::tait(1e5), 9.81);
     let method = Method {
         f_reset: true,
         ..common::method(ShapeKind::Cpgimp, TransferKind::Flip, SchemeKind::Usf)
     };
-    let err = Solver::new(SolverConfig {
-        scene,
-        method,
-        perturb: vec![],
-    })
-    .err()
-    .expect("cpGIMP with f_reset accepted");
+    let err = common::refusal(scene, method).expect("cpGIMP with f_reset accepted");
     assert_eq!(err.key, "method.f_reset", "{err:?}");
     assert!(err.message.contains("cpgimp"), "{err:?}");
 }

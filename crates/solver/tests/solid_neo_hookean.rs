@@ -197,13 +197,8 @@ fn solid_refuses_f_reset_and_the_fluid_j_remedies() {
             "method.volume_relaxation_time",
         ),
     ] {
-        let err = Solver::new(SolverConfig {
-            scene: scene.clone(),
-            method,
-            perturb: vec![],
-        })
-        .err()
-        .unwrap_or_else(|| panic!("{key}: accepted"));
+        let err =
+            common::refusal(scene.clone(), method).unwrap_or_else(|| panic!("{key}: accepted"));
         assert_eq!(err.key, key, "{err:?}");
     }
 }

@@ -96,13 +96,8 @@ fn mls_is_refused_for_linear_and_gimp_shapes_and_without_apic() {
             force: ForceKind::Mls,
             ..common::method(shape, transfer, SchemeKind::Usl)
         };
-        let err = Solver::new(SolverConfig {
-            scene,
-            method,
-            perturb: vec![],
-        })
-        .err()
-        .unwrap_or_else(|| panic!("{shape:?} {transfer:?} accepted"));
+        let err = common::refusal(scene, method)
+            .unwrap_or_else(|| panic!("{shape:?} {transfer:?} accepted"));
         assert_eq!(err.key, "method.force", "{err:?}");
         assert!(err.message.contains("bspline2"), "{err:?}");
     }

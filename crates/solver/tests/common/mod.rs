@@ -49,6 +49,16 @@ pub fn solver(scene: Scene, method: Method) -> Solver {
     .expect("valid config")
 }
 
+/// The error a refused config gets (None when it is accepted).
+pub fn refusal(scene: Scene, method: Method) -> Option<ConfigError> {
+    Solver::new(SolverConfig {
+        scene,
+        method,
+        perturb: vec![],
+    })
+    .err()
+}
+
 pub const SHAPES: [ShapeKind; 5] = [
     ShapeKind::Linear,
     ShapeKind::Gimp,
