@@ -103,6 +103,18 @@ pub enum ForceKind {
     Mls,
 }
 
+/// Where the internal force is integrated.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum QuadratureKind {
+    /// At the material points (MPM's own quadrature).
+    #[default]
+    Particles,
+    /// At fixed points in the cells full of material, at the material
+    /// points elsewhere (mixed integration, Beuth 2012; `quadrature_mixed`).
+    Mixed,
+}
+
 /// A wall of the box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -459,6 +471,9 @@ pub struct Method {
     pub min_node_mass: f64,
     /// Force and velocity-gradient discretisation (`gradient` or `mls`).
     pub force: ForceKind,
+    /// Where the internal force is integrated: `particles` or `mixed`
+    /// (fixed points in the cells full of material).
+    pub quadrature: QuadratureKind,
     /// F reset for fluids: F <- J^(1/2) I after each update (in 2D), so that
     /// no distortion accumulates in F. Pressure depends on J and the viscous
     /// stress on D only, so this changes nothing but round-off for shapes
@@ -516,6 +531,7 @@ impl Default for Method {
             j_update: JUpdate::Det,
             min_node_mass: 0.0,
             force: ForceKind::Gradient,
+            quadrature: QuadratureKind::Particles,
             f_reset: false,
             cell_dilatation: 0.0,
             j_bar: 0.0,
@@ -703,6 +719,27 @@ impl SolverConfig {
                 format!(
                     "\"mls\" needs method.shape = \"bspline2\" | \"bspline3\" and method.transfer = \"apic\" (got {:?}, {:?})",
                     m.shape, m.transfer
+                ),
+            )?;
+        }
+        if m.quadrature == QuadratureKind::Mixed {
+            check(
+                matches!(
+                    m.shape,
+                    ShapeKind::Linear | ShapeKind::Bspline2 | ShapeKind::Bspline3
+                ) && m.force == ForceKind::Gradient,
+                "method.quadrature",
+                format!(
+                    "\"mixed\" needs method.shape = \"linear\" | \"bspline2\" | \"bspline3\" (GIMP's kernels belong to the particles, not to a point) and method.force = \"gradient\" (got {:?}, {:?})",
+                    m.shape, m.force
+                ),
+            )?;
+            check(
+                self.scene.materials.len() == 1,
+                "method.quadrature",
+                format!(
+                    "\"mixed\" needs a single material (a full cell is judged by rho0; got {})",
+                    self.scene.materials.len()
                 ),
             )?;
         }

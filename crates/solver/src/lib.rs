@@ -22,6 +22,7 @@ pub mod mixture;
 pub mod par;
 pub mod particles;
 pub mod pore_pressure;
+pub mod quadrature_mixed;
 pub mod remedy_null_space;
 pub mod remedy_volumetric;
 pub mod scene;
@@ -155,6 +156,8 @@ pub struct Solver {
     /// Scratch of XPIC(m) (empty for the other transfers).
     xpic: transfer_xpic::Scratch,
     null_space: remedy_null_space::Scratch,
+    /// Scratch of `quadrature = "mixed"` (empty otherwise).
+    quadrature: quadrature_mixed::Scratch,
 }
 
 impl Solver {
@@ -227,7 +230,11 @@ impl Solver {
             volumetric: remedy_volumetric::Scratch::default(),
             xpic: transfer_xpic::Scratch::default(),
             null_space: remedy_null_space::Scratch::default(),
+            quadrature: quadrature_mixed::Scratch::default(),
         };
+        if solver.cfg.method.quadrature == QuadratureKind::Mixed {
+            solver.quadrature = quadrature_mixed::Scratch::new(&solver.grid);
+        }
         if solver.cfg.method.null_space_filter {
             solver.null_space = remedy_null_space::Scratch::new(&solver.grid, n);
         }

@@ -64,6 +64,16 @@ impl Mixture {
                     .into(),
             });
         }
+        if phases
+            .iter()
+            .any(|p| p.cfg.method.quadrature == crate::config::QuadratureKind::Mixed)
+        {
+            // Its full cells are judged by one phase's density.
+            return Err(ConfigError {
+                key: "method.quadrature".into(),
+                message: "\"mixed\" is for a single phase: in a mixture each phase fills only part of a cell".into(),
+            });
+        }
         if !(drag.coefficient >= 0.0 && drag.coefficient.is_finite()) {
             return Err(ConfigError {
                 key: "drag.coefficient".into(),

@@ -1,6 +1,6 @@
 //! USF, USL and MUSL as orderings of the same stages.
 
-use crate::config::{ForceKind, SchemeKind, TransferKind};
+use crate::config::{ForceKind, QuadratureKind, SchemeKind, TransferKind};
 use crate::stage_p2g::{self, Terms};
 use crate::stage_times::lap;
 use crate::{par, stage_g2p, stage_grid, stage_stress, Solver};
@@ -111,7 +111,24 @@ fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
         },
         gravity: s.gravity,
     };
-    stage_p2g::p2g(&inputs, terms, &mut s.grid);
+    let mixed = terms.force && s.cfg.method.quadrature == QuadratureKind::Mixed;
+    let scattered = Terms {
+        force: terms.force && !mixed,
+        ..terms
+    };
+    stage_p2g::p2g(&inputs, scattered, &mut s.grid);
+    if mixed {
+        let rho0 = s.cfg.scene.materials.first().map_or(0.0, |m| m.rho0);
+        crate::quadrature_mixed::forces(
+            &s.particles,
+            &s.stencils,
+            &s.shape,
+            &mut s.grid,
+            s.gravity,
+            rho0,
+            &mut s.quadrature,
+        );
+    }
     if terms.mass {
         let grid = &s.grid;
         s.grid_mass_p2g =
