@@ -18,11 +18,9 @@
 
 use crate::grid::{Grid, Mirrored, PAD};
 use crate::particles::{Particles, Vec2};
+use crate::remedy_volumetric::FULL_NODE_SHARE;
 use crate::shape::{Shape, Stencil};
 use std::ops::AddAssign;
-
-/// A node counts as full from this share of rho0 h^2.
-const FULL_NODE_SHARE: f64 = 0.75;
 
 /// Offsets of the integration points in a cell (cell units, per axis).
 const POINTS: [f64; 2] = [0.25, 0.75];

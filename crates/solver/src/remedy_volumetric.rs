@@ -346,7 +346,7 @@ pub fn j_bar(
 /// A particle's stencil counts as inside the material when every node it
 /// weighs holds at least this share of a full node's mass rho0 h^2: near a
 /// free surface the grid density says nothing about the particles' volume.
-const FULL_NODE_SHARE: f64 = 0.75;
+pub(crate) const FULL_NODE_SHARE: f64 = 0.75;
 
 /// Volume consistency with blend `b`: J_geo = rho0 / sum N rho_i, with the
 /// grid density rho_i = m_i / h^2 of the folded nodal mass (mirror images

@@ -88,13 +88,17 @@ fn grid_velocities(s: &mut Solver, clock: &mut Instant) {
 fn grid_update(s: &mut Solver, clock: &mut Instant) {
     let (grid, dt) = (&mut s.grid, s.dt);
     // method.min_node_mass is a fraction of a full cell's mass rho0 h^2.
-    let rho0 = s.cfg.scene.materials.first().map_or(0.0, |m| m.rho0);
     let guard = stage_grid::MassGuard {
-        min_mass: s.cfg.method.min_node_mass * (rho0 * grid.h * grid.h),
+        min_mass: s.cfg.method.min_node_mass * (first_rho0(&s.cfg) * grid.h * grid.h),
         gravity: s.gravity,
     };
     par::keep_warm(|| stage_grid::update(grid, dt, &guard));
     lap(&mut s.times.grid, clock);
+}
+
+/// rho0 of the first material: what a "full" node or cell is measured by.
+fn first_rho0(cfg: &crate::config::SolverConfig) -> f64 {
+    cfg.scene.materials.first().map_or(0.0, |m| m.rho0)
 }
 
 fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
@@ -118,7 +122,7 @@ fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
     };
     stage_p2g::p2g(&inputs, scattered, &mut s.grid);
     if mixed {
-        let rho0 = s.cfg.scene.materials.first().map_or(0.0, |m| m.rho0);
+        let rho0 = first_rho0(&s.cfg);
         crate::quadrature_mixed::forces(
             &s.particles,
             &s.stencils,
