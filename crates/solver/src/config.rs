@@ -452,6 +452,11 @@ pub struct Method {
     pub transfer: TransferKind,
     /// FLIP fraction of the FLIP/PIC blend (1 = pure FLIP).
     pub flip_alpha: f64,
+    /// The FLIP/PIC blend as a damping time tau (s; 0 = off, `flip_alpha`
+    /// applies): each step's blend is 1 - min(dt / tau, 1), so the PIC
+    /// share damps at one rate per unit time whatever dt is. PIC's own
+    /// damping grows as dt shrinks, i.e. with the fluid's stiffness.
+    pub pic_damping_time: f64,
     pub scheme: SchemeKind,
     /// Courant number of the time step.
     pub cfl: f64,
@@ -494,6 +499,11 @@ pub struct Method {
     /// (0 = off; each step blends by min(dt / time, 1)), so J cannot drift
     /// away from how closely the particles pack.
     pub volume_relaxation_time: f64,
+    /// Particle shifting: the time (s) over which the particles move down
+    /// the gradient of their concentration on a grid of spacing h / ppc,
+    /// closing slits and lines the grid cannot see (0 = off; each step
+    /// moves by -(dt / time) l^2 grad C, never outward at a free surface).
+    pub shift_time: f64,
     /// Whether the particle carries the averaged J of `cell_dilatation` /
     /// `j_bar` to the next step (`true`, the default: J, F and V are
     /// replaced) or keeps its own J and F, the average setting only this
@@ -524,6 +534,7 @@ impl Default for Method {
             shape: ShapeKind::Linear,
             transfer: TransferKind::Flip,
             flip_alpha: 1.0,
+            pic_damping_time: 0.0,
             scheme: SchemeKind::Usf,
             cfl: 0.2,
             dt: DtMode::Fixed,
@@ -537,6 +548,7 @@ impl Default for Method {
             j_bar: 0.0,
             j_bar_fit: JBarFit::Constant,
             volume_relaxation_time: 0.0,
+            shift_time: 0.0,
             carry_averaged_j: true,
             average_increment: false,
             bulk_damping: 0.0,
@@ -639,6 +651,16 @@ impl SolverConfig {
         self.validate_scene()?;
         let m = &self.method;
         within(m.flip_alpha, 0.0, 1.0, "method.flip_alpha")?;
+        within(m.pic_damping_time, 0.0, 1e3, "method.pic_damping_time")?;
+        check(
+            m.pic_damping_time == 0.0
+                || (m.transfer == TransferKind::Flip && m.flip_alpha == 1.0),
+            "method.pic_damping_time",
+            format!(
+                "needs method.transfer = \"flip\" with method.flip_alpha left at 1 (it sets the blend each step; got {:?}, flip_alpha {})",
+                m.transfer, m.flip_alpha
+            ),
+        )?;
         within(m.cfl, 1e-4, 1.0, "method.cfl")?;
         within(m.min_node_mass, 0.0, 1.0, "method.min_node_mass")?;
         if let Some(dt) = m.dt_value {
@@ -653,7 +675,13 @@ impl SolverConfig {
             1e3,
             "method.volume_relaxation_time",
         )?;
+        within(m.shift_time, 0.0, 1e3, "method.shift_time")?;
         within(m.bulk_damping, 0.0, 0.5 / m.cfl, "method.bulk_damping")?;
+        check(
+            m.shift_time == 0.0 || !self.scene.periodic.iter().any(|&p| p),
+            "method.shift_time",
+            "needs walls on both axes (scene.periodic = [false, false]): the shifting grid mirrors at walls only",
+        )?;
         check(
             m.cell_dilatation == 0.0 || m.j_bar == 0.0,
             "method.j_bar",
@@ -701,6 +729,7 @@ impl SolverConfig {
                     "method.volume_relaxation_time",
                     m.volume_relaxation_time > 0.0,
                 ),
+                ("method.shift_time", m.shift_time > 0.0),
                 ("method.pressure_smoothing", m.pressure_smoothing),
             ] {
                 check(

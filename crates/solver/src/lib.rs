@@ -24,6 +24,7 @@ pub mod particles;
 pub mod pore_pressure;
 pub mod quadrature_mixed;
 pub mod remedy_null_space;
+pub mod remedy_shifting;
 pub mod remedy_volumetric;
 pub mod scene;
 mod scheme;
@@ -156,6 +157,8 @@ pub struct Solver {
     /// Scratch of XPIC(m) (empty for the other transfers).
     xpic: transfer_xpic::Scratch,
     null_space: remedy_null_space::Scratch,
+    /// Scratch of particle shifting (empty when off).
+    shifting: remedy_shifting::Scratch,
     /// Scratch of `quadrature = "mixed"` (empty otherwise).
     quadrature: quadrature_mixed::Scratch,
 }
@@ -230,6 +233,7 @@ impl Solver {
             volumetric: remedy_volumetric::Scratch::default(),
             xpic: transfer_xpic::Scratch::default(),
             null_space: remedy_null_space::Scratch::default(),
+            shifting: remedy_shifting::Scratch::default(),
             quadrature: quadrature_mixed::Scratch::default(),
         };
         if solver.cfg.method.quadrature == QuadratureKind::Mixed {
@@ -237,6 +241,9 @@ impl Solver {
         }
         if solver.cfg.method.null_space_filter {
             solver.null_space = remedy_null_space::Scratch::new(&solver.grid, n);
+        }
+        if solver.cfg.method.shift_time > 0.0 {
+            solver.shifting = remedy_shifting::Scratch::new(&solver.grid, solver.cfg.scene.ppc);
         }
         if solver.cfg.method.transfer == TransferKind::Xpic {
             solver.xpic = transfer_xpic::Scratch::new(&solver.grid, n);

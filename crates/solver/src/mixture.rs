@@ -64,6 +64,15 @@ impl Mixture {
                     .into(),
             });
         }
+        if phases.iter().any(|p| p.cfg.method.shift_time > 0.0) {
+            // Each phase's concentration is only its share of the space.
+            return Err(ConfigError {
+                key: "method.shift_time".into(),
+                message:
+                    "is for a single phase: in a mixture each phase fills only part of the space"
+                        .into(),
+            });
+        }
         if phases
             .iter()
             .any(|p| p.cfg.method.quadrature == crate::config::QuadratureKind::Mixed)

@@ -199,6 +199,16 @@ fn volumetric_remedies(s: &mut Solver) {
     }
 }
 
+/// This step's FLIP fraction: `flip_alpha`, or 1 - dt / tau under
+/// `pic_damping_time = tau`.
+fn flip_alpha(m: &crate::config::Method, dt: f64) -> f64 {
+    if m.pic_damping_time > 0.0 {
+        (1.0 - dt / m.pic_damping_time).max(0.0)
+    } else {
+        m.flip_alpha
+    }
+}
+
 fn g2p(s: &mut Solver, clock: &mut Instant) {
     let xpic = s.cfg.method.transfer == TransferKind::Xpic;
     if xpic {
@@ -214,7 +224,11 @@ fn g2p(s: &mut Solver, clock: &mut Instant) {
     }
     let transfer = stage_g2p::Transfer {
         kind: s.cfg.method.transfer,
-        flip_alpha: if xpic { 1.0 } else { s.cfg.method.flip_alpha },
+        flip_alpha: if xpic {
+            1.0
+        } else {
+            flip_alpha(&s.cfg.method, s.dt)
+        },
     };
     stage_g2p::g2p(
         &mut s.particles,
@@ -231,6 +245,16 @@ fn g2p(s: &mut Solver, clock: &mut Instant) {
             &s.shape,
             &s.grid,
             &mut s.null_space,
+        );
+    }
+    if s.cfg.method.shift_time > 0.0 {
+        crate::remedy_shifting::shift(
+            &mut s.particles,
+            &s.stencils,
+            &s.shape,
+            &s.grid,
+            s.dt / s.cfg.method.shift_time,
+            &mut s.shifting,
         );
     }
     s.apply_perturbations();

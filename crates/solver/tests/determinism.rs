@@ -46,7 +46,7 @@ fn configs() -> Vec<SolverConfig> {
         perturb: vec![],
     });
     // The serial volumetric passes: J-bar with the linear fit, volume
-    // consistency and bulk damping.
+    // consistency and bulk damping; and particle shifting.
     let mut mat = Material::tait(1.5e6);
     mat.viscosity = 0.5;
     out.push(SolverConfig {
@@ -56,6 +56,7 @@ fn configs() -> Vec<SolverConfig> {
             j_bar_fit: JBarFit::Linear,
             bulk_damping: 0.3,
             volume_relaxation_time: 0.01,
+            shift_time: 0.01,
             ..common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl)
         },
         perturb: vec![],

@@ -1,0 +1,65 @@
+//! `method.pic_damping_time = tau`: the FLIP/PIC blend of each step is
+//! 1 - min(dt / tau, 1) (docs/physics.md section 5), bit for bit the same
+//! as the constant blend it stands for; refused where it makes no sense.
+
+mod common;
+
+use solver::*;
+
+const DT: f64 = 2e-4;
+
+fn dam(method: Method) -> Solver {
+    let mut mat = Material::tait(1.5e4);
+    mat.viscosity = 0.5;
+    common::solver(Scene::dam_break(mat), method)
+}
+
+fn flip(alpha: f64, pic_damping_time: f64) -> Method {
+    Method {
+        flip_alpha: alpha,
+        pic_damping_time,
+        dt: DtMode::Fixed,
+        dt_value: Some(DT),
+        ..common::method(ShapeKind::Bspline2, TransferKind::Flip, SchemeKind::Usl)
+    }
+}
+
+fn hash_after(method: Method, steps: usize) -> u64 {
+    let mut s = dam(method);
+    for _ in 0..steps {
+        s.step().unwrap();
+    }
+    s.state_hash()
+}
+
+#[test]
+fn the_blend_is_one_minus_dt_over_tau() {
+    // dt / tau = 1/4 exactly: the blend is FLIP 0.75.
+    let damped = hash_after(flip(1.0, 4.0 * DT), 200);
+    assert_eq!(damped, hash_after(flip(0.75, 0.0), 200));
+    assert_ne!(damped, hash_after(flip(1.0, 0.0), 200), "it changes FLIP");
+}
+
+#[test]
+fn tau_at_or_below_dt_is_pic() {
+    let pic = Method {
+        transfer: TransferKind::Pic,
+        ..flip(1.0, 0.0)
+    };
+    assert_eq!(hash_after(flip(1.0, DT), 100), hash_after(pic, 100));
+}
+
+#[test]
+fn refused_unless_flip_with_its_blend_left_at_one() {
+    let scene = Scene::dam_break(Material::tait(1.5e4));
+    let apic = Method {
+        transfer: TransferKind::Apic,
+        ..flip(1.0, 0.01)
+    };
+    let blended = flip(0.9, 0.01);
+    let negative = flip(1.0, -1.0);
+    for method in [apic, blended, negative] {
+        let err = common::refusal(scene.clone(), method).expect("refused");
+        assert_eq!(err.key, "method.pic_damping_time");
+    }
+}
