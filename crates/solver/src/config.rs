@@ -504,6 +504,11 @@ pub struct Method {
     /// closing slits and lines the grid cannot see (0 = off; each step
     /// moves by -(dt / time) l^2 grad C, never outward at a free surface).
     pub shift_time: f64,
+    /// Shifting's free-surface test: a particle whose (coarse) stencil has a
+    /// node below this share of a full node's mass rho0 h^2 does not shift
+    /// outward. Lower, it tells a surface (nodes near empty) from a depleted
+    /// region (nodes part full), which a high share would lock against refill.
+    pub shift_surface_share: f64,
     /// Whether the particle carries the averaged J of `cell_dilatation` /
     /// `j_bar` to the next step (`true`, the default: J, F and V are
     /// replaced) or keeps its own J and F, the average setting only this
@@ -549,6 +554,7 @@ impl Default for Method {
             j_bar_fit: JBarFit::Constant,
             volume_relaxation_time: 0.0,
             shift_time: 0.0,
+            shift_surface_share: 0.75,
             carry_averaged_j: true,
             average_increment: false,
             bulk_damping: 0.0,
@@ -676,6 +682,12 @@ impl SolverConfig {
             "method.volume_relaxation_time",
         )?;
         within(m.shift_time, 0.0, 1e3, "method.shift_time")?;
+        within(
+            m.shift_surface_share,
+            0.05,
+            1.0,
+            "method.shift_surface_share",
+        )?;
         within(m.bulk_damping, 0.0, 0.5 / m.cfl, "method.bulk_damping")?;
         check(
             m.shift_time == 0.0 || !self.scene.periodic.iter().any(|&p| p),

@@ -21,7 +21,6 @@
 
 use crate::grid::Grid;
 use crate::particles::{Particles, Vec2};
-use crate::remedy_volumetric::FULL_NODE_SHARE;
 use crate::shape::{Shape, Stencil};
 use crate::shape_bspline::quadratic;
 
@@ -147,12 +146,13 @@ pub fn shift(
     shape: &Shape,
     grid: &Grid,
     rate: f64,
+    surface_share: f64,
     s: &mut Scratch,
 ) {
     match shape.width() {
-        2 => shift_w::<2>(ps, stencils, shape, grid, rate, s),
-        3 => shift_w::<3>(ps, stencils, shape, grid, rate, s),
-        _ => shift_w::<4>(ps, stencils, shape, grid, rate, s),
+        2 => shift_w::<2>(ps, stencils, shape, grid, rate, surface_share, s),
+        3 => shift_w::<3>(ps, stencils, shape, grid, rate, surface_share, s),
+        _ => shift_w::<4>(ps, stencils, shape, grid, rate, surface_share, s),
     }
 }
 
@@ -162,6 +162,7 @@ fn shift_w<const W: usize>(
     shape: &Shape,
     grid: &Grid,
     rate: f64,
+    surface_share: f64,
     s: &mut Scratch,
 ) {
     concentration(ps, grid, s);
@@ -180,7 +181,7 @@ fn shift_w<const W: usize>(
         if len > MAX_STEP * l {
             dx *= MAX_STEP * l / len;
         }
-        let full = FULL_NODE_SHARE * ps.mass[p] / ps.vol0[p] * area;
+        let full = surface_share * ps.mass[p] / ps.vol0[p] * area;
         let (inside, inward) = coarse_surface::<W>(&stencils[p], shape, grid, &s.coarse_mass, full);
         if !inside {
             let norm = inward.norm();

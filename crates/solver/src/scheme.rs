@@ -254,6 +254,7 @@ fn g2p(s: &mut Solver, clock: &mut Instant) {
             &s.shape,
             &s.grid,
             s.dt / s.cfg.method.shift_time,
+            s.cfg.method.shift_surface_share,
             &mut s.shifting,
         );
     }

@@ -31,7 +31,14 @@ fn max_y(x: &[Vec2]) -> f64 {
 
 #[test]
 fn a_lattice_is_a_fixed_point_up_to_the_walls_and_the_surface() {
-    let (scene, method) = pool(1e-3);
+    for share in [0.75, 0.25] {
+        lattice_stays(share);
+    }
+}
+
+fn lattice_stays(share: f64) {
+    let (scene, mut method) = pool(1e-3);
+    method.shift_surface_share = share;
     let mut s = common::solver(scene, method);
     let before = s.view().x.to_vec();
     for _ in 0..50 {
@@ -44,7 +51,10 @@ fn a_lattice_is_a_fixed_point_up_to_the_walls_and_the_surface() {
         .map(|(a, b)| (a - b).norm())
         .fold(0.0, f64::max);
     // l = 5 mm; round-off of a concentration of exactly 1.
-    assert!(worst < 1e-14, "largest move {worst} m");
+    assert!(
+        worst < 1e-14,
+        "surface share {share}: largest move {worst} m"
+    );
 }
 
 /// The spread (max - min) of the concentration over the fine nodes well
@@ -106,6 +116,53 @@ fn a_slit_the_grid_cannot_see_closes_and_the_surface_stays() {
     assert!(s.view().v.iter().all(|v| v.norm() < 1e-12));
 }
 
+/// The particles in the band next to the right wall (x > 0.29 m).
+fn band_count(x: &[Vec2]) -> usize {
+    x.iter().filter(|p| p.x > 0.29).count()
+}
+
+/// The pool with every other row of the band next to the right wall taken
+/// out (20 of its 40 particles), run for `steps` with the surface test at
+/// `share`; returns the band's count and how far the top rose (m).
+fn depleted_band(share: f64, steps: usize) -> (usize, f64) {
+    let (scene, mut method) = pool(0.02);
+    method.shift_surface_share = share;
+    let mut ps = solver::scene::seed(&scene);
+    let keep: Vec<usize> = (0..ps.len())
+        .filter(|&p| ps.x[p].x < 0.29 || ((ps.x[p].y / L) as usize).is_multiple_of(2))
+        .collect();
+    let mut thinned = Particles::default();
+    for p in keep {
+        thinned.push(ps.x[p], Vec2::zeros(), ps.mass[p], ps.vol0[p], 0);
+    }
+    ps = thinned;
+    assert_eq!(band_count(&ps.x), 20);
+    let top0 = max_y(&ps.x);
+    let cfg = SolverConfig {
+        scene,
+        method,
+        perturb: vec![],
+    };
+    let mut s = Solver::with_particles(cfg, ps);
+    for _ in 0..steps {
+        s.step().unwrap();
+    }
+    (band_count(s.view().x), max_y(s.view().x) - top0)
+}
+
+#[test]
+fn a_depleted_band_at_a_wall_refills_when_the_surface_test_tells_it_from_a_surface() {
+    // At 0.75 the band's nodes (about half full) count as a surface, whose
+    // outward direction is into the band: no particle enters it.
+    let (locked, _) = depleted_band(0.75, 1600);
+    assert_eq!(locked, 20);
+    // At 0.25 only near-empty nodes make a surface: the band refills (37 of
+    // 40 measured) and the top stays within 0.1 l.
+    let (refilled, rise) = depleted_band(0.25, 1600);
+    assert!(refilled >= 35, "{refilled} particles in the band");
+    assert!(rise < 0.1 * L, "the surface rose by {rise} m");
+}
+
 #[test]
 fn refused_where_it_makes_no_sense() {
     let (scene, method) = pool(0.05);
@@ -121,6 +178,12 @@ fn refused_where_it_makes_no_sense() {
         shift_time: -1.0,
         ..method
     };
-    let err = common::refusal(scene, negative).expect("negative refused");
+    let err = common::refusal(scene.clone(), negative).expect("negative refused");
     assert_eq!(err.key, "method.shift_time");
+    let no_surface = Method {
+        shift_surface_share: 0.0,
+        ..method
+    };
+    let err = common::refusal(scene, no_surface).expect("share 0 refused");
+    assert_eq!(err.key, "method.shift_surface_share");
 }

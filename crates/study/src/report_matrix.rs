@@ -14,7 +14,7 @@ use crate::report_html::{escape, Cell, Page};
 use crate::study_file::ENSEMBLE_KEYS;
 use crate::summary::{Status, Summary};
 use plotters::style::RGBColor;
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// One case of the matrix, with the values of the parameters that vary.
@@ -169,6 +169,26 @@ fn param_text(v: &serde_json::Value) -> String {
     }
 }
 
+/// The default method, as the params of a summary hold it.
+fn method_defaults() -> serde_json::Value {
+    serde_json::to_value(solver::Method::default()).unwrap_or_default()
+}
+
+/// A param as text. A summary written before a method key existed lacks
+/// it and ran with its default, so it reads as the default ("" for other
+/// keys).
+fn param_or_default(
+    params: &BTreeMap<String, serde_json::Value>,
+    key: &str,
+    defaults: &serde_json::Value,
+) -> String {
+    params
+        .get(key)
+        .or_else(|| defaults.get(key.strip_prefix("method.")?))
+        .map(param_text)
+        .unwrap_or_default()
+}
+
 /// The rows of a matrix, sorted by the varying parameters, and those parameters' keys.
 pub struct Matrix {
     pub axes: Vec<String>,
@@ -192,7 +212,8 @@ impl Matrix {
             .flat_map(|(_, s)| s.params.keys())
             .filter(|k| !ENSEMBLE_KEYS.contains(&k.as_str()))
             .collect();
-        let text = |s: &Summary, k: &String| s.params.get(k).map(param_text).unwrap_or_default();
+        let defaults = method_defaults();
+        let text = |s: &Summary, k: &String| param_or_default(&s.params, k, &defaults);
         let axes: Vec<String> = keys
             .into_iter()
             .filter(|k| {
@@ -782,4 +803,28 @@ fn case_table(m: &Matrix, page: &mut Page) {
         })
         .collect();
     page.table("cases", &headers, &rows);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_method_key_missing_from_an_older_summary_reads_as_its_default() {
+        let defaults = method_defaults();
+        let mut params = BTreeMap::new();
+        params.insert("method.shift_time".to_string(), serde_json::json!(0.02));
+        let text = |k: &str| param_or_default(&params, k, &defaults);
+        assert_eq!(
+            text("method.shift_time"),
+            param_text(&serde_json::json!(0.02))
+        );
+        assert_eq!(
+            text("method.shift_surface_share"),
+            param_text(&serde_json::json!(0.75))
+        );
+        assert_eq!(text("method.transfer"), "flip");
+        assert_eq!(text("materials.water.K"), "");
+        assert_eq!(text("method.no_such_key"), "");
+    }
 }

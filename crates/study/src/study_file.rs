@@ -319,10 +319,37 @@ fn matrix_axes(matrix: Option<Value>) -> Result<Vec<Axis>, KeyError> {
         .collect()
 }
 
+/// `method.ppc`: the seeding density as a choice of method (a matrix's
+/// method entry can then refine one method's particles), written into
+/// `scene.ppc` before the case is read. Returns the effective table and the
+/// value, if set.
+fn method_ppc(table: &Table) -> Result<(Table, Option<Value>), KeyError> {
+    let mut table = table.clone();
+    let Some(Value::Table(method)) = table.get_mut("method") else {
+        return Ok((table, None));
+    };
+    let Some(ppc) = method.remove("ppc") else {
+        return Ok((table, None));
+    };
+    match ppc {
+        Value::Integer(n) if (1..=8).contains(&n) => {
+            set_path(&mut table, "scene.ppc", ppc.clone()).map_err(|m| ("scene.ppc".into(), m))?;
+            Ok((table, Some(ppc)))
+        }
+        other => Err((
+            "method.ppc".into(),
+            format!(
+                "{other} is out of range (allowed whole numbers 1 ..= 8; it overrides scene.ppc)"
+            ),
+        )),
+    }
+}
+
 /// Deserialises and validates one case's table.
 fn case(name: String, table: Table) -> Result<Case, KeyError> {
+    let (effective, ppc) = method_ppc(&table)?;
     let doc: StudyDoc =
-        serde_path_to_error::deserialize(Value::Table(table.clone())).map_err(schema_error)?;
+        serde_path_to_error::deserialize(Value::Table(effective)).map_err(schema_error)?;
     let mut scene = doc.scene;
     scene.materials = doc
         .materials
@@ -352,6 +379,9 @@ fn case(name: String, table: Table) -> Result<Case, KeyError> {
         }
     };
     let mut params = flatten(&table);
+    if let Some(ppc) = ppc {
+        params.insert("scene.ppc".into(), ppc);
+    }
     // Every method key appears in every case, defaults included.
     if let Ok(Value::Table(m)) = Value::try_from(&solver.method) {
         for (k, v) in m {
@@ -994,5 +1024,27 @@ mod tests {
         assert_eq!(k, "method.cfl");
         let (k, m) = bad("[materials.water]\nK = 1e5\n");
         assert_eq!((k.as_str(), m.as_str()), ("scene", "is required"));
+    }
+
+    #[test]
+    fn method_ppc_overrides_the_scene_seeding_and_names_itself() {
+        let text = "[scene]\nppc = 2\n[[scene.body]]\nrect = [0.0, 0.0, 0.2, 0.4]\n\
+            [materials.water]\nK = 1e5\n[method]\nppc = 3\n";
+        let c = case("c".into(), text.parse().unwrap()).unwrap();
+        assert_eq!(c.solver.scene.ppc, 3);
+        assert_eq!(c.params["method.ppc"], Value::Integer(3));
+        assert_eq!(c.params["scene.ppc"], Value::Integer(3));
+        // The written case table keeps the key, so a reload seeds the same.
+        assert_eq!(c.table["method"]["ppc"], Value::Integer(3));
+        let plain = case("c".into(), text.replace("ppc = 3\n", "").parse().unwrap()).unwrap();
+        assert_eq!(plain.solver.scene.ppc, 2);
+        assert!(!plain.params.contains_key("method.ppc"));
+        for bad in ["0", "9", "2.5", "\"3\""] {
+            let t = text.replace("ppc = 3", &format!("ppc = {bad}"));
+            let (k, m) = case("c".into(), t.parse().unwrap()).expect_err("refused");
+            assert_eq!(k, "method.ppc");
+            assert!(m.contains("1 ..= 8"), "{m}");
+        }
+        assert_eq!(name_part("method", &toml("{ ppc = 3 }")), "ppc3");
     }
 }
