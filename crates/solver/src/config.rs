@@ -554,7 +554,7 @@ impl Default for Method {
             j_bar_fit: JBarFit::Constant,
             volume_relaxation_time: 0.0,
             shift_time: 0.0,
-            shift_surface_share: 0.75,
+            shift_surface_share: crate::remedy_volumetric::FULL_NODE_SHARE,
             carry_averaged_j: true,
             average_increment: false,
             bulk_damping: 0.0,

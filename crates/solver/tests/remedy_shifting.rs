@@ -25,6 +25,16 @@ fn pool(shift_time: f64) -> (Scene, Method) {
 /// The seeding spacing l = h / ppc.
 const L: f64 = 0.005;
 
+/// A solver over particles seeded and then edited by the test.
+fn solver_with(scene: Scene, method: Method, ps: Particles) -> Solver {
+    let cfg = SolverConfig {
+        scene,
+        method,
+        perturb: vec![],
+    };
+    Solver::with_particles(cfg, ps)
+}
+
 fn max_y(x: &[Vec2]) -> f64 {
     x.iter().map(|p| p.y).fold(f64::MIN, f64::max)
 }
@@ -91,12 +101,7 @@ fn a_slit_the_grid_cannot_see_closes_and_the_surface_stays() {
         }
     }
     let top0 = max_y(&ps.x);
-    let cfg = SolverConfig {
-        scene,
-        method,
-        perturb: vec![],
-    };
-    let mut s = Solver::with_particles(cfg, ps);
+    let mut s = solver_with(scene, method, ps);
     let spread0 = spread(s.view().x, vol0);
     assert!(spread0 > 0.5, "the slit shows on the fine grid: {spread0}");
     let mut spreads = vec![spread0];
@@ -138,12 +143,7 @@ fn depleted_band(share: f64, steps: usize) -> (usize, f64) {
     ps = thinned;
     assert_eq!(band_count(&ps.x), 20);
     let top0 = max_y(&ps.x);
-    let cfg = SolverConfig {
-        scene,
-        method,
-        perturb: vec![],
-    };
-    let mut s = Solver::with_particles(cfg, ps);
+    let mut s = solver_with(scene, method, ps);
     for _ in 0..steps {
         s.step().unwrap();
     }
