@@ -50,69 +50,204 @@ fn percent(k: usize, n: usize) -> Cell {
     Cell::Num(format!("{:.0} %", 100.0 * k as f64 / n.max(1) as f64))
 }
 
-pub fn ablation_table(m: &Matrix, page: &mut Page) {
-    let base = baseline(m);
-    if base.is_empty() {
-        return;
-    }
+/// The runs of each method, the baseline first, then by name.
+fn method_groups<'a>(m: &'a Matrix, base: &[(usize, String)]) -> Vec<(String, Vec<&'a Row>)> {
     let mut groups: Vec<(String, Vec<&Row>)> = vec![];
     for r in &m.rows {
-        let l = label(m, &base, r);
+        let l = label(m, base, r);
         match groups.iter_mut().find(|(g, _)| *g == l) {
             Some((_, rows)) => rows.push(r),
             None => groups.push((l, vec![r])),
         }
     }
+    groups.sort_by(|a, b| (a.0 != "baseline", &a.0).cmp(&(b.0 != "baseline", &b.0)));
+    groups
+}
+
+const HEADERS: [&str; 14] = [
+    "method",
+    "runs",
+    "kicked",
+    "injection",
+    "inversion",
+    "anomaly",
+    "cfl",
+    "blew up",
+    "survived (s)",
+    "completed",
+    "late departure",
+    "late checkerboard",
+    "M particle-steps/s",
+    "wall (s)",
+];
+
+/// One method's row: shares over all its runs; the late figures (mean over
+/// the last simulated second) over its completed runs only, since a window
+/// that holds a blow-up says nothing.
+fn method_cells(label: &str, runs: &[&Row]) -> Vec<Cell> {
+    let n = runs.len();
+    let with = |keep: &dyn Fn(&monitor::Event) -> bool| {
+        runs.iter()
+            .filter(|r| r.summary.events.iter().any(keep))
+            .count()
+    };
+    let blew = runs
+        .iter()
+        .filter(|r| r.summary.status == Status::BlewUp)
+        .count();
+    let completed: Vec<&&Row> = runs
+        .iter()
+        .filter(|r| r.summary.status == Status::Completed)
+        .collect();
+    let late = |f: &dyn Fn(&Row) -> Option<f64>| {
+        let values: Vec<f64> = completed.iter().filter_map(|r| f(r)).collect();
+        Cell::Num(spread_text(values.iter().copied(), values.len(), 3))
+    };
+    vec![
+        Cell::Text(label.to_string()),
+        Cell::Num(n.to_string()),
+        percent(with(&|e| e.is_kick()), n),
+        percent(with(&|e| e.cause == monitor::Cause::Injection), n),
+        percent(with(&|e| e.cause == monitor::Cause::Inversion), n),
+        percent(with(&|e| e.is_anomaly()), n),
+        percent(with(&|e| e.cause == monitor::Cause::Cfl), n),
+        percent(blew, n),
+        Cell::Num(spread_text(runs.iter().map(|r| r.summary.t_end), n, 2)),
+        Cell::Num(completed.len().to_string()),
+        late(&|r| r.summary.metrics.hydro_rel_rms_late),
+        late(&|r| r.summary.metrics.checkerboard_late),
+        Cell::Num(spread_text(
+            runs.iter().map(|r| r.summary.particle_steps_per_s / 1e6),
+            1,
+            2,
+        )),
+        Cell::Num(format!(
+            "{:.0}",
+            runs.iter().map(|r| r.summary.wall_s).sum::<f64>()
+        )),
+    ]
+}
+
+pub fn ablation_table(m: &Matrix, page: &mut Page) {
+    let base = baseline(m);
+    if base.is_empty() {
+        return;
+    }
+    let groups = method_groups(m, &base);
     if groups.len() < 2 {
         return;
     }
-    // The baseline first, then by name.
-    groups.sort_by(|a, b| (a.0 != "baseline", &a.0).cmp(&(b.0 != "baseline", &b.0)));
     page.h2("Methods: which change removes the kick");
-    page.p("One row per method, named by what it changes from the most common value of each varying method key. Over all its runs (every case and ensemble member): the share with at least one kick, with a kick of each cause, with a kick that has the hallmark (the anomaly proper), and that blew up; the time survived (a completed run counts its t_end) as median [min, max]; the median particle-steps per second.");
-    let headers: Vec<String> = [
-        "method",
-        "runs",
-        "kicked",
-        "injection",
-        "inversion",
-        "anomaly",
-        "blew up",
-        "survived (s)",
-        "particle-steps/s",
-    ]
-    .map(String::from)
-    .to_vec();
+    page.p("One row per method, named by what it changes from the most common value of each varying method key. Over all its runs (every case and ensemble member): the share with at least one kick, with a kick of each cause, with a kick that has the hallmark (the anomaly proper), with a time-step (cfl) event, and that blew up; the time survived (a completed run counts its t_end) as median [min, max]. Over its completed runs only: the late hydrostatic departure and checkerboard index (each the mean over the last simulated second) as median [min, max]. The median particle-steps per second, and the wall seconds summed over the runs.");
+    let headers: Vec<String> = HEADERS.map(String::from).to_vec();
     let rows: Vec<(String, Vec<Cell>)> = groups
         .iter()
-        .map(|(l, runs)| {
-            let n = runs.len();
-            let with = |keep: &dyn Fn(&monitor::Event) -> bool| {
-                runs.iter()
-                    .filter(|r| r.summary.events.iter().any(keep))
-                    .count()
-            };
-            let blew = runs
-                .iter()
-                .filter(|r| r.summary.status == Status::BlewUp)
-                .count();
-            let cells = vec![
-                Cell::Text(l.clone()),
-                Cell::Num(n.to_string()),
-                percent(with(&|e| e.is_kick()), n),
-                percent(with(&|e| e.cause == monitor::Cause::Injection), n),
-                percent(with(&|e| e.cause == monitor::Cause::Inversion), n),
-                percent(with(&|e| e.is_anomaly()), n),
-                percent(blew, n),
-                Cell::Num(spread_text(runs.iter().map(|r| r.summary.t_end), n, 2)),
-                Cell::Num(spread_text(
-                    runs.iter().map(|r| r.summary.particle_steps_per_s),
-                    1,
-                    0,
-                )),
-            ];
-            (l.clone(), cells)
-        })
+        .map(|(l, runs)| (String::new(), method_cells(l, runs)))
         .collect();
     page.table("ablation", &headers, &rows);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::summary::{Metrics, Summary, SCHEMA_VERSION};
+
+    fn event(cause: monitor::Cause) -> monitor::Event {
+        let mut e: monitor::Event = serde_json::from_value(serde_json::json!({
+            "id": 1, "kind": "kick", "first_step": 3, "last_step": 4, "t": 0.1, "last_t": 0.2,
+            "cells": {"i_min": 0, "j_min": 0, "i_max": 1, "j_max": 1},
+            "region": {"x_min": 0.0, "y_min": 0.0, "x_max": 0.01, "y_max": 0.01},
+            "extent": {"i_min": 0, "j_min": 0, "i_max": 1, "j_max": 1},
+            "n_particles": 4, "particles": [1, 2], "peak_accel_g": 1.0, "peak_z": 2.0,
+            "energy_injected": 0.0, "courant": 0.2, "quiescent_before": false,
+            "deformed_by": [], "rules": ["ke_spike"], "state_hash": null, "checkpoint": null
+        }))
+        .unwrap();
+        e.cause = cause;
+        e
+    }
+
+    fn run(transfer: &str, late: Option<(f64, f64)>, events: Vec<monitor::Event>) -> Row {
+        let status = if late.is_some() {
+            Status::Completed
+        } else {
+            Status::BlewUp
+        };
+        let metrics = Metrics {
+            hydro_rel_rms_late: late.map(|l| l.0),
+            checkerboard_late: late.map(|l| l.1),
+            ..Metrics::default()
+        };
+        let summary = Summary {
+            schema_version: SCHEMA_VERSION,
+            case: transfer.into(),
+            params: Default::default(),
+            status,
+            reason: String::new(),
+            steps: 10,
+            t_end: if late.is_some() { 5.0 } else { 1.5 },
+            wall_s: 10.0,
+            particles: 100,
+            particle_steps_per_s: 2.0e6,
+            final_state_hash: "0".into(),
+            events,
+            metrics,
+            phases: vec![],
+        };
+        Row::for_test(summary, vec![transfer.into()])
+    }
+
+    fn text(c: &Cell) -> &str {
+        match c {
+            Cell::Num(s) | Cell::Text(s) => s,
+        }
+    }
+
+    #[test]
+    fn a_method_row_counts_kicks_over_all_runs_and_late_figures_over_completed_runs() {
+        use monitor::Cause;
+        let m = Matrix {
+            axes: vec!["method.transfer".into()],
+            rows: vec![
+                run("pic", Some((0.05, 0.01)), vec![event(Cause::Impact)]),
+                run("apic", Some((0.2, 0.3)), vec![]),
+                run("apic", Some((0.4, 0.1)), vec![event(Cause::Injection)]),
+                run(
+                    "apic",
+                    None,
+                    vec![event(Cause::Inversion), event(Cause::Cfl)],
+                ),
+            ],
+        };
+        let base = baseline(&m);
+        let groups = method_groups(&m, &base);
+        let names: Vec<&str> = groups.iter().map(|(l, _)| l.as_str()).collect();
+        assert_eq!(names, ["baseline", "transfer = pic"]);
+        let cells = |i: usize| -> Vec<String> {
+            let (l, runs) = &groups[i];
+            method_cells(l, runs)
+                .iter()
+                .map(|c| text(c).to_string())
+                .collect()
+        };
+        let column = |name: &str| HEADERS.iter().position(|h| *h == name).unwrap();
+        let apic = cells(0);
+        assert_eq!(apic.len(), HEADERS.len());
+        assert_eq!(apic[column("runs")], "3");
+        assert_eq!(apic[column("kicked")], "67 %");
+        assert_eq!(apic[column("injection")], "33 %");
+        assert_eq!(apic[column("inversion")], "33 %");
+        assert_eq!(apic[column("cfl")], "33 %");
+        assert_eq!(apic[column("blew up")], "33 %");
+        assert_eq!(apic[column("survived (s)")], "5.00 [1.50, 5.00]");
+        assert_eq!(apic[column("completed")], "2");
+        // The blown-up run has no late window: it is not counted as zero.
+        assert_eq!(apic[column("late departure")], "0.300 [0.200, 0.400]");
+        assert_eq!(apic[column("late checkerboard")], "0.200 [0.100, 0.300]");
+        assert_eq!(apic[column("wall (s)")], "30");
+        let pic = cells(1);
+        assert_eq!(pic[column("kicked")], "0 %", "an impact is not a kick");
+        assert_eq!(pic[column("late departure")], "0.050");
+        assert_eq!(pic[column("M particle-steps/s")], "2.00");
+    }
 }

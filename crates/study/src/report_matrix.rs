@@ -72,6 +72,18 @@ impl Row {
     }
 }
 
+#[cfg(test)]
+impl Row {
+    pub fn for_test(summary: Summary, params: Vec<String>) -> Self {
+        Row {
+            summary,
+            dir: PathBuf::new(),
+            params,
+            link: None,
+        }
+    }
+}
+
 /// The outcome heatmap's classes, best to worst: how a run ended when it
 /// never kicked, else the cause of its first kick (docs/physics.md 4b).
 const CLASSES: [(&str, RGBColor); 6] = [
