@@ -150,19 +150,10 @@ pub fn ablation_table(m: &Matrix, page: &mut Page) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::summary::{Metrics, Summary, SCHEMA_VERSION};
+    use crate::summary::{sample_event, Metrics, Summary, SCHEMA_VERSION};
 
     fn event(cause: monitor::Cause) -> monitor::Event {
-        let mut e: monitor::Event = serde_json::from_value(serde_json::json!({
-            "id": 1, "kind": "kick", "first_step": 3, "last_step": 4, "t": 0.1, "last_t": 0.2,
-            "cells": {"i_min": 0, "j_min": 0, "i_max": 1, "j_max": 1},
-            "region": {"x_min": 0.0, "y_min": 0.0, "x_max": 0.01, "y_max": 0.01},
-            "extent": {"i_min": 0, "j_min": 0, "i_max": 1, "j_max": 1},
-            "n_particles": 4, "particles": [1, 2], "peak_accel_g": 1.0, "peak_z": 2.0,
-            "energy_injected": 0.0, "courant": 0.2, "quiescent_before": false,
-            "deformed_by": [], "rules": ["ke_spike"], "state_hash": null, "checkpoint": null
-        }))
-        .unwrap();
+        let mut e = sample_event();
         e.cause = cause;
         e
     }

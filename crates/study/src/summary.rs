@@ -269,6 +269,21 @@ impl Summary {
     }
 }
 
+/// A small kick event as a summary stores it, for tests.
+#[cfg(test)]
+pub fn sample_event() -> Event {
+    serde_json::from_value(serde_json::json!({
+        "id": 1, "kind": "kick", "first_step": 3, "last_step": 4, "t": 0.1, "last_t": 0.2,
+        "cells": {"i_min": 0, "j_min": 0, "i_max": 1, "j_max": 1},
+        "region": {"x_min": 0.0, "y_min": 0.0, "x_max": 0.01, "y_max": 0.01},
+        "extent": {"i_min": 0, "j_min": 0, "i_max": 1, "j_max": 1},
+        "n_particles": 4, "particles": [1, 2], "peak_accel_g": 1.0, "peak_z": 2.0,
+        "energy_injected": 0.0, "courant": 0.2, "quiescent_before": false,
+        "deformed_by": [], "rules": ["ke_spike"], "state_hash": null, "checkpoint": null
+    }))
+    .unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -278,16 +293,7 @@ mod tests {
     fn non_finite_event_figures_read_back() {
         let dir = std::env::temp_dir().join(format!("kick-summary-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let mut event: Event = serde_json::from_value(serde_json::json!({
-            "id": 1, "kind": "kick", "first_step": 3, "last_step": 4, "t": 0.1, "last_t": 0.2,
-            "cells": {"i_min": 0, "j_min": 0, "i_max": 1, "j_max": 1},
-            "region": {"x_min": 0.0, "y_min": 0.0, "x_max": 0.01, "y_max": 0.01},
-            "extent": {"i_min": 0, "j_min": 0, "i_max": 1, "j_max": 1},
-            "n_particles": 4, "particles": [1, 2], "peak_accel_g": 1.0, "peak_z": 2.0,
-            "energy_injected": 0.0, "courant": 0.2, "quiescent_before": false,
-            "deformed_by": [], "rules": ["ke_spike"], "state_hash": null, "checkpoint": null
-        }))
-        .unwrap();
+        let mut event = sample_event();
         event.evidence.advection_before = f64::INFINITY;
         event.energy_injected = f64::NAN;
         event.evidence.j_min = Some(f64::NEG_INFINITY);
