@@ -47,8 +47,8 @@ bench: build
 	$(KICK) bench --scene dam-break --cell 0.0025 --steps 500 --threads 1 --shape bspline2 --transfer apic
 	$(KICK) bench --scene dam-break --cell 0.0025 --steps 500 --threads 2 --shape bspline2 --transfer apic
 	# The cost of each remedy on the modern baseline (quadratic B-spline, APIC).
-	for r in method.force=mls method.f_reset=true method.cell_dilatation=1.0 method.j_bar=1.0 \
-	         method.pressure_smoothing=true method.j_update=exp method.min_node_mass=0.01; do \
+	for r in method.force=mls method.f_reset=true method.cell_dilatation=true method.j_bar=true \
+	         method.pressure_smoothing=true method.j_update=exp method.min_node_mass=true; do \
 	  $(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape bspline2 --transfer apic --set $$r; \
 	done
 	$(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape bspline2 --transfer xpic --set method.xpic_order=5

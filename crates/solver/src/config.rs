@@ -1,7 +1,24 @@
 //! Plain-data description of a scene and a method. The study crate fills these
 //! from TOML; the solver only reads them.
 
+use crate::remedies::RemedySettings;
 use serde::{Deserialize, Serialize};
+
+/// The keys of `[method]` that are not remedies (serde's own list is not
+/// public; a test checks this one against `Method`'s serialisation).
+pub const METHOD_KEYS: &[&str] = &[
+    "shape",
+    "transfer",
+    "flip_alpha",
+    "scheme",
+    "cfl",
+    "dt",
+    "dt_value",
+    "j_update",
+    "force",
+    "quadrature",
+    "xpic_order",
+];
 
 /// Shape-function family.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -445,18 +462,15 @@ impl Scene {
 
 /// The `[method]` table: every suspect choice. Defaults: the problem
 /// statement's baseline (linear, FLIP, USF, fixed dt, CFL 0.2, det J).
+// deny_unknown_fields does not combine with flatten: `RemedySettings` refuses
+// the keys that are neither a field here nor a remedy.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default)]
 pub struct Method {
     pub shape: ShapeKind,
     pub transfer: TransferKind,
     /// FLIP fraction of the FLIP/PIC blend (1 = pure FLIP).
     pub flip_alpha: f64,
-    /// The FLIP/PIC blend as a damping time tau (s; 0 = off, `flip_alpha`
-    /// applies): each step's blend is 1 - min(dt / tau, 1), so the PIC
-    /// share damps at one rate per unit time whatever dt is. PIC's own
-    /// damping grows as dt shrinks, i.e. with the fluid's stiffness.
-    pub pic_damping_time: f64,
     pub scheme: SchemeKind,
     /// Courant number of the time step.
     pub cfl: f64,
@@ -465,72 +479,17 @@ pub struct Method {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dt_value: Option<f64>,
     pub j_update: JUpdate,
-    /// Minimum nodal mass for acceleration (Uintah's `minimum_mass_for_acc`),
-    /// dimensionless: a fraction of the mass rho0 h^2 of a full cell of the
-    /// first material, like the monitor's `min_node_mass_ratio` (0 ..= 1;
-    /// 0 = off, today's results bit for bit). "Mass" is the folded nodal mass
-    /// `grid.mass` (mirror images included: what the force is divided by),
-    /// not `grid.mass_raw`. A node with 0 < mass <= threshold ignores its
-    /// forces and gets a = g (wall conditions as usual); see
-    /// `stage_grid::MassGuard`.
-    pub min_node_mass: f64,
     /// Force and velocity-gradient discretisation (`gradient` or `mls`).
     pub force: ForceKind,
     /// Where the internal force is integrated: `particles` or `mixed`
     /// (fixed points in the cells full of material).
     pub quadrature: QuadratureKind,
-    /// F reset for fluids: F <- J^(1/2) I after each update (in 2D), so that
-    /// no distortion accumulates in F. Pressure depends on J and the viscous
-    /// stress on D only, so this changes nothing but round-off for shapes
-    /// that ignore F; it blinds the distortion flag (not the strain-rate
-    /// hallmark).
-    pub f_reset: bool,
-    /// Cell-averaged dilatation (Mast et al. 2012), blend b in 0 ..= 1 (0 =
-    /// off): J_p <- (1 - b) J_p + b sum_c V / sum_c V0.
-    pub cell_dilatation: f64,
-    /// J-bar by particle-grid averaging (Zhao, Jiang & Choo 2023), blend b
-    /// in 0 ..= 1 (0 = off).
-    pub j_bar: f64,
-    /// The nodal reconstruction of `j_bar`: `constant` (the paper's mean) or
-    /// `linear` (a least-squares plane per node, exact for linear J).
-    pub j_bar_fit: JBarFit,
-    /// Volume consistency: the time (s) over which J relaxes towards rho0 /
-    /// (grid density) where the particle's stencil is inside the material
-    /// (0 = off; each step blends by min(dt / time, 1)), so J cannot drift
-    /// away from how closely the particles pack.
-    pub volume_relaxation_time: f64,
-    /// Particle shifting: the time (s) over which the particles move down
-    /// the gradient of their concentration on a grid of spacing h / ppc,
-    /// closing slits and lines the grid cannot see (0 = off; each step
-    /// moves by -(dt / time) l^2 grad C, never outward at a free surface).
-    pub shift_time: f64,
-    /// Shifting's free-surface test: a particle whose (coarse) stencil has a
-    /// node below this share of a full node's mass rho0 h^2 does not shift
-    /// outward. Lower, it tells a surface (nodes near empty) from a depleted
-    /// region (nodes part full), which a high share would lock against refill.
-    pub shift_surface_share: f64,
-    /// Whether the particle carries the averaged J of `cell_dilatation` /
-    /// `j_bar` to the next step (`true`, the default: J, F and V are
-    /// replaced) or keeps its own J and F, the average setting only this
-    /// step's pressure and volume (`false`): repeated replacement diffuses J
-    /// every step.
-    pub carry_averaged_j: bool,
-    /// J-bar averages this step's volume ratio J_new / J_old instead of J
-    /// (the incremental form, as Coombs et al. 2018 average the incremental
-    /// dF): a field at rest is left alone.
-    pub average_increment: bool,
-    /// Artificial bulk viscosity b (0 = off): sigma += b rho0 c h tr(D) I,
-    /// its work counted as dissipated. Damps acoustic ringing; stable for
-    /// b < 1 / (2 cfl).
-    pub bulk_damping: f64,
-    /// Pressure smoothing through the nodes (CB-Geo's option).
-    pub pressure_smoothing: bool,
     /// The order m of `transfer = "xpic"` (1 = PIC).
     pub xpic_order: u32,
-    /// Null-space filter (Gritton & Berzins 2017) after G2P: the particle
-    /// velocities' consistent-mass projection onto the span of the shape
-    /// functions (FLIP only).
-    pub null_space_filter: bool,
+    /// The remedies, each its own `[method.KEY]` sub-table (absent = off;
+    /// `remedies/`). It also refuses every key that is neither.
+    #[serde(flatten)]
+    pub remedies: RemedySettings,
 }
 
 impl Default for Method {
@@ -539,28 +498,15 @@ impl Default for Method {
             shape: ShapeKind::Linear,
             transfer: TransferKind::Flip,
             flip_alpha: 1.0,
-            pic_damping_time: 0.0,
             scheme: SchemeKind::Usf,
             cfl: 0.2,
             dt: DtMode::Fixed,
             dt_value: None,
             j_update: JUpdate::Det,
-            min_node_mass: 0.0,
             force: ForceKind::Gradient,
             quadrature: QuadratureKind::Particles,
-            f_reset: false,
-            cell_dilatation: 0.0,
-            j_bar: 0.0,
-            j_bar_fit: JBarFit::Constant,
-            volume_relaxation_time: 0.0,
-            shift_time: 0.0,
-            shift_surface_share: crate::remedy_volumetric::FULL_NODE_SHARE,
-            carry_averaged_j: true,
-            average_increment: false,
-            bulk_damping: 0.0,
-            pressure_smoothing: false,
             xpic_order: 2,
-            null_space_filter: false,
+            remedies: RemedySettings::default(),
         }
     }
 }
@@ -657,100 +603,11 @@ impl SolverConfig {
         self.validate_scene()?;
         let m = &self.method;
         within(m.flip_alpha, 0.0, 1.0, "method.flip_alpha")?;
-        within(m.pic_damping_time, 0.0, 1e3, "method.pic_damping_time")?;
-        check(
-            m.pic_damping_time == 0.0
-                || (m.transfer == TransferKind::Flip && m.flip_alpha == 1.0),
-            "method.pic_damping_time",
-            format!(
-                "needs method.transfer = \"flip\" with method.flip_alpha left at 1 (it sets the blend each step; got {:?}, flip_alpha {})",
-                m.transfer, m.flip_alpha
-            ),
-        )?;
         within(m.cfl, 1e-4, 1.0, "method.cfl")?;
-        within(m.min_node_mass, 0.0, 1.0, "method.min_node_mass")?;
         if let Some(dt) = m.dt_value {
             within(dt, 1e-12, 1.0, "method.dt_value")?;
         }
-        within(m.cell_dilatation, 0.0, 1.0, "method.cell_dilatation")?;
         within(m.xpic_order as f64, 1.0, 16.0, "method.xpic_order")?;
-        within(m.j_bar, 0.0, 1.0, "method.j_bar")?;
-        within(
-            m.volume_relaxation_time,
-            0.0,
-            1e3,
-            "method.volume_relaxation_time",
-        )?;
-        within(m.shift_time, 0.0, 1e3, "method.shift_time")?;
-        within(
-            m.shift_surface_share,
-            0.05,
-            1.0,
-            "method.shift_surface_share",
-        )?;
-        within(m.bulk_damping, 0.0, 0.5 / m.cfl, "method.bulk_damping")?;
-        check(
-            m.shift_time == 0.0 || !self.scene.periodic.iter().any(|&p| p),
-            "method.shift_time",
-            "needs walls on both axes (scene.periodic = [false, false]): the shifting grid mirrors at walls only",
-        )?;
-        check(
-            m.cell_dilatation == 0.0 || m.j_bar == 0.0,
-            "method.j_bar",
-            "cannot be combined with method.cell_dilatation (two averagings of J: choose one)",
-        )?;
-        check(
-            m.j_bar_fit == JBarFit::Constant || m.j_bar > 0.0,
-            "method.j_bar_fit",
-            "= \"linear\" needs method.j_bar > 0 (it is the nodal fit of J-bar)",
-        )?;
-        check(
-            m.carry_averaged_j || m.cell_dilatation > 0.0 || m.j_bar > 0.0,
-            "method.carry_averaged_j",
-            "= false needs method.cell_dilatation > 0 or method.j_bar > 0 (there is no averaged J to keep apart)",
-        )?;
-        check(
-            !m.average_increment || (m.j_bar > 0.0 && m.carry_averaged_j),
-            "method.average_increment",
-            "needs method.j_bar > 0 with method.carry_averaged_j = true (it replaces J by J_old times the averaged ratio)",
-        )?;
-        check(
-            !m.null_space_filter || m.transfer == TransferKind::Flip,
-            "method.null_space_filter",
-            format!(
-                "needs method.transfer = \"flip\" (got {:?}: PIC, APIC and XPIC velocities are already in the shape functions' span, so the filter would change nothing)",
-                m.transfer
-            ),
-        )?;
-        check(
-            !(m.f_reset && m.shape == ShapeKind::Cpgimp),
-            "method.f_reset",
-            "cannot be combined with method.shape = \"cpgimp\" (the reset F would reshape the particle domains)",
-        )?;
-        if self
-            .scene
-            .materials
-            .iter()
-            .any(|mat| mat.shear_modulus > 0.0)
-        {
-            // Their J update re-evaluates the EOS only, not the shear part.
-            for (key, on) in [
-                ("method.cell_dilatation", m.cell_dilatation > 0.0),
-                ("method.j_bar", m.j_bar > 0.0),
-                (
-                    "method.volume_relaxation_time",
-                    m.volume_relaxation_time > 0.0,
-                ),
-                ("method.shift_time", m.shift_time > 0.0),
-                ("method.pressure_smoothing", m.pressure_smoothing),
-            ] {
-                check(
-                    !on,
-                    key,
-                    "is for fluids only so far: a material has shear_modulus > 0",
-                )?;
-            }
-        }
         if m.force == ForceKind::Mls {
             // D = sum N (x_i - x_p)(x_i - x_p)^T is singular at the nodes for linear and uGIMP shapes.
             check(
@@ -784,6 +641,7 @@ impl SolverConfig {
                 ),
             )?;
         }
+        m.remedies.validate(self)?;
         for (i, p) in self.perturb.iter().enumerate() {
             check(p.step >= 1, &format!("perturb[{i}].step"), "must be >= 1")?;
             ordered_rect(&p.region, &format!("perturb[{i}].region"))?;
@@ -924,11 +782,6 @@ impl SolverConfig {
                 within(p, -1e12, 1e12, &m.key(i, "pressure_floor"))?;
             }
             within(m.shear_modulus, 0.0, 1e13, &m.key(i, "shear_modulus"))?;
-            check(
-                m.shear_modulus == 0.0 || !self.method.f_reset,
-                &m.key(i, "shear_modulus"),
-                "a solid (shear_modulus > 0) cannot be run with method.f_reset = true (the reset F forgets the shear)",
-            )?;
             within(m.softening_strain, 0.0, 1e6, &m.key(i, "softening_strain"))?;
             check(
                 m.softening_strain == 0.0 || m.shear_modulus > 0.0,

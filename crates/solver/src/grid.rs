@@ -56,6 +56,11 @@ impl Mirrored for Vec2 {
     }
 }
 
+/// A node counts as full of material when it holds at least this share of a
+/// full node's mass rho0 h^2 (folded: mirror images included): near a free
+/// surface the grid density says nothing about the particles' volume.
+pub const FULL_NODE_SHARE: f64 = 0.75;
+
 #[derive(Clone, Debug)]
 pub struct Grid {
     pub h: f64,

@@ -23,9 +23,7 @@ pub mod par;
 pub mod particles;
 pub mod pore_pressure;
 pub mod quadrature_mixed;
-pub mod remedy_null_space;
-pub mod remedy_shifting;
-pub mod remedy_volumetric;
+pub mod remedies;
 pub mod scene;
 mod scheme;
 pub mod shape;
@@ -47,6 +45,7 @@ mod view;
 pub mod viscosity;
 
 pub use checkpoint::CheckpointError;
+pub use remedies::EnergyChange;
 pub use config::*;
 pub use energy::Energy;
 pub use mixture::Mixture;
@@ -125,7 +124,7 @@ pub struct Solver {
     stencils: Vec<Stencil>,
     bins: Bins,
     measure_partials: Vec<measure::Partial>,
-    partials1: Vec<[f64; 1]>,
+    partials_stress: Vec<[f64; 2]>,
     gravity: Vec2,
     step: u64,
     time: f64,
@@ -152,13 +151,10 @@ pub struct Solver {
     losses: Losses,
     /// The particles deleted at the last step (capacity: every particle).
     culled: Vec<Culled>,
-    /// Scratch of the volumetric remedies (empty when none is on).
-    volumetric: remedy_volumetric::Scratch,
     /// Scratch of XPIC(m) (empty for the other transfers).
     xpic: transfer_xpic::Scratch,
-    null_space: remedy_null_space::Scratch,
-    /// Scratch of particle shifting (empty when off).
-    shifting: remedy_shifting::Scratch,
+    /// The remedies switched on, with their scratch (`remedies/`).
+    remedies: remedies::Remedies,
     /// Scratch of `quadrature = "mixed"` (empty otherwise).
     quadrature: quadrature_mixed::Scratch,
 }
@@ -207,7 +203,7 @@ impl Solver {
             stencils: vec![Stencil::default(); n],
             bins: Bins::new(grid.dims, n),
             measure_partials: vec![measure::Partial::default(); chunks],
-            partials1: vec![[0.0; 1]; chunks],
+            partials_stress: vec![[0.0; 2]; chunks],
             grid,
             particles,
             cfg,
@@ -230,36 +226,17 @@ impl Solver {
             cull_rules,
             losses: Losses::default(),
             culled: Vec::with_capacity(n),
-            volumetric: remedy_volumetric::Scratch::default(),
             xpic: transfer_xpic::Scratch::default(),
-            null_space: remedy_null_space::Scratch::default(),
-            shifting: remedy_shifting::Scratch::default(),
+            remedies: remedies::Remedies::default(),
             quadrature: quadrature_mixed::Scratch::default(),
         };
         if solver.cfg.method.quadrature == QuadratureKind::Mixed {
             solver.quadrature = quadrature_mixed::Scratch::new(&solver.grid);
         }
-        if solver.cfg.method.null_space_filter {
-            solver.null_space = remedy_null_space::Scratch::new(&solver.grid, n);
-        }
-        if solver.cfg.method.shift_time > 0.0 {
-            solver.shifting = remedy_shifting::Scratch::new(&solver.grid, solver.cfg.scene.ppc);
-        }
         if solver.cfg.method.transfer == TransferKind::Xpic {
             solver.xpic = transfer_xpic::Scratch::new(&solver.grid, n);
         }
-        let m = &solver.cfg.method;
-        if m.cell_dilatation > 0.0
-            || m.j_bar > 0.0
-            || m.pressure_smoothing
-            || m.volume_relaxation_time > 0.0
-        {
-            solver.volumetric = remedy_volumetric::Scratch::new(
-                &solver.grid,
-                n,
-                m.j_bar_fit == config::JBarFit::Linear,
-            );
-        }
+        solver.remedies = remedies::Remedies::build(&solver.cfg, &solver.grid, n);
         solver.start_clock();
         solver
     }
@@ -350,6 +327,7 @@ impl Solver {
         let ps = &mut self.particles;
         par::keep_warm(|| ps.v_prev.copy_from_slice(&ps.v));
         self.ke_particles_p2g = self.energy.kinetic;
+        self.remedies.begin_step();
         stage_times::lap(&mut self.times.other, &mut clock);
         stage_sort::sort(
             &self.particles,
@@ -412,11 +390,10 @@ impl Solver {
         if self.measure_partials.len() < chunks {
             self.measure_partials
                 .resize(chunks, measure::Partial::default());
-            self.partials1.resize(chunks, [0.0; 1]);
+            self.partials_stress.resize(chunks, [0.0; 2]);
         }
-        self.volumetric.fit_particles(n);
         self.xpic.fit_particles(n);
-        self.null_space.fit_particles(n);
+        self.remedies.fit_particles(n);
     }
 
     /// Appends a particle that enters through an inflow wall: the next free
@@ -439,6 +416,43 @@ impl Solver {
             + mass * self.cfg.scene.gravity * (x.y - floor)
             + self.particles.stored_energy[p];
         self.dissipated -= brought;
+    }
+
+    /// Each remedy's key and the energy it changed in the last step.
+    pub fn remedy_energy(&self) -> impl Iterator<Item = (&'static str, remedies::EnergyChange)> + '_ {
+        self.remedies.energy()
+    }
+
+    /// Switches to another method mid-run (a restart from a checkpoint with
+    /// changed remedies, for counterfactual replay): validated like a new
+    /// configuration, the remedies and transfer scratch rebuilt for it.
+    pub fn set_method(&mut self, method: Method) -> Result<(), ConfigError> {
+        let cfg = SolverConfig {
+            method,
+            ..self.cfg.clone()
+        };
+        cfg.validate()?;
+        if cfg.method.shape != self.cfg.method.shape {
+            return Err(ConfigError {
+                key: "method.shape".into(),
+                message: "cannot change mid-run (the stencils are the shape's)".into(),
+            });
+        }
+        self.cfg = cfg;
+        let n = self.particles.len();
+        self.xpic = if self.cfg.method.transfer == TransferKind::Xpic {
+            transfer_xpic::Scratch::new(&self.grid, n)
+        } else {
+            transfer_xpic::Scratch::default()
+        };
+        self.quadrature = if self.cfg.method.quadrature == QuadratureKind::Mixed {
+            quadrature_mixed::Scratch::new(&self.grid)
+        } else {
+            quadrature_mixed::Scratch::default()
+        };
+        self.remedies = remedies::Remedies::build(&self.cfg, &self.grid, n);
+        self.fit_scratch(n);
+        Ok(())
     }
 
     /// Particles deleted since t = 0 (`on_escape` / `on_inversion = "delete"`).

@@ -52,26 +52,9 @@ impl Mixture {
                     .into(),
             });
         }
-        if phases
-            .iter()
-            .any(|p| p.cfg.method.volume_relaxation_time > 0.0)
-        {
-            // A phase fills only its share of each node: its grid density
-            // says nothing of its particles' volume.
-            return Err(ConfigError {
-                key: "method.volume_relaxation_time".into(),
-                message: "is for a single phase: in a mixture each phase fills only part of a node"
-                    .into(),
-            });
-        }
-        if phases.iter().any(|p| p.cfg.method.shift_time > 0.0) {
-            // Each phase's concentration is only its share of the space.
-            return Err(ConfigError {
-                key: "method.shift_time".into(),
-                message:
-                    "is for a single phase: in a mixture each phase fills only part of the space"
-                        .into(),
-            });
+        for p in phases.iter() {
+            // A phase fills only its share of each node and of the space.
+            p.cfg.method.remedies.refuse_in_mixture()?;
         }
         if phases
             .iter()

@@ -18,7 +18,7 @@
 
 use crate::grid::{Grid, Mirrored, PAD};
 use crate::particles::{Particles, Vec2};
-use crate::remedy_volumetric::FULL_NODE_SHARE;
+use crate::grid::FULL_NODE_SHARE;
 use crate::shape::{Shape, Stencil};
 use std::ops::AddAssign;
 

@@ -1,6 +1,7 @@
 //! USF, USL and MUSL as orderings of the same stages.
 
 use crate::config::{ForceKind, QuadratureKind, SchemeKind, TransferKind};
+use crate::remedies::{GridStep, Step};
 use crate::stage_p2g::{self, Terms};
 use crate::stage_times::lap;
 use crate::{par, stage_g2p, stage_grid, stage_stress, Solver};
@@ -87,18 +88,39 @@ fn grid_velocities(s: &mut Solver, clock: &mut Instant) {
 
 fn grid_update(s: &mut Solver, clock: &mut Instant) {
     let (grid, dt) = (&mut s.grid, s.dt);
-    // method.min_node_mass is a fraction of a full cell's mass rho0 h^2.
-    let guard = stage_grid::MassGuard {
-        min_mass: s.cfg.method.min_node_mass * (first_rho0(&s.cfg) * grid.h * grid.h),
-        gravity: s.gravity,
-    };
-    par::keep_warm(|| stage_grid::update(grid, dt, &guard));
+    par::keep_warm(|| stage_grid::update(grid, dt));
+    if !s.remedies.is_empty() {
+        let mut g = GridStep {
+            grid: &mut s.grid,
+            particles: &s.particles,
+            stencils: &s.stencils,
+            shape: &s.shape,
+            dt: s.dt,
+            gravity: s.gravity,
+        };
+        s.remedies.after_grid_update(&mut g);
+    }
     lap(&mut s.times.grid, clock);
 }
 
 /// rho0 of the first material: what a "full" node or cell is measured by.
 fn first_rho0(cfg: &crate::config::SolverConfig) -> f64 {
     cfg.scene.materials.first().map_or(0.0, |m| m.rho0)
+}
+
+/// The particle side of the step as the remedies' hooks see it.
+macro_rules! step_view {
+    ($s:expr) => {
+        Step {
+            particles: &mut $s.particles,
+            stencils: &$s.stencils,
+            shape: &$s.shape,
+            grid: &$s.grid,
+            materials: &$s.cfg.scene.materials,
+            dt: $s.dt,
+            gravity: $s.cfg.scene.gravity,
+        }
+    };
 }
 
 fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
@@ -142,6 +164,9 @@ fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
 }
 
 fn stress(s: &mut Solver, which: StressVelocity, clock: &mut Instant) {
+    if !s.remedies.is_empty() {
+        s.remedies.before_stress(&mut step_view!(s));
+    }
     let velocity = match which {
         StressVelocity::Grid => &s.grid.vel,
         StressVelocity::Updated => &s.grid.vel_new,
@@ -155,58 +180,16 @@ fn stress(s: &mut Solver, which: StressVelocity, clock: &mut Instant) {
         j_update: s.cfg.method.j_update,
         dt: s.dt,
         mls: s.cfg.method.force == ForceKind::Mls,
-        f_reset: s.cfg.method.f_reset,
-        bulk_damping: s.cfg.method.bulk_damping,
+        rules: &s.remedies.points,
         drop_inverted: s.cfg.scene.on_inversion == crate::config::OnLoss::Delete,
     };
-    if s.cfg.method.average_increment {
-        // J before this step's update: J-bar averages the increment.
-        crate::remedy_volumetric::save_own(&s.particles, &mut s.volumetric);
+    let (dissipated, rule_work) = stage_stress::update(&inputs, &mut s.particles, &mut s.partials_stress);
+    s.dissipated += dissipated;
+    if !s.remedies.is_empty() {
+        s.remedies.book_point_work(rule_work);
+        s.remedies.after_stress(&mut step_view!(s));
     }
-    s.dissipated += stage_stress::update(&inputs, &mut s.particles, &mut s.partials1);
-    volumetric_remedies(s);
     lap(&mut s.times.stress, clock);
-}
-
-/// Cell-averaged dilatation or J-bar, volume consistency, then pressure
-/// smoothing (each off by default).
-fn volumetric_remedies(s: &mut Solver) {
-    use crate::remedy_volumetric as rv;
-    let m = &s.cfg.method;
-    let (ps, scratch) = (&mut s.particles, &mut s.volumetric);
-    let averaging = m.cell_dilatation > 0.0 || m.j_bar > 0.0;
-    if averaging && !m.carry_averaged_j {
-        rv::save_own(ps, scratch);
-    }
-    if m.cell_dilatation > 0.0 {
-        rv::cell_dilatation(ps, &s.grid, m.cell_dilatation, scratch);
-    } else if m.j_bar > 0.0 {
-        rv::j_bar(ps, &s.stencils, &s.shape, &s.grid, m, scratch);
-    }
-    let relax = m.volume_relaxation_time > 0.0;
-    if relax {
-        let blend = (s.dt / m.volume_relaxation_time).min(1.0);
-        rv::volume_consistency(ps, &s.stencils, &s.shape, &s.grid, blend, scratch);
-    }
-    if averaging || relax {
-        rv::reevaluate_eos(ps, &s.cfg.scene.materials);
-        if !m.carry_averaged_j {
-            rv::restore_own(ps, scratch);
-        }
-    }
-    if m.pressure_smoothing {
-        rv::smooth_pressure(ps, &s.stencils, &s.shape, &s.grid, scratch);
-    }
-}
-
-/// This step's FLIP fraction: `flip_alpha`, or 1 - dt / tau under
-/// `pic_damping_time = tau`.
-fn flip_alpha(m: &crate::config::Method, dt: f64) -> f64 {
-    if m.pic_damping_time > 0.0 {
-        (1.0 - dt / m.pic_damping_time).max(0.0)
-    } else {
-        m.flip_alpha
-    }
 }
 
 fn g2p(s: &mut Solver, clock: &mut Instant) {
@@ -227,7 +210,7 @@ fn g2p(s: &mut Solver, clock: &mut Instant) {
         flip_alpha: if xpic {
             1.0
         } else {
-            flip_alpha(&s.cfg.method, s.dt)
+            s.remedies.flip_fraction(s.dt, s.cfg.method.flip_alpha)
         },
     };
     stage_g2p::g2p(
@@ -238,25 +221,8 @@ fn g2p(s: &mut Solver, clock: &mut Instant) {
         &transfer,
         s.dt,
     );
-    if s.cfg.method.null_space_filter {
-        crate::remedy_null_space::filter(
-            &mut s.particles,
-            &s.stencils,
-            &s.shape,
-            &s.grid,
-            &mut s.null_space,
-        );
-    }
-    if s.cfg.method.shift_time > 0.0 {
-        crate::remedy_shifting::shift(
-            &mut s.particles,
-            &s.stencils,
-            &s.shape,
-            &s.grid,
-            s.dt / s.cfg.method.shift_time,
-            s.cfg.method.shift_surface_share,
-            &mut s.shifting,
-        );
+    if !s.remedies.is_empty() {
+        s.remedies.after_g2p(&mut step_view!(s));
     }
     s.apply_perturbations();
     lap(&mut s.times.g2p, clock);

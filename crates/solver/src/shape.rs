@@ -4,6 +4,29 @@
 use crate::config::ShapeKind;
 use crate::{shape_bspline, shape_gimp, shape_linear};
 
+/// Runs `$body` with the constant `$w` set to the shape's stencil width in
+/// nodes per axis (2, 3 or 4): the one place the width is matched, so every
+/// particle loop is monomorphised on it.
+macro_rules! with_width {
+    ($shape:expr, $w:ident => $body:expr) => {
+        match $shape.width() {
+            2 => {
+                const $w: usize = 2;
+                $body
+            }
+            3 => {
+                const $w: usize = 3;
+                $body
+            }
+            _ => {
+                const $w: usize = 4;
+                $body
+            }
+        }
+    };
+}
+pub(crate) use with_width;
+
 /// Widest stencil (cubic B-spline) in nodes per axis.
 pub const MAX_STENCIL: usize = 4;
 

@@ -1,30 +1,8 @@
 //! Grid stage: fold wall/periodic images, nodal velocities, momentum update,
 //! ghost refill. Zero-mass active nodes (a particle exactly on a node line)
-//! keep zero velocity. Nodes lighter than the minimum nodal mass
-//! (`method.min_node_mass`, see [`MassGuard`]) move under gravity alone.
+//! keep zero velocity.
 
 use crate::grid::Grid;
-use crate::particles::Vec2;
-
-/// The minimum nodal mass for acceleration (Uintah's `minimum_mass_for_acc`,
-/// docs/physics.md section 5) in absolute terms.
-///
-/// A node whose folded mass `grid.mass` (mirror images included: the mass its
-/// force is divided by, not the real particles' `grid.mass_raw`) satisfies
-/// `0 < m <= min_mass` ignores its force (stress and the folded gravity
-/// force) and gets `a = g`, with the symmetry-wall condition applied as
-/// usual (the wall-normal component is zero on a wall node). The test is
-/// strict: `m > min_mass` uses the force. Zero-mass nodes are left as they
-/// were (zero velocity). With `min_mass = 0` no node with mass is guarded, so
-/// the update performs exactly the operations it did before the guard.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MassGuard {
-    /// Folded nodal mass threshold (kg per metre of thickness):
-    /// `method.min_node_mass` x rho0 h^2 of the first material.
-    pub min_mass: f64,
-    /// Gravity vector (m/s^2).
-    pub gravity: Vec2,
-}
 
 /// v^n = p / m from the folded P2G sums; also returns the grid kinetic energy
 /// of the real particles' mass (sum over nodes of m_raw |v|^2 / 2).
@@ -69,20 +47,15 @@ pub fn project_momentum(grid: &mut Grid) {
     grid.mass = mass;
 }
 
-/// v^{n+1} = v^n + dt f / m from the folded nodal force (gravity included);
-/// a node at or below the guard's mass gets `a = g` instead (see [`MassGuard`]).
-pub fn update(grid: &mut Grid, dt: f64, guard: &MassGuard) {
+/// v^{n+1} = v^n + dt f / m from the folded nodal force (gravity included).
+pub fn update(grid: &mut Grid, dt: f64) {
     let mut force = std::mem::take(&mut grid.force);
     grid.fold(&mut force);
     for &n in &grid.inside {
         let n = n as usize;
         let m = grid.mass[n];
         let a = if m > 0.0 {
-            if m <= guard.min_mass {
-                grid.project_walls(n, guard.gravity)
-            } else {
-                force[n] / m
-            }
+            force[n] / m
         } else {
             force[n] * 0.0
         };

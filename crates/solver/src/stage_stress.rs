@@ -9,7 +9,9 @@ use crate::par::{Pieces, CHUNK};
 use crate::particles::{Mat2, Particles, Vec2};
 use crate::shape::{Shape, Stencil};
 use crate::viscosity;
+use crate::remedies::PointRule;
 use rayon::prelude::*;
+use std::sync::Arc;
 
 pub struct Inputs<'a> {
     pub stencils: &'a [Stencil],
@@ -22,10 +24,8 @@ pub struct Inputs<'a> {
     pub dt: f64,
     /// MLS-MPM: the velocity gradient is the particle's affine matrix C.
     pub mls: bool,
-    /// F <- J^(1/2) I after the update (`method.f_reset`).
-    pub f_reset: bool,
-    /// Artificial bulk viscosity coefficient b (`method.bulk_damping`).
-    pub bulk_damping: f64,
+    /// The remedies' per-particle rules (F kept, extra stress), in order.
+    pub rules: &'a [Arc<dyn PointRule>],
     /// `scene.on_inversion = "delete"`: a particle that inverts here carries
     /// no stress (it is deleted at the end of the step; under USF its
     /// singular pressure would otherwise push its neighbours this step).
@@ -33,13 +33,14 @@ pub struct Inputs<'a> {
 }
 
 /// Updates F, J, V, stress, pressure, |dev D| and xi; returns the energy
-/// dissipated this step (viscous work and what softening released).
-pub fn update(inputs: &Inputs, particles: &mut Particles, partials: &mut [[f64; 1]]) -> f64 {
-    match inputs.shape.width() {
-        2 => run::<2>(inputs, particles, partials),
-        3 => run::<3>(inputs, particles, partials),
-        _ => run::<4>(inputs, particles, partials),
-    }
+/// dissipated this step (viscous work, the rules' extra stress and what
+/// softening released) and the rules' share of it.
+pub fn update(
+    inputs: &Inputs,
+    particles: &mut Particles,
+    partials: &mut [[f64; 2]],
+) -> (f64, f64) {
+    crate::shape::with_width!(inputs.shape, W => run::<W>(inputs, particles, partials))
 }
 
 /// Velocity gradient L = sum v grad N^T at a particle, summed row by row
@@ -73,8 +74,8 @@ fn velocity_gradient<const W: usize>(
 fn run<const W: usize>(
     inputs: &Inputs,
     particles: &mut Particles,
-    partials: &mut [[f64; 1]],
-) -> f64 {
+    partials: &mut [[f64; 2]],
+) -> (f64, f64) {
     let Inputs {
         stencils,
         shape,
@@ -84,8 +85,7 @@ fn run<const W: usize>(
         j_update,
         dt,
         mls,
-        f_reset,
-        bulk_damping,
+        rules,
         drop_inverted,
     } = *inputs;
     let nx = grid.dims[0];
@@ -129,7 +129,7 @@ fn run<const W: usize>(
                 (st, affine),
                 work,
             )| {
-                let mut acc = 0.0;
+                let (mut acc, mut rule_acc) = (0.0, 0.0);
                 // This step's history increments (softening solids only).
                 let mut dxi = [0.0; CHUNK];
                 for k in 0..f.len() {
@@ -148,12 +148,11 @@ fn run<const W: usize>(
                             (f_new * (jn / det).abs().sqrt(), jn)
                         }
                     };
-                    // An inverted F is kept as it is, for the inversion checks to see.
-                    f[k] = if f_reset && j_next > 0.0 {
-                        Mat2::identity() * j_next.sqrt()
-                    } else {
-                        f_next
-                    };
+                    let mut f_kept = f_next;
+                    for rule in rules {
+                        f_kept = rule.deformation(f_kept, j_next);
+                    }
+                    f[k] = f_kept;
                     j[k] = j_next;
                     vol[k] = vol0[k] * j_next;
                     let m = &materials[mat[k] as usize];
@@ -165,12 +164,13 @@ fn run<const W: usize>(
                         dxi[k] = crate::solid_neo_hookean::history_increment(&d, dt);
                     }
                     acc += visc.power * vol[k] * dt;
-                    if bulk_damping > 0.0 {
+                    for rule in rules {
                         // The wave speed is the previous step's (the EOS runs below).
-                        let zeta = bulk_damping * m.rho0 * wave[k] * grid.h;
-                        let (s, power) = viscosity::bulk(zeta, &d);
-                        stress[k] += s;
-                        acc += power * vol[k] * dt;
+                        if let Some((s, power)) = rule.extra_stress(m, wave[k], grid.h, &d) {
+                            stress[k] += s;
+                            acc += power * vol[k] * dt;
+                            rule_acc += power * vol[k] * dt;
+                        }
                     }
                 }
                 // The EOS over the chunk in one loop per material (vectorised).
@@ -208,9 +208,14 @@ fn run<const W: usize>(
                     }
                 }
                 work[0] = acc;
+                work[1] = rule_acc;
             },
         );
-    partials[..n_chunks].iter().map(|w| w[0]).sum()
+    let parts = &partials[..n_chunks];
+    (
+        parts.iter().map(|w| w[0]).sum(),
+        parts.iter().map(|w| w[1]).sum(),
+    )
 }
 
 /// The EOS particle by particle when several materials are present.

@@ -110,7 +110,10 @@ pub fn mpm88_sized(n_particles: usize, n_grid: usize) -> (SolverConfig, Particle
         // distorted F of a sloshing fluid, det F loses J to cancellation
         // and a particle leaves the grid near step 2100.
         force: ForceKind::Mls,
-        f_reset: true,
+        remedies: solver::remedies::RemedySettings {
+            f_reset: Some(Default::default()),
+            ..Default::default()
+        },
         ..Method::default()
     };
     let mut ps = Particles::default();

@@ -8,6 +8,7 @@ use indexmap::IndexMap;
 use monitor::MonitorConfig;
 use serde::{Deserialize, Serialize};
 use solver::drag::{Drag, DragModel, DragUpdate};
+use solver::remedies::{Descriptor, DESCRIPTORS};
 use solver::{Material, Method, Perturb, Phase, Scene, SolverConfig, Wall};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -569,8 +570,34 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
 /// A serde error as (dotted key, message in the study file's words).
 fn schema_error(e: serde_path_to_error::Error<toml::de::Error>) -> KeyError {
     let path = e.path().to_string();
-    let path = if path == "." { String::new() } else { path };
-    let message = e.inner().message().to_string();
+    let mut path = if path == "." { String::new() } else { path };
+    let mut message = e.inner().message().to_string();
+    // A remedy's table reports "at `KEY`: ..." (serde loses the path there).
+    while let Some(rest) = message.strip_prefix("at `") {
+        let Some((key, rest)) = rest.split_once("`: ") else {
+            break;
+        };
+        path = if path.is_empty() {
+            key.to_string()
+        } else {
+            format!("{path}.{key}")
+        };
+        message = rest.to_string();
+    }
+    if let Some(rest) = message.strip_prefix("old key `") {
+        if let Some((key, rest)) = rest.split_once("`: ") {
+            let key = if path.is_empty() || path.ends_with(&format!(".{key}")) {
+                if path.is_empty() {
+                    key.to_string()
+                } else {
+                    path.clone()
+                }
+            } else {
+                format!("{path}.{key}")
+            };
+            return (key, rest.to_string());
+        }
+    }
     let join = |field: &str| {
         if path.is_empty() || path.ends_with(&format!(".{field}")) || path == field {
             if path.is_empty() {
@@ -672,6 +699,14 @@ fn flatten(table: &Table) -> BTreeMap<String, Value> {
 
 /// Readable case-name fragment: `K1.5MPa`, `tait`, `mu0.5`, `dyn`.
 fn name_part(key: &str, v: &Value) -> String {
+    if let Some(remedy) = remedy_descriptor(key) {
+        return remedy_name(remedy, v);
+    }
+    plain_part(key, v)
+}
+
+/// `name_part` of a key that is not a remedy's.
+fn plain_part(key: &str, v: &Value) -> String {
     let last = key.rsplit('.').next().unwrap_or(key);
     match (last, v) {
         ("K", Value::Float(_) | Value::Integer(_)) => format!("K{}", si_pascal(as_f64(v))),
@@ -696,6 +731,47 @@ fn name_part(key: &str, v: &Value) -> String {
             .join("-"),
         ("gamma", _) => format!("g{}", as_f64(v)),
         (_, other) => format!("{last}{other}"),
+    }
+}
+
+/// The remedy a key names (`method.j_bar`, or `j_bar` inside a method table).
+fn remedy_descriptor(key: &str) -> Option<&'static Descriptor> {
+    let last = match key.rsplit_once('.') {
+        Some(("method", last)) => last,
+        Some(_) => return None,
+        None => key,
+    };
+    DESCRIPTORS.iter().copied().find(|d| d.key == last)
+}
+
+/// A remedy's fragment, written as its old flat keys were (so names do not
+/// change with the keys): `j_bar1.0-linear`, `shift_time0.02`, `f_reset`;
+/// off (`false`) as the old zero or `no_` form.
+fn remedy_name(d: &Descriptor, v: &Value) -> String {
+    let head = |main: Option<&Value>| match d.main {
+        Some((setting, default)) => {
+            let value = main.cloned().unwrap_or(Value::Float(default));
+            plain_part(d.old_key(setting), &value)
+        }
+        None => plain_part(d.key, &Value::Boolean(true)),
+    };
+    match v {
+        Value::Boolean(false) => match d.main {
+            Some((setting, _)) => plain_part(d.old_key(setting), &Value::Float(0.0)),
+            None => plain_part(d.key, &Value::Boolean(false)),
+        },
+        Value::Table(t) => {
+            let main = d.main.and_then(|(setting, _)| t.get(setting));
+            let mut parts = vec![head(main)];
+            for (k, value) in t {
+                if d.main.is_some_and(|(setting, _)| setting == k) {
+                    continue;
+                }
+                parts.push(plain_part(d.old_key(k), value));
+            }
+            parts.join("-")
+        }
+        _ => head(None),
     }
 }
 

@@ -1,5 +1,5 @@
-//! Particle shifting (docs/physics.md section 5; after Lind et al. 2012 in
-//! SPH), off by default. A fluid's material points can gather into lines
+//! Particle shifting (`[method.shifting] time, surface_share`;
+//! docs/physics.md section 5; after Lind et al. 2012 in SPH). A fluid's material points can gather into lines
 //! and leave slits between them narrower than the grid's support: the nodes
 //! see a full, uniform fluid there and nothing closes the slits. Each step,
 //! after G2P, every particle moves down the gradient of the particles'
@@ -15,14 +15,25 @@
 //! along the outward normal of the grid mass is removed, so a free surface
 //! does not spread. Velocities, J, F and stress stay: mass and momentum are
 //! unchanged. Serial, in particle order: deterministic for any thread count.
+//!
+//! `surface_share`: a particle whose (coarse) stencil has a node below this
+//! share of a full node's mass rho0 h^2 does not shift outward. Lower, it
+//! tells a surface (nodes near empty) from a depleted region (nodes part
+//! full), which a high share would lock against refill.
+//!
+//! Energy: the gravitational energy the moves change.
 
 // The loop walks particles and their stencils in step.
 #![allow(clippy::needless_range_loop)]
 
-use crate::grid::Grid;
+use super::{Descriptor, EnergyChange, Remedy, Setup, Step, Supports};
+use crate::config::SolverConfig;
+use crate::grid::{Grid, FULL_NODE_SHARE};
+use crate::ConfigError;
 use crate::particles::{Particles, Vec2};
 use crate::shape::{Shape, Stencil};
 use crate::shape_bspline::quadratic;
+use serde::{Deserialize, Serialize};
 
 /// The largest shift per step in units of l, a guard against dt / tau near
 /// 1 (an explicit diffusion of C stays stable well below it).
@@ -149,11 +160,7 @@ pub fn shift(
     surface_share: f64,
     s: &mut Scratch,
 ) {
-    match shape.width() {
-        2 => shift_w::<2>(ps, stencils, shape, grid, rate, surface_share, s),
-        3 => shift_w::<3>(ps, stencils, shape, grid, rate, surface_share, s),
-        _ => shift_w::<4>(ps, stencils, shape, grid, rate, surface_share, s),
-    }
+    crate::shape::with_width!(shape, W => shift_w::<W>(ps, stencils, shape, grid, rate, surface_share, s))
 }
 
 fn shift_w<const W: usize>(
@@ -228,4 +235,85 @@ fn coarse_surface<const W: usize>(
         }
     }
     (inside, g)
+}
+
+pub static DESCRIPTOR: Descriptor = Descriptor {
+    key: "shifting",
+    main: Some(("time", 0.02)),
+    old_keys: &[("time", "shift_time"), ("surface_share", "shift_surface_share")],
+};
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Settings {
+    /// The shifting time tau (s): each step moves by -(dt / tau) l^2 grad C.
+    pub time: f64,
+    /// The free-surface test's share of a full node's mass (0.05 ..= 1).
+    pub surface_share: f64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            time: 0.02,
+            surface_share: FULL_NODE_SHARE,
+        }
+    }
+}
+
+impl super::Settings for Settings {
+    fn descriptor(&self) -> &'static Descriptor {
+        &DESCRIPTOR
+    }
+    fn supports(&self) -> Supports {
+        Supports {
+            mixtures: false,
+            solids: false,
+            // The shifting grid mirrors at walls only.
+            periodic: false,
+            ..Supports::ALL
+        }
+    }
+    fn validate(&self, _cfg: &SolverConfig) -> Result<(), ConfigError> {
+        super::positive_up_to(self.time, 1e3, "method.shifting.time")?;
+        if !(self.surface_share >= 0.05 && self.surface_share <= 1.0) {
+            return Err(ConfigError {
+                key: "method.shifting.surface_share".into(),
+                message: format!(
+                    "{} is out of range (allowed 0.05 ..= 1)",
+                    self.surface_share
+                ),
+            });
+        }
+        Ok(())
+    }
+    fn build(&self, setup: &Setup) -> Box<dyn Remedy> {
+        Box::new(Shifting {
+            settings: self.clone(),
+            scratch: Scratch::new(setup.grid, setup.cfg.scene.ppc),
+        })
+    }
+}
+
+#[derive(Clone)]
+struct Shifting {
+    settings: Settings,
+    scratch: Scratch,
+}
+
+impl Remedy for Shifting {
+    fn key(&self) -> &'static str {
+        DESCRIPTOR.key
+    }
+    fn after_g2p(&mut self, s: &mut Step) -> EnergyChange {
+        let height = |ps: &Particles| -> f64 { ps.mass.iter().zip(&ps.x).map(|(m, x)| m * x.y).sum() };
+        let before = height(s.particles);
+        let rate = s.dt / self.settings.time;
+        let share = self.settings.surface_share;
+        shift(s.particles, s.stencils, s.shape, s.grid, rate, share, &mut self.scratch);
+        EnergyChange {
+            gravitational: s.gravity * (height(s.particles) - before),
+            ..EnergyChange::default()
+        }
+    }
 }

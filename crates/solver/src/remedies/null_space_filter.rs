@@ -1,4 +1,4 @@
-//! Null-space filter (Gritton & Berzins 2017): the consistent-mass
+//! Null-space filter (Gritton & Berzins 2017), `[method.null_space_filter]`: the consistent-mass
 //! least-squares projection of the particle velocities onto the span of the
 //! shape functions,
 //!
@@ -17,10 +17,14 @@
 //! FLIP velocities only (PIC, APIC and XPIC velocities are S u already).
 //! Serial, in particle order, with a fixed stopping rule: deterministic for
 //! any thread count.
+//!
+//! Energy: the kinetic energy the projection changes.
 
 // The loops walk several arrays in step (weights, nodes, particles).
 #![allow(clippy::needless_range_loop)]
 
+use super::{Descriptor, EnergyChange, Remedy, Setup, Step, Supports};
+use crate::config::TransferKind;
 use crate::grid::Grid;
 use crate::particles::{Particles, Vec2};
 use crate::shape::{Shape, Stencil};
@@ -168,9 +172,52 @@ pub fn filter(
     grid: &Grid,
     s: &mut Scratch,
 ) {
-    match shape.width() {
-        2 => run::<2>(ps, stencils, shape, grid, s),
-        3 => run::<3>(ps, stencils, shape, grid, s),
-        _ => run::<4>(ps, stencils, shape, grid, s),
+    crate::shape::with_width!(shape, W => run::<W>(ps, stencils, shape, grid, s))
+}
+
+pub static DESCRIPTOR: Descriptor = Descriptor {
+    key: "null_space_filter",
+    main: None,
+    old_keys: &[],
+};
+
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Settings {}
+
+impl super::Settings for Settings {
+    fn descriptor(&self) -> &'static Descriptor {
+        &DESCRIPTOR
+    }
+    fn supports(&self) -> Supports {
+        // PIC, APIC and XPIC velocities are already in the shape functions'
+        // span: the filter would change nothing.
+        Supports {
+            transfers: &[TransferKind::Flip],
+            ..Supports::ALL
+        }
+    }
+    fn build(&self, setup: &Setup) -> Box<dyn Remedy> {
+        Box::new(Filter(Scratch::new(setup.grid, setup.particles)))
+    }
+}
+
+#[derive(Clone)]
+struct Filter(Scratch);
+
+impl Remedy for Filter {
+    fn key(&self) -> &'static str {
+        DESCRIPTOR.key
+    }
+    fn fit_particles(&mut self, n: usize) {
+        self.0.fit_particles(n);
+    }
+    fn after_g2p(&mut self, s: &mut Step) -> EnergyChange {
+        let before = super::kinetic_energy(s.particles);
+        filter(s.particles, s.stencils, s.shape, s.grid, &mut self.0);
+        EnergyChange {
+            kinetic: super::kinetic_energy(s.particles) - before,
+            ..EnergyChange::default()
+        }
     }
 }
