@@ -1,6 +1,7 @@
 //! Bit-identical state for 1 and 2 threads, and after a checkpoint restart;
 //! corrupted checkpoints are refused.
 
+use solver::remedies::{bulk_damping, j_bar, shifting, volume_relaxation, RemedySettings};
 use solver::*;
 
 mod common;
@@ -52,11 +53,19 @@ fn configs() -> Vec<SolverConfig> {
     out.push(SolverConfig {
         scene: Scene::dam_break(mat),
         method: Method {
-            j_bar: 1.0,
-            j_bar_fit: JBarFit::Linear,
-            bulk_damping: 0.3,
-            volume_relaxation_time: 0.01,
-            shift_time: 0.01,
+            remedies: RemedySettings {
+                j_bar: Some(j_bar::Settings {
+                    fit: JBarFit::Linear,
+                    ..Default::default()
+                }),
+                bulk_damping: Some(bulk_damping::Settings { coefficient: 0.3 }),
+                volume_relaxation: Some(volume_relaxation::Settings { time: 0.01 }),
+                shifting: Some(shifting::Settings {
+                    time: 0.01,
+                    ..Default::default()
+                }),
+                ..Default::default()
+            },
             ..common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl)
         },
         perturb: vec![],

@@ -12,6 +12,7 @@
 //! a fixed skeleton reaches Darcy's flux q = k rho_f g / mu.
 
 use solver::drag::{Drag, DragModel, DragUpdate};
+use solver::remedies::volume_relaxation;
 use solver::*;
 
 mod common;
@@ -325,15 +326,13 @@ fn phases_over_different_grids_are_refused() {
 #[test]
 fn volume_relaxation_is_refused_in_a_mixture() {
     let method = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
-    let relaxed = Method {
-        volume_relaxation_time: 0.1,
-        ..method.clone()
-    };
+    let mut relaxed = method.clone();
+    relaxed.remedies.volume_relaxation = Some(volume_relaxation::Settings { time: 0.1 });
     let a = common::phase([0.0, 0.0, 0.1, 0.1], RHO_S, N_S, method, |_| Vec2::zeros());
     let b = common::phase([0.0, 0.0, 0.1, 0.1], RHO_F, N_F, relaxed, |_| Vec2::zeros());
     let drag = drag(1.0, DragModel::BangBangNode, DragUpdate::Implicit);
     let err = Mixture::new([a, b], drag).err().unwrap();
-    assert_eq!(err.key, "method.volume_relaxation_time");
+    assert_eq!(err.key, "method.volume_relaxation");
 }
 
 /// Kozeny-Carman: at the reference porosity the coefficient is B0; at

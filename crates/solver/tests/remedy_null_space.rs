@@ -8,6 +8,7 @@
 
 mod common;
 
+use solver::remedies::null_space_filter;
 use solver::*;
 
 const H: f64 = 0.1;
@@ -20,11 +21,11 @@ fn config(shape: ShapeKind, transfer: TransferKind, filter: bool, jitter: f64) -
     scene.periodic = [true, true];
     scene.jitter = jitter;
     scene.seed = 7;
-    let method = Method {
+    let mut method = Method {
         dt_value: Some(1e-12),
-        null_space_filter: filter,
         ..common::method(shape, transfer, SchemeKind::Usl)
     };
+    method.remedies.null_space_filter = filter.then(null_space_filter::Settings::default);
     SolverConfig {
         scene,
         method,
@@ -121,6 +122,7 @@ fn the_filter_needs_flip() {
     for transfer in [TransferKind::Pic, TransferKind::Apic, TransferKind::Xpic] {
         let cfg = config(ShapeKind::Bspline2, transfer, true, 0.0);
         let err = Solver::new(cfg).err().expect("refused");
+        assert_eq!(err.key, "method.null_space_filter", "{err}");
         assert!(
             format!("{err}").contains("method.null_space_filter"),
             "{err}"

@@ -8,6 +8,7 @@ mod common;
 
 use solver::grid::Grid;
 use solver::particles::Particles;
+use solver::remedies::shifting;
 use solver::*;
 
 /// Water in the bottom-left of a walled box, on the seeding lattice
@@ -15,10 +16,11 @@ use solver::*;
 /// right walls and has a free surface on top.
 fn pool(shift_time: f64) -> (Scene, Method) {
     let scene = common::box_scene([0.3, 0.3], [0.0, 0.0, 0.3, 0.1], Material::tait(1e5), 0.0);
-    let method = Method {
-        shift_time,
-        ..common::method(ShapeKind::Bspline2, TransferKind::Pic, SchemeKind::Usl)
-    };
+    let mut method = common::method(ShapeKind::Bspline2, TransferKind::Pic, SchemeKind::Usl);
+    method.remedies.shifting = Some(shifting::Settings {
+        time: shift_time,
+        ..Default::default()
+    });
     (scene, method)
 }
 
@@ -48,7 +50,7 @@ fn a_lattice_is_a_fixed_point_up_to_the_walls_and_the_surface() {
 
 fn lattice_stays(share: f64) {
     let (scene, mut method) = pool(1e-3);
-    method.shift_surface_share = share;
+    method.remedies.shifting.as_mut().unwrap().surface_share = share;
     let mut s = common::solver(scene, method);
     let before = s.view().x.to_vec();
     for _ in 0..50 {
@@ -75,8 +77,8 @@ fn spread(x: &[Vec2], vol0: f64) -> f64 {
     for &p in x {
         ps.push(p, Vec2::zeros(), 1.0, vol0, 0);
     }
-    let mut scratch = solver::remedy_shifting::Scratch::new(&grid, 2);
-    solver::remedy_shifting::concentration(&ps, &grid, &mut scratch);
+    let mut scratch = shifting::Scratch::new(&grid, 2);
+    shifting::concentration(&ps, &grid, &mut scratch);
     let (mut lo, mut hi) = (f64::MAX, f64::MIN);
     for j in 4..=16 {
         for i in 4..=56 {
@@ -131,7 +133,7 @@ fn band_count(x: &[Vec2]) -> usize {
 /// `share`; returns the band's count and how far the top rose (m).
 fn depleted_band(share: f64, steps: usize) -> (usize, f64) {
     let (scene, mut method) = pool(0.02);
-    method.shift_surface_share = share;
+    method.remedies.shifting.as_mut().unwrap().surface_share = share;
     let mut ps = solver::scene::seed(&scene);
     let keep: Vec<usize> = (0..ps.len())
         .filter(|&p| ps.x[p].x < 0.29 || ((ps.x[p].y / L) as usize).is_multiple_of(2))
@@ -169,21 +171,19 @@ fn refused_where_it_makes_no_sense() {
     let mut periodic = scene.clone();
     periodic.periodic = [true, false];
     let err = common::refusal(periodic, method.clone()).expect("periodic refused");
-    assert_eq!(err.key, "method.shift_time");
+    assert_eq!(err.key, "method.shifting");
     let mut solid = scene.clone();
     solid.materials[0].shear_modulus = 1e4;
     let err = common::refusal(solid, method.clone()).expect("solid refused");
-    assert_eq!(err.key, "method.shift_time");
-    let negative = Method {
-        shift_time: -1.0,
-        ..method
-    };
-    let err = common::refusal(scene.clone(), negative).expect("negative refused");
-    assert_eq!(err.key, "method.shift_time");
-    let no_surface = Method {
-        shift_surface_share: 0.0,
-        ..method
-    };
+    assert_eq!(err.key, "method.shifting");
+    // Off is None: a zero or negative time is out of range.
+    for time in [-1.0, 0.0] {
+        let (_, bad) = pool(time);
+        let err = common::refusal(scene.clone(), bad).expect("time refused");
+        assert_eq!(err.key, "method.shifting.time", "{time}");
+    }
+    let mut no_surface = method;
+    no_surface.remedies.shifting.as_mut().unwrap().surface_share = 0.0;
     let err = common::refusal(scene, no_surface).expect("share 0 refused");
-    assert_eq!(err.key, "method.shift_surface_share");
+    assert_eq!(err.key, "method.shifting.surface_share");
 }

@@ -7,6 +7,9 @@
 
 mod common;
 
+use solver::remedies::{
+    cell_dilatation, j_bar, pressure_smoothing, volume_relaxation, RemedySettings,
+};
 use solver::*;
 
 /// A block of 2 x 2 ppc at h = 0.05 with jittered positions and J = 1 +
@@ -45,13 +48,33 @@ fn method(shape: ShapeKind) -> Method {
     common::method(shape, TransferKind::Pic, SchemeKind::Usl)
 }
 
+/// `method(shape)` with its remedies set by `set`.
+fn with(shape: ShapeKind, set: impl FnOnce(&mut RemedySettings)) -> Method {
+    let mut m = method(shape);
+    set(&mut m.remedies);
+    m
+}
+
+fn j_bar(blend: f64) -> Option<j_bar::Settings> {
+    Some(j_bar::Settings {
+        blend,
+        ..Default::default()
+    })
+}
+
+fn cell_dilatation(blend: f64) -> Option<cell_dilatation::Settings> {
+    Some(cell_dilatation::Settings {
+        blend,
+        ..Default::default()
+    })
+}
+
 #[test]
 fn cell_dilatation_makes_j_and_p_constant_per_cell_and_keeps_the_volume() {
     let (mut s, _) = disordered(
-        Method {
-            cell_dilatation: 1.0,
-            ..method(ShapeKind::Linear)
-        },
+        with(ShapeKind::Linear, |r| {
+            r.cell_dilatation = cell_dilatation(1.0)
+        }),
         0.02,
     );
     let before: f64 = s.view().volume.iter().sum();
@@ -75,10 +98,9 @@ fn cell_dilatation_makes_j_and_p_constant_per_cell_and_keeps_the_volume() {
 #[test]
 fn cell_dilatation_leaves_a_cell_with_an_inverted_particle_alone() {
     let (s0, _) = disordered(
-        Method {
-            cell_dilatation: 1.0,
-            ..method(ShapeKind::Linear)
-        },
+        with(ShapeKind::Linear, |r| {
+            r.cell_dilatation = cell_dilatation(1.0)
+        }),
         0.0,
     );
     // The lattice at J = 1 with one particle inverted: its cell keeps its own J values.
@@ -103,13 +125,7 @@ fn cell_dilatation_leaves_a_cell_with_an_inverted_particle_alone() {
 #[test]
 fn j_bar_conserves_mass_weighted_volume_and_blends() {
     for shape in [ShapeKind::Linear, ShapeKind::Bspline2, ShapeKind::Bspline3] {
-        let (mut s, j0) = disordered(
-            Method {
-                j_bar: 1.0,
-                ..method(shape)
-            },
-            0.02,
-        );
+        let (mut s, j0) = disordered(with(shape, |r| r.j_bar = j_bar(1.0)), 0.02);
         let mj = |v: &StateView| -> f64 { v.mass.iter().zip(v.j).map(|(m, j)| m * j).sum() };
         let before = mj(&s.view());
         apply(&mut s);
@@ -122,13 +138,7 @@ fn j_bar_conserves_mass_weighted_volume_and_blends() {
         let changed = v.j.iter().zip(&j0).filter(|(a, b)| a != b).count();
         assert!(changed > v.j.len() / 2, "{shape:?}: the noise is averaged");
         // Blend 1/2: halfway between the particle's J and the full average.
-        let (mut half, _) = disordered(
-            Method {
-                j_bar: 0.5,
-                ..method(shape)
-            },
-            0.02,
-        );
+        let (mut half, _) = disordered(with(shape, |r| r.j_bar = j_bar(0.5)), 0.02);
         apply(&mut half);
         let h = half.view();
         for p in 0..h.j.len() {
@@ -143,10 +153,9 @@ fn pressure_smoothing_conserves_mass_weighted_pressure_and_keeps_a_linear_field_
     for shape in [ShapeKind::Linear, ShapeKind::Bspline2] {
         // On the undisturbed lattice with J linear in x, p = K (1 - J) is linear.
         let mut s = lattice(
-            Method {
-                pressure_smoothing: true,
-                ..method(shape)
-            },
+            with(shape, |r| {
+                r.pressure_smoothing = Some(pressure_smoothing::Settings {})
+            }),
             |x| 1.0 - 0.01 * x.x,
         );
         let k = s.config().scene.materials[0].k;
@@ -178,24 +187,29 @@ fn pressure_smoothing_conserves_mass_weighted_pressure_and_keeps_a_linear_field_
     }
 }
 
-/// `carry_averaged_j = false`: the averaged J sets this step's pressure
-/// (and volume), while each particle keeps its own J and F.
+/// `carry = false` (of `j_bar` or `cell_dilatation`): the averaged J sets
+/// this step's pressure (and volume), while each particle keeps its own J
+/// and F.
 #[test]
 fn averaged_j_can_set_the_stress_without_being_carried() {
-    for (j_bar, cell) in [(1.0, 0.0), (0.0, 1.0)] {
-        let base = Method {
-            j_bar,
-            cell_dilatation: cell,
-            ..method(ShapeKind::Bspline2)
+    for use_j_bar in [true, false] {
+        let set = |carry: bool| {
+            with(ShapeKind::Bspline2, |r| {
+                if use_j_bar {
+                    r.j_bar = Some(j_bar::Settings {
+                        carry,
+                        ..Default::default()
+                    });
+                } else {
+                    r.cell_dilatation = Some(cell_dilatation::Settings {
+                        carry,
+                        ..Default::default()
+                    });
+                }
+            })
         };
-        let (mut carried, j0) = disordered(base.clone(), 0.02);
-        let (mut own, _) = disordered(
-            Method {
-                carry_averaged_j: false,
-                ..base
-            },
-            0.02,
-        );
+        let (mut carried, j0) = disordered(set(true), 0.02);
+        let (mut own, _) = disordered(set(false), 0.02);
         apply(&mut carried);
         apply(&mut own);
         let (c, o) = (carried.view(), own.view());
@@ -222,11 +236,12 @@ fn averaged_j_can_set_the_stress_without_being_carried() {
 #[test]
 fn j_bar_of_the_increment_leaves_a_field_at_rest_alone() {
     let (mut s, j0) = disordered(
-        Method {
-            j_bar: 1.0,
-            average_increment: true,
-            ..method(ShapeKind::Bspline2)
-        },
+        with(ShapeKind::Bspline2, |r| {
+            r.j_bar = Some(j_bar::Settings {
+                average_increment: true,
+                ..Default::default()
+            })
+        }),
         0.02,
     );
     apply(&mut s);
@@ -270,11 +285,12 @@ fn lattice_j_bar(
     fit: JBarFit,
     j: impl Fn(Vec2) -> f64,
 ) -> (Vec<Vec2>, Vec<f64>, Vec<f64>) {
-    let method = Method {
-        j_bar: 1.0,
-        j_bar_fit: fit,
-        ..method(shape)
-    };
+    let method = with(shape, |r| {
+        r.j_bar = Some(j_bar::Settings {
+            fit,
+            ..Default::default()
+        })
+    });
     let mut s = lattice(method, j);
     let (x, j0) = (s.view().x.to_vec(), s.view().j.to_vec());
     apply(&mut s);
@@ -305,11 +321,12 @@ fn j_bar_linear_fit_keeps_a_linear_field_to_the_edges_and_conserves_volume() {
         );
 
         let (mut s, _) = disordered(
-            Method {
-                j_bar: 1.0,
-                j_bar_fit: JBarFit::Linear,
-                ..method(shape)
-            },
+            with(shape, |r| {
+                r.j_bar = Some(j_bar::Settings {
+                    fit: JBarFit::Linear,
+                    ..Default::default()
+                })
+            }),
             0.02,
         );
         let mj = |v: &StateView| -> f64 { v.mass.iter().zip(v.j).map(|(m, j)| m * j).sum() };
@@ -365,10 +382,9 @@ fn squeezed_block(squeeze: f64, shape: ShapeKind) -> (Vec<Vec2>, Vec<f64>) {
     scene.cell = 0.05;
     let cfg = SolverConfig {
         scene: scene.clone(),
-        method: Method {
-            volume_relaxation_time: 1e-12,
-            ..method(shape)
-        },
+        method: with(shape, |r| {
+            r.volume_relaxation = Some(volume_relaxation::Settings { time: 1e-12 })
+        }),
         perturb: vec![],
     };
     let mut ps = solver::scene::seed(&scene);
@@ -432,29 +448,91 @@ fn volume_consistency_sets_j_from_how_closely_particles_pack() {
     }
 }
 
-/// The fit without J-bar, and a relaxation time out of range, are refused
-/// by key.
+/// Blends and relaxation times out of range (off is None: 0 is out of
+/// range too), and the combinations that contradict each other, are refused
+/// by key: two averagings of J, the increment averaged but not carried, and
+/// a relaxation that an uncarried average would undo.
 #[test]
-fn j_bar_fit_without_j_bar_and_a_negative_relaxation_time_are_refused() {
+fn out_of_range_and_contradicting_volumetric_settings_are_refused() {
     let scene = common::box_scene([1.0, 1.0], [0.2, 0.2, 0.8, 0.8], Material::tait(1e5), 9.81);
-    for (method, key) in [
+    let shape = ShapeKind::Bspline2;
+    let relax = |time| Some(volume_relaxation::Settings { time });
+    let uncarried_j_bar = Some(j_bar::Settings {
+        carry: false,
+        ..Default::default()
+    });
+    let uncarried_cell = Some(cell_dilatation::Settings {
+        carry: false,
+        ..Default::default()
+    });
+    let mut cases = vec![];
+    for blend in [0.0, -0.5, 1.5, f64::NAN] {
+        cases.push((
+            with(shape, |r| r.j_bar = j_bar(blend)),
+            "method.j_bar.blend",
+        ));
+        cases.push((
+            with(shape, |r| r.cell_dilatation = cell_dilatation(blend)),
+            "method.cell_dilatation.blend",
+        ));
+    }
+    for time in [0.0, -1.0, f64::INFINITY] {
+        cases.push((
+            with(shape, |r| r.volume_relaxation = relax(time)),
+            "method.volume_relaxation.time",
+        ));
+    }
+    cases.extend([
         (
-            Method {
-                j_bar_fit: JBarFit::Linear,
-                ..method(ShapeKind::Bspline2)
-            },
-            "method.j_bar_fit",
+            with(shape, |r| {
+                r.j_bar = j_bar(1.0);
+                r.cell_dilatation = cell_dilatation(1.0);
+            }),
+            "method.j_bar",
         ),
         (
-            Method {
-                volume_relaxation_time: -1.0,
-                ..method(ShapeKind::Bspline2)
-            },
-            "method.volume_relaxation_time",
+            with(shape, |r| {
+                r.j_bar = Some(j_bar::Settings {
+                    carry: false,
+                    average_increment: true,
+                    ..Default::default()
+                })
+            }),
+            "method.j_bar.average_increment",
         ),
-    ] {
-        let err =
-            common::refusal(scene.clone(), method).unwrap_or_else(|| panic!("{key}: accepted"));
+        (
+            with(shape, |r| {
+                r.j_bar = uncarried_j_bar.clone();
+                r.volume_relaxation = relax(0.1);
+            }),
+            "method.volume_relaxation",
+        ),
+        (
+            with(shape, |r| {
+                r.cell_dilatation = uncarried_cell.clone();
+                r.volume_relaxation = relax(0.1);
+            }),
+            "method.volume_relaxation",
+        ),
+    ]);
+    for (method, key) in cases {
+        let err = common::refusal(scene.clone(), method.clone())
+            .unwrap_or_else(|| panic!("{key}: accepted {:?}", method.remedies));
         assert_eq!(err.key, key, "{err:?}");
+    }
+    // Each of them alone (and carried averages with the relaxation) runs.
+    for method in [
+        with(shape, |r| r.j_bar = uncarried_j_bar.clone()),
+        with(shape, |r| r.cell_dilatation = uncarried_cell.clone()),
+        with(shape, |r| {
+            r.j_bar = j_bar(0.5);
+            r.volume_relaxation = relax(0.1);
+        }),
+        with(shape, |r| {
+            r.cell_dilatation = cell_dilatation(0.5);
+            r.volume_relaxation = relax(0.1);
+        }),
+    ] {
+        assert!(common::refusal(scene.clone(), method).is_none());
     }
 }

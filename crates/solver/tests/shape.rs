@@ -283,13 +283,12 @@ fn cpgimp_half_widths_follow_f() {
 /// The F reset would reshape cpGIMP's particle domains: refused by key.
 #[test]
 fn cpgimp_with_f_reset_is_refused() {
-    use solver::{Material, Method, SchemeKind, TransferKind};
+    use solver::{Material, SchemeKind, TransferKind};
     let scene = common::box_scene([1.0, 1.0], [0.4, 0.4, 0.6, 0.6], Material::tait(1e5), 9.81);
-    let method = Method {
-        f_reset: true,
-        ..common::method(ShapeKind::Cpgimp, TransferKind::Flip, SchemeKind::Usf)
-    };
+    let mut method = common::method(ShapeKind::Cpgimp, TransferKind::Flip, SchemeKind::Usf);
+    method.remedies.f_reset = Some(solver::remedies::f_reset::Settings {});
     let err = common::refusal(scene, method).expect("cpGIMP with f_reset accepted");
     assert_eq!(err.key, "method.f_reset", "{err:?}");
-    assert!(err.message.contains("cpgimp"), "{err:?}");
+    // The message names the shape it got (as its Rust variant, `Cpgimp`).
+    assert!(err.message.to_lowercase().contains("cpgimp"), "{err:?}");
 }

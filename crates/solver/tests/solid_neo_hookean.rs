@@ -7,6 +7,10 @@
 
 mod common;
 
+use solver::remedies::{
+    cell_dilatation, f_reset, j_bar, pressure_smoothing, shifting, volume_relaxation,
+    RemedySettings,
+};
 use solver::solid_neo_hookean::{add_to, history_increment, shear};
 use solver::*;
 
@@ -160,41 +164,40 @@ fn solid_refuses_f_reset_and_the_fluid_j_remedies() {
     material.shear_modulus = G;
     let scene = common::box_scene([1.0, 1.0], [0.4, 0.4, 0.6, 0.6], material, 9.81);
     let base = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
+    let with = |set: &dyn Fn(&mut RemedySettings)| {
+        let mut m = base.clone();
+        set(&mut m.remedies);
+        m
+    };
     for (method, key) in [
         (
-            Method {
-                f_reset: true,
-                ..base.clone()
-            },
-            "materials[0].shear_modulus",
+            with(&|r| r.f_reset = Some(f_reset::Settings {})),
+            "method.f_reset",
         ),
         (
-            Method {
-                j_bar: 1.0,
-                ..base.clone()
-            },
+            with(&|r| r.j_bar = Some(j_bar::Settings::default())),
             "method.j_bar",
         ),
         (
-            Method {
-                cell_dilatation: 1.0,
-                ..base.clone()
-            },
+            with(&|r| r.cell_dilatation = Some(cell_dilatation::Settings::default())),
             "method.cell_dilatation",
         ),
         (
-            Method {
-                pressure_smoothing: true,
-                ..base.clone()
-            },
+            with(&|r| r.pressure_smoothing = Some(pressure_smoothing::Settings {})),
             "method.pressure_smoothing",
         ),
         (
-            Method {
-                volume_relaxation_time: 0.1,
-                ..base.clone()
-            },
-            "method.volume_relaxation_time",
+            with(&|r| r.volume_relaxation = Some(volume_relaxation::Settings { time: 0.1 })),
+            "method.volume_relaxation",
+        ),
+        (
+            with(&|r| {
+                r.shifting = Some(shifting::Settings {
+                    time: 0.1,
+                    ..Default::default()
+                })
+            }),
+            "method.shifting",
         ),
     ] {
         let err =

@@ -1,8 +1,10 @@
-//! The grid stage's minimum nodal mass guard (`method.min_node_mass`,
-//! docs/physics.md section 5): a node with 0 < folded mass <= the threshold
-//! ignores its forces and gets a = g (wall-projected); threshold 0, or one no
-//! node reaches, changes no bit.
+//! The minimum nodal mass remedy (`[method.min_node_mass] share`,
+//! docs/physics.md section 5), the grid update's `after_grid_update` hook: a
+//! node with 0 < folded mass <= the threshold ignores its forces and gets
+//! a = g (wall-projected); a threshold no node reaches changes no bit and
+//! books no work.
 
+use solver::remedies::min_node_mass;
 use solver::*;
 
 mod common;
@@ -40,23 +42,26 @@ fn zero_or_unreached_threshold_changes_no_bit() {
         (ShapeKind::Gimp, TransferKind::Flip, SchemeKind::Usl),
     ] {
         let base = dam_break(shape, transfer, scheme);
-        assert_eq!(base.method.min_node_mass, 0.0);
+        assert_eq!(base.method.remedies.min_node_mass, None);
         let run = |ratio: Option<f64>| {
             let mut cfg = base.clone();
-            if let Some(r) = ratio {
-                cfg.method.min_node_mass = r;
-            }
+            cfg.method.remedies.min_node_mass =
+                ratio.map(|share| min_node_mass::Settings { share });
             let mut s = Solver::new(cfg).unwrap();
             let mut lightest = f64::INFINITY;
             for _ in 0..300 {
                 s.step().unwrap();
                 lightest = lightest.min(min_mass_ratio(&s.view()));
+                // A remedy that guards no node books no work.
+                for (key, e) in s.remedy_energy() {
+                    assert_eq!(key, "min_node_mass");
+                    assert_eq!(e, EnergyChange::default());
+                }
             }
             (s.state_hash(), lightest)
         };
         let tag = format!("{shape:?} {transfer:?} {scheme:?}");
         let (default, lightest) = run(None);
-        assert_eq!(default, run(Some(0.0)).0, "{tag}: explicit 0");
         // A positive threshold below every node's mass exercises the guard's
         // comparison without guarding a node. 1e-12 is not always below:
         // B-spline tails leave nodes near 2e-13 of a full cell.
@@ -106,10 +111,9 @@ fn guarded_nodes_get_exactly_gravity_despite_stress() {
             for scheme in common::SCHEMES {
                 let tag = format!("{shape:?} {transfer:?} {scheme:?}");
                 let run = |ratio: f64| {
-                    let method = Method {
-                        min_node_mass: ratio,
-                        ..common::method(shape, transfer, scheme)
-                    };
+                    let mut method = common::method(shape, transfer, scheme);
+                    method.remedies.min_node_mass =
+                        (ratio > 0.0).then_some(min_node_mass::Settings { share: ratio });
                     let mut s = common::solver(scene.clone(), method);
                     let v0: Vec<Vec2> = s.view().v.to_vec();
                     for _ in 0..200 {
@@ -162,7 +166,7 @@ fn guarded_nodes_get_exactly_gravity_despite_stress() {
 fn guarded_nodes_get_wall_projected_gravity_in_the_dam_break() {
     let ratio = 0.6;
     let mut cfg = dam_break(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usf);
-    cfg.method.min_node_mass = ratio;
+    cfg.method.remedies.min_node_mass = Some(min_node_mass::Settings { share: ratio });
     let (origin, size) = (cfg.scene.origin, cfg.scene.size);
     let mut s = Solver::new(cfg).unwrap();
     let (mut guarded, mut on_walls, mut forced) = (0, 0, 0);
@@ -209,15 +213,16 @@ fn guarded_nodes_get_wall_projected_gravity_in_the_dam_break() {
 
 #[test]
 fn threshold_out_of_range_is_refused() {
-    for bad in [-1e-3, 1.5, f64::NAN, f64::INFINITY] {
+    // Off is None: a share of 0 is out of range too.
+    for bad in [-1e-3, 0.0, 1.5, f64::NAN, f64::INFINITY] {
         let mut cfg = dam_break(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usf);
-        cfg.method.min_node_mass = bad;
+        cfg.method.remedies.min_node_mass = Some(min_node_mass::Settings { share: bad });
         let err = cfg.validate().unwrap_err();
-        assert_eq!(err.key, "method.min_node_mass", "{bad}");
+        assert_eq!(err.key, "method.min_node_mass.share", "{bad}");
     }
     let mut cfg = dam_break(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usf);
-    for ok in [0.0, 0.25, 1.0] {
-        cfg.method.min_node_mass = ok;
+    for ok in [1e-12, 0.25, 1.0] {
+        cfg.method.remedies.min_node_mass = Some(min_node_mass::Settings { share: ok });
         cfg.validate().unwrap();
     }
 }

@@ -381,10 +381,8 @@ fn f_reset_changes_only_round_off() {
         let mut mat = Material::tait(1.5e5);
         mat.viscosity = 0.5;
         let scene = Scene::dam_break(mat);
-        let method = Method {
-            f_reset,
-            ..common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl)
-        };
+        let mut method = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
+        method.remedies.f_reset = f_reset.then_some(solver::remedies::f_reset::Settings {});
         let mut s = common::solver(scene, method);
         for _ in 0..300 {
             s.step().unwrap();

@@ -1,4 +1,4 @@
-//! Artificial bulk viscosity (`method.bulk_damping`): its stress and power,
+//! Artificial bulk viscosity (`[method.bulk_damping] coefficient`): its stress and power,
 //! and a standing acoustic wave in a periodic box that loses its energy at
 //! the linear-theory rate nu k^2 (nu = b c h), with the budget closed.
 
@@ -25,10 +25,9 @@ fn wave(b: f64) -> (f64, f64, f64) {
     let mut scene = common::box_scene([size, size], [0.0, 0.0, size, size], material, 0.0);
     scene.cell = 0.005;
     scene.periodic = [true, true];
-    let method = Method {
-        bulk_damping: b,
-        ..common::method(ShapeKind::Bspline2, TransferKind::Flip, SchemeKind::Usl)
-    };
+    let mut method = common::method(ShapeKind::Bspline2, TransferKind::Flip, SchemeKind::Usl);
+    method.remedies.bulk_damping =
+        (b > 0.0).then_some(solver::remedies::bulk_damping::Settings { coefficient: b });
     let cfg = SolverConfig {
         scene: scene.clone(),
         method,

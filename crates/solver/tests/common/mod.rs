@@ -11,7 +11,6 @@ pub fn method(shape: ShapeKind, transfer: TransferKind, scheme: SchemeKind) -> M
         dt: DtMode::Fixed,
         dt_value: None,
         j_update: JUpdate::Det,
-        min_node_mass: 0.0,
         ..Method::default()
     }
 }
