@@ -305,6 +305,39 @@ fn bad_study_files_exit_2_naming_file_key_and_range() {
     );
 }
 
+/// The flat remedy keys of older study files exit 2 and name the sub-table
+/// that replaced them; a remedy's own table is checked like any section.
+#[test]
+fn old_flat_remedy_keys_exit_2_naming_the_new_key() {
+    for (method, key, new) in [
+        ("j_bar = 1.0", "`method.j_bar`", "[method.j_bar] blend = 1.0"),
+        ("j_bar_fit = \"linear\"", "`method.j_bar_fit`", "[method.j_bar] fit"),
+        (
+            "volume_relaxation_time = 0.16",
+            "`method.volume_relaxation_time`",
+            "[method.volume_relaxation] time",
+        ),
+        ("shift_time = 0.02", "`method.shift_time`", "[method.shifting] time"),
+        (
+            "pic_damping_time = 5e-5",
+            "`method.pic_damping_time`",
+            "[method.pic_damping] time",
+        ),
+        (
+            "bulk_damping = 0.3",
+            "`method.bulk_damping`",
+            "[method.bulk_damping] coefficient = 0.3",
+        ),
+    ] {
+        let e = bad(&format!("{GOOD}\n[method]\n{method}\n"), &[]);
+        assert!(e.contains(key) && e.contains(new), "{method}: {e}");
+    }
+    let e = bad(&format!("{GOOD}\n[method.j_bar]\nblend = 2.0\n"), &[]);
+    assert!(e.contains("method.j_bar.blend") && e.contains("allowed"), "{e}");
+    let e = bad(&format!("{GOOD}\n[method.shifting]\n"), &["--set", "scene.periodic=[true, false]"]);
+    assert!(e.contains("`method.shifting`") && e.contains("walls"), "{e}");
+}
+
 #[test]
 fn an_unknown_key_in_any_section_exits_2_naming_it_and_the_allowed_keys() {
     let perturb = "[[perturb]]\nstep = 1\nregion = [0, 0, 1, 1]\ndv = [1, 0]\n";

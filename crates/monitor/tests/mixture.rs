@@ -6,7 +6,7 @@
 //! event is raised on either phase.
 
 use monitor::{Monitor, MonitorConfig};
-use solver::drag::{Drag, DragModel, DragUpdate};
+use solver::multiphase::drag::{Drag, DragModel, DragUpdate};
 use solver::*;
 
 mod common;

@@ -1,264 +1,16 @@
 //! Plain-data description of a scene and a method. The study crate fills these
-//! from TOML; the solver only reads them.
+//! from TOML; the solver only reads them. The enums live in `choices`, the
+//! material in `material`.
 
+pub use crate::choices::*;
+
+pub use crate::config_error::ConfigError;
+use crate::config_error::{check, ordered_rect, within};
+pub use crate::material::Material;
 use crate::remedies::RemedySettings;
 use serde::{Deserialize, Serialize};
 
-/// The keys of `[method]` that are not remedies (serde's own list is not
-/// public; a test checks this one against `Method`'s serialisation).
-pub const METHOD_KEYS: &[&str] = &[
-    "shape",
-    "transfer",
-    "flip_alpha",
-    "scheme",
-    "cfl",
-    "dt",
-    "dt_value",
-    "j_update",
-    "force",
-    "quadrature",
-    "xpic_order",
-];
 
-/// Shape-function family.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ShapeKind {
-    /// Bilinear hat functions.
-    Linear,
-    /// Undeformed GIMP (particle half-width h / (2 ppc)).
-    Gimp,
-    /// Convected-particle GIMP: the half-widths follow F's diagonal
-    /// (a suspect for "once highly deformed" mattering, not a remedy).
-    Cpgimp,
-    /// Quadratic B-spline.
-    Bspline2,
-    /// Cubic B-spline.
-    Bspline3,
-}
-
-/// Particle/grid velocity transfer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum TransferKind {
-    Pic,
-    /// FLIP blended with PIC by `Method::flip_alpha` (1 = pure FLIP).
-    Flip,
-    Apic,
-    /// XPIC(m) (Hammerquist & Nairn 2017), m = `Method::xpic_order`.
-    Xpic,
-}
-
-/// When the stress is updated relative to the grid momentum update.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum SchemeKind {
-    /// Update stress first (from the P2G velocity).
-    Usf,
-    /// Update stress last (from the updated grid velocity).
-    Usl,
-    /// Modified USL: stress from the velocity re-projected from the particles.
-    Musl,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum DtMode {
-    /// CFL step taken once at t = 0 (the problem statement's setting).
-    Fixed,
-    /// CFL step recomputed every step.
-    Dynamic,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum JUpdate {
-    /// J = det((I + dt L) F).
-    Det,
-    /// J <- J exp(dt tr L): stays positive.
-    Exp,
-}
-
-/// How `method.j_bar` reconstructs J on the grid before interpolating it
-/// back.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum JBarFit {
-    /// Each node takes the mass-weighted mean of J (Zhao, Jiang & Choo
-    /// 2023): a linear J field is bent at the edges of the material.
-    #[default]
-    Constant,
-    /// Each node fits J by mass-weighted least squares to a plane over its
-    /// support and the particle reads the planes back: any linear J field
-    /// (the hydrostatic one) is kept wherever the support spans both axes.
-    Linear,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum InitialState {
-    /// Zero stress, gravity jumps on at t = 0.
-    ZeroStress,
-    /// Discrete hydrostatic equilibrium (spaced by J, then damped relaxation).
-    Hydrostatic,
-    /// The same equilibrium reached behind gates at the bodies' left and right
-    /// edges, lifted at t = 0: a dam-break column standing at rest before its
-    /// release, as in the experiments (zero stress would add a fall under
-    /// gravity that the experiment does not have).
-    HydrostaticGate,
-}
-
-/// How the internal force and the velocity gradient are discretised.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ForceKind {
-    /// f_i = -sum V sigma grad N_i, L = sum v_i grad N_i^T.
-    #[default]
-    Gradient,
-    /// MLS-MPM (Hu et al. 2018): f_i = -sum V sigma D^-1 (x_i - x_p) N_i and
-    /// L = C (the APIC affine matrix); B-splines and APIC only.
-    Mls,
-}
-
-/// Where the internal force is integrated.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum QuadratureKind {
-    /// At the material points (MPM's own quadrature).
-    #[default]
-    Particles,
-    /// At fixed points in the cells full of material, at the material
-    /// points elsewhere (mixed integration, Beuth 2012; `quadrature_mixed`).
-    Mixed,
-}
-
-/// A wall of the box.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Wall {
-    Left,
-    Right,
-    Floor,
-    Top,
-}
-
-/// What happens to a particle that leaves the box or inverts (J <= 0).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum OnLoss {
-    /// The monitor stops the run (status `blew_up`).
-    #[default]
-    Stop,
-    /// The solver deletes it at the end of the step and counts it (Uintah's
-    /// behaviour); the run stops once `lost_mass_limit` of the mass is gone.
-    Delete,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum EosKind {
-    /// p = K (J^-gamma - 1).
-    Power,
-    /// p = C K [exp((1 - J)/C) - 1], C = 0.0894.
-    Tait,
-    /// p = K (1 - J) (the mpm88 benchmark's fluid).
-    Linear,
-}
-
-/// A fluid material: a `[materials.NAME]` table of a study file. Every key
-/// but `K` is optional; the defaults below are the only ones.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Material {
-    /// The study file's table name (`water` in `[materials.water]`).
-    #[serde(skip)]
-    pub name: String,
-    /// Reference density (kg/m^3).
-    #[serde(default = "defaults::rho0")]
-    pub rho0: f64,
-    #[serde(default = "defaults::eos")]
-    pub eos: EosKind,
-    /// Low-pressure bulk modulus K (Pa).
-    #[serde(rename = "K")]
-    pub k: f64,
-    /// Power-law exponent (power EOS only).
-    #[serde(default = "defaults::gamma")]
-    pub gamma: f64,
-    /// Dynamic viscosity (Pa s).
-    #[serde(default)]
-    pub viscosity: f64,
-    /// Free thermal-expansion volume ratio: the EOS sees J / j_res.
-    #[serde(default = "defaults::j_res")]
-    pub j_res: f64,
-    /// Tension cutoff (Pa): pressure never goes below this (absent = no cutoff).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub pressure_floor: Option<f64>,
-    /// Shear modulus G (Pa) of the neo-Hookean shear part: 0 = a fluid.
-    #[serde(default, skip_serializing_if = "is_zero")]
-    pub shear_modulus: f64,
-    /// Shear softening (the unified model's history variable xi, the
-    /// accumulated equivalent shear strain): G(xi) = G exp(-xi /
-    /// softening_strain), so a solid sheared far enough becomes the fluid
-    /// U(J) + 2 mu dev D. 0 = none (G stays G).
-    #[serde(default, skip_serializing_if = "is_zero")]
-    pub softening_strain: f64,
-}
-
-fn is_zero(v: &f64) -> bool {
-    *v == 0.0
-}
-
-/// Defaults of the optional material keys (one definition, used by serde and `Material::new`).
-mod defaults {
-    use super::EosKind;
-    pub fn rho0() -> f64 {
-        1000.0
-    }
-    pub fn eos() -> EosKind {
-        EosKind::Power
-    }
-    pub fn gamma() -> f64 {
-        7.0
-    }
-    pub fn j_res() -> f64 {
-        1.0
-    }
-}
-
-impl Material {
-    /// Water with every default (power law, gamma 7) and bulk modulus `k`.
-    pub fn new(k: f64) -> Self {
-        Material {
-            name: String::new(),
-            rho0: defaults::rho0(),
-            eos: defaults::eos(),
-            k,
-            gamma: defaults::gamma(),
-            viscosity: 0.0,
-            j_res: defaults::j_res(),
-            pressure_floor: None,
-            shear_modulus: 0.0,
-            softening_strain: 0.0,
-        }
-    }
-
-    /// Water with the Tait EOS and bulk modulus `k`, otherwise the defaults.
-    pub fn tait(k: f64) -> Self {
-        Material {
-            eos: EosKind::Tait,
-            ..Material::new(k)
-        }
-    }
-
-    /// The study key of field `field` of this material.
-    fn key(&self, index: usize, field: &str) -> String {
-        if self.name.is_empty() {
-            format!("materials[{index}].{field}")
-        } else {
-            format!("materials.{}.{field}", self.name)
-        }
-    }
-}
 
 /// A `[[scene.body]]`: a rectangle of one material.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -384,25 +136,6 @@ impl Default for Scene {
     }
 }
 
-impl Wall {
-    /// The axis the wall is normal to.
-    pub fn axis(self) -> usize {
-        match self {
-            Wall::Left | Wall::Right => 0,
-            Wall::Floor | Wall::Top => 1,
-        }
-    }
-
-    /// Flags per [axis][low side, high side] of the given walls.
-    pub fn mask(walls: &[Wall]) -> [[bool; 2]; 2] {
-        let mut mask = [[false; 2]; 2];
-        for w in walls {
-            let side = usize::from(matches!(w, Wall::Right | Wall::Top));
-            mask[w.axis()][side] = true;
-        }
-        mask
-    }
-}
 
 impl Scene {
     /// No-slip flags per [axis][low side, high side].
@@ -536,50 +269,28 @@ pub struct SolverConfig {
     pub perturb: Vec<Perturb>,
 }
 
-/// A configuration the solver cannot run, with the offending key.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ConfigError {
-    pub key: String,
-    pub message: String,
-}
-
-impl std::fmt::Display for ConfigError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}: {}", self.key, self.message)
-    }
-}
-
-impl std::error::Error for ConfigError {}
-
-fn check(ok: bool, key: &str, message: impl Into<String>) -> Result<(), ConfigError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(ConfigError {
-            key: key.to_string(),
-            message: message.into(),
-        })
-    }
-}
-
-/// `lo <= v <= hi` (and finite), else "`v` is out of range (allowed lo ..= hi)".
-fn within(v: f64, lo: f64, hi: f64, key: &str) -> Result<(), ConfigError> {
-    check(
-        v.is_finite() && (lo..=hi).contains(&v),
-        key,
-        format!("{v} is out of range (allowed {lo} ..= {hi})"),
-    )
-}
-
-fn ordered_rect(r: &[f64; 4], key: &str) -> Result<(), ConfigError> {
-    check(
-        r.iter().all(|v| v.is_finite()) && r[0] < r[2] && r[1] < r[3],
-        key,
-        "needs x0 < x1 and y0 < y1",
-    )
-}
 
 impl SolverConfig {
+    /// rho0 of the first material: what a "full" node or cell is measured by.
+    pub fn first_rho0(&self) -> f64 {
+        self.scene.materials.first().map_or(0.0, |m| m.rho0)
+    }
+
+    /// The remedies' hooks for this configuration, sized for `grid` and `particles`.
+    pub(crate) fn build_remedies(
+        &self,
+        grid: &crate::grid::Grid,
+        particles: usize,
+    ) -> crate::remedies::Remedies {
+        let setup = crate::remedies::Setup {
+            grid,
+            particles,
+            ppc: self.scene.ppc,
+            rho0: self.first_rho0(),
+        };
+        crate::remedies::Remedies::build(&self.method.remedies, &setup)
+    }
+
     /// The dam break the benchmarks time (`kick bench`, criterion): power law
     /// gamma 7 at K = 150 kPa, the baseline method with `shape` and `transfer`.
     pub fn benchmark_dam_break(shape: ShapeKind, transfer: TransferKind, cell: f64) -> Self {
@@ -641,7 +352,15 @@ impl SolverConfig {
                 ),
             )?;
         }
-        m.remedies.validate(self)?;
+        m.remedies.validate(&crate::remedies::Check {
+            shape: m.shape,
+            transfer: m.transfer,
+            flip_alpha: m.flip_alpha,
+            cfl: m.cfl,
+            periodic: self.scene.periodic,
+            solids: self.scene.materials.iter().any(|mat| mat.shear_modulus > 0.0),
+            remedies: &m.remedies,
+        })?;
         for (i, p) in self.perturb.iter().enumerate() {
             check(p.step >= 1, &format!("perturb[{i}].step"), "must be >= 1")?;
             ordered_rect(&p.region, &format!("perturb[{i}].region"))?;

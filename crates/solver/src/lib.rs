@@ -1,46 +1,38 @@
 //! kick's solver: a 2D plane-strain explicit MPM in which every choice suspected
 //! of mattering for the kinematic anomaly is a switch (see `config`).
 //!
-//! A step is a short chain of named stages (`scheme.rs` orders them):
-//! sort, P2G, grid update, G2P, stress. The monitor sees the state only
+//! A step is a short chain of named stages (`stages/scheme.rs` orders
+//! them): sort, P2G, grid update, G2P, stress. The remedies (`remedies/`)
+//! plug into the stages through hooks. The monitor sees the state only
 //! through [`StateView`].
+//!
+//! Layout: `stages/` (one file per stage, and the schemes that order them),
+//! `shapes/`, `eos/`, `transfers/` (XPIC and the serial particle-grid sums),
+//! `remedies/` (one file per remedy), `multiphase/` (the mixture, drag, pore
+//! pressure and inflow); `config` and `choices` describe a run.
 
-pub mod boundary_inflow;
 pub mod checkpoint;
+pub mod choices;
 pub mod config;
-pub mod drag;
-mod drag_particle;
+mod config_error;
+pub mod deletion;
 pub mod energy;
 pub mod eos;
-mod eos_linear;
-mod eos_power;
-pub mod eos_tait;
 pub mod grid;
 mod init_hydrostatic;
+pub mod material;
 mod measure;
-pub mod mixture;
+pub mod multiphase;
 pub mod par;
 pub mod particles;
-pub mod pore_pressure;
-pub mod quadrature_mixed;
 pub mod remedies;
 pub mod scene;
-mod scheme;
-pub mod shape;
-mod shape_bspline;
-mod shape_gimp;
-mod shape_linear;
+pub mod shapes;
 pub mod solid_neo_hookean;
-pub mod stage_cull;
-mod stage_g2p;
-mod stage_grid;
-mod stage_p2g;
-mod stage_sort;
-mod stage_stress;
-pub mod stage_times;
+pub mod stages;
 pub mod timestep;
-mod transfer_serial;
-pub mod transfer_xpic;
+pub mod timing;
+pub mod transfers;
 mod view;
 pub mod viscosity;
 
@@ -48,17 +40,17 @@ pub use checkpoint::CheckpointError;
 pub use remedies::EnergyChange;
 pub use config::*;
 pub use energy::Energy;
-pub use mixture::Mixture;
+pub use multiphase::mixture::Mixture;
 pub use particles::{Mat2, Vec2};
-pub use stage_cull::{CullReason, Culled, Losses};
-pub use stage_times::StageTimes;
+pub use deletion::{CullReason, Culled, Losses};
+pub use timing::StageTimes;
 pub use view::{GridView, StateView};
 
 use grid::Grid;
 use particles::Particles;
-use shape::{Shape, Stencil};
-use stage_cull::CullRules;
-use stage_sort::Bins;
+use shapes::{Shape, Stencil};
+use deletion::CullRules;
+use stages::sort::Bins;
 
 /// Why a step could not be taken.
 #[derive(Clone, Debug, PartialEq)]
@@ -152,11 +144,11 @@ pub struct Solver {
     /// The particles deleted at the last step (capacity: every particle).
     culled: Vec<Culled>,
     /// Scratch of XPIC(m) (empty for the other transfers).
-    xpic: transfer_xpic::Scratch,
+    xpic: transfers::xpic::Scratch,
     /// The remedies switched on, with their scratch (`remedies/`).
     remedies: remedies::Remedies,
     /// Scratch of `quadrature = "mixed"` (empty otherwise).
-    quadrature: quadrature_mixed::Scratch,
+    quadrature: stages::quadrature_mixed::Scratch,
 }
 
 impl Solver {
@@ -226,17 +218,17 @@ impl Solver {
             cull_rules,
             losses: Losses::default(),
             culled: Vec::with_capacity(n),
-            xpic: transfer_xpic::Scratch::default(),
+            xpic: transfers::xpic::Scratch::default(),
             remedies: remedies::Remedies::default(),
-            quadrature: quadrature_mixed::Scratch::default(),
+            quadrature: stages::quadrature_mixed::Scratch::default(),
         };
         if solver.cfg.method.quadrature == QuadratureKind::Mixed {
-            solver.quadrature = quadrature_mixed::Scratch::new(&solver.grid);
+            solver.quadrature = stages::quadrature_mixed::Scratch::new(&solver.grid);
         }
         if solver.cfg.method.transfer == TransferKind::Xpic {
-            solver.xpic = transfer_xpic::Scratch::new(&solver.grid, n);
+            solver.xpic = transfers::xpic::Scratch::new(&solver.grid, n);
         }
-        solver.remedies = remedies::Remedies::build(&solver.cfg, &solver.grid, n);
+        solver.remedies = solver.cfg.build_remedies(&solver.grid, n);
         solver.start_clock();
         solver
     }
@@ -328,16 +320,16 @@ impl Solver {
         par::keep_warm(|| ps.v_prev.copy_from_slice(&ps.v));
         self.ke_particles_p2g = self.energy.kinetic;
         self.remedies.begin_step();
-        stage_times::lap(&mut self.times.other, &mut clock);
-        stage_sort::sort(
+        timing::lap(&mut self.times.other, &mut clock);
+        stages::sort::sort(
             &self.particles,
             &mut self.grid,
             &self.shape,
             &mut self.stencils,
             &mut self.bins,
         )?;
-        stage_times::lap(&mut self.times.sort, &mut clock);
-        scheme::to_grid(self, &mut clock);
+        timing::lap(&mut self.times.sort, &mut clock);
+        stages::scheme::to_grid(self, &mut clock);
         Ok(())
     }
 
@@ -345,12 +337,12 @@ impl Solver {
     /// stress under USL and MUSL), the clock, deletions and the measures.
     pub(crate) fn finish_step(&mut self) {
         let mut clock = std::time::Instant::now();
-        scheme::from_grid(self, &mut clock);
+        stages::scheme::from_grid(self, &mut clock);
         self.step += 1;
         self.time += self.dt;
         self.cull();
         self.measure();
-        stage_times::lap(&mut self.times.other, &mut clock);
+        timing::lap(&mut self.times.other, &mut clock);
         self.times.steps += 1;
     }
 
@@ -360,7 +352,7 @@ impl Solver {
             return;
         };
         let ps = &mut self.particles;
-        if stage_cull::cull(ps, rules, self.time, &mut self.losses, &mut self.culled) > 0 {
+        if deletion::cull(ps, rules, self.time, &mut self.losses, &mut self.culled) > 0 {
             self.stencils.truncate(ps.len());
         }
     }
@@ -441,16 +433,16 @@ impl Solver {
         self.cfg = cfg;
         let n = self.particles.len();
         self.xpic = if self.cfg.method.transfer == TransferKind::Xpic {
-            transfer_xpic::Scratch::new(&self.grid, n)
+            transfers::xpic::Scratch::new(&self.grid, n)
         } else {
-            transfer_xpic::Scratch::default()
+            transfers::xpic::Scratch::default()
         };
         self.quadrature = if self.cfg.method.quadrature == QuadratureKind::Mixed {
-            quadrature_mixed::Scratch::new(&self.grid)
+            stages::quadrature_mixed::Scratch::new(&self.grid)
         } else {
-            quadrature_mixed::Scratch::default()
+            stages::quadrature_mixed::Scratch::default()
         };
-        self.remedies = remedies::Remedies::build(&self.cfg, &self.grid, n);
+        self.remedies = self.cfg.build_remedies(&self.grid, n);
         self.fit_scratch(n);
         Ok(())
     }
@@ -518,17 +510,17 @@ impl Solver {
     pub fn run_stage(&mut self, stage: Stage) -> Result<(), StepError> {
         let mut clock = std::time::Instant::now();
         match stage {
-            Stage::Sort => stage_sort::sort(
+            Stage::Sort => stages::sort::sort(
                 &self.particles,
                 &mut self.grid,
                 &self.shape,
                 &mut self.stencils,
                 &mut self.bins,
             )?,
-            Stage::P2g => scheme::run_p2g_all(self, &mut clock),
-            Stage::Grid => scheme::run_grid(self, &mut clock),
-            Stage::G2p => scheme::run_g2p(self, &mut clock),
-            Stage::Stress => scheme::run_stress(self, &mut clock),
+            Stage::P2g => stages::scheme::run_p2g_all(self, &mut clock),
+            Stage::Grid => stages::scheme::run_grid(self, &mut clock),
+            Stage::G2p => stages::scheme::run_g2p(self, &mut clock),
+            Stage::Stress => stages::scheme::run_stress(self, &mut clock),
         }
         Ok(())
     }

@@ -3,7 +3,7 @@
 use crate::config::{JUpdate, Material, Scene, ShapeKind, TransferKind};
 use crate::energy::Energy;
 use crate::particles::{Mat2, Vec2};
-use crate::stage_cull::{Culled, Losses};
+use crate::deletion::{Culled, Losses};
 use crate::Solver;
 
 /// Grid geometry and nodal fields after the last step (ghost layers included).

@@ -11,7 +11,7 @@
 //! total momentum is kept to round-off. Fluid falling under gravity through
 //! a fixed skeleton reaches Darcy's flux q = k rho_f g / mu.
 
-use solver::drag::{Drag, DragModel, DragUpdate};
+use solver::multiphase::drag::{Drag, DragModel, DragUpdate};
 use solver::remedies::volume_relaxation;
 use solver::*;
 

@@ -2,7 +2,7 @@
 //! threads, and a restart from its checkpoint continues bit for bit
 //! (the explicit drag's step limit included); damaged checkpoints are refused.
 
-use solver::drag::{Drag, DragModel, DragUpdate};
+use solver::multiphase::drag::{Drag, DragModel, DragUpdate};
 use solver::*;
 
 mod common;

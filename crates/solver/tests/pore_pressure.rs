@@ -5,8 +5,8 @@
 
 mod common;
 
-use solver::drag::{Drag, DragModel, DragUpdate};
-use solver::pore_pressure::ramp_share;
+use solver::multiphase::drag::{Drag, DragModel, DragUpdate};
+use solver::multiphase::pore_pressure::ramp_share;
 use solver::{Mixture, SchemeKind, ShapeKind, TransferKind, Vec2};
 
 #[test]

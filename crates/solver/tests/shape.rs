@@ -3,8 +3,8 @@
 //! compute (`locate` + `stencil_weights`) against the kernel and the
 //! completeness conditions, on and around every stencil boundary.
 
-use solver::shape::Shape;
-use solver::shape::{CPGIMP_HALF_MAX, CPGIMP_HALF_MIN};
+use solver::shapes::Shape;
+use solver::shapes::{CPGIMP_HALF_MAX, CPGIMP_HALF_MIN};
 use solver::{Mat2, ShapeKind};
 
 mod common;

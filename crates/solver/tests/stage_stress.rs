@@ -73,7 +73,7 @@ fn eos_pressure(m: &Material, j: f64) -> f64 {
     let p = match m.eos {
         EosKind::Power => m.k * (j.powf(-m.gamma) - 1.0),
         EosKind::Tait => {
-            let c = solver::eos_tait::TAIT_C;
+            let c = solver::eos::tait::TAIT_C;
             c * m.k * (((1.0 - j) / c).exp() - 1.0)
         }
         EosKind::Linear => m.k * (1.0 - j),
@@ -88,7 +88,7 @@ fn eos_round_off(m: &Material, j: f64) -> f64 {
     let scale = match m.eos {
         EosKind::Power => m.k * (1.0 + m.gamma) * j.powf(-m.gamma),
         EosKind::Tait => {
-            let c = solver::eos_tait::TAIT_C;
+            let c = solver::eos::tait::TAIT_C;
             m.k * ((1.0 - j) / c).exp() * (c + (1.0 - j).abs())
         }
         EosKind::Linear => m.k * (1.0 - j).abs(),

@@ -825,16 +825,12 @@ mod tests {
     fn a_method_key_missing_from_an_older_summary_reads_as_its_default() {
         let defaults = method_defaults();
         let mut params = BTreeMap::new();
-        params.insert("method.shift_time".to_string(), serde_json::json!(0.02));
+        params.insert("method.cfl".to_string(), serde_json::json!(0.4));
         let text = |k: &str| param_or_default(&params, k, &defaults);
-        assert_eq!(
-            text("method.shift_time"),
-            param_text(&serde_json::json!(0.02))
-        );
-        assert_eq!(
-            text("method.shift_surface_share"),
-            param_text(&serde_json::json!(0.75))
-        );
+        assert_eq!(text("method.cfl"), param_text(&serde_json::json!(0.4)));
+        assert_eq!(text("method.xpic_order"), param_text(&serde_json::json!(2)));
+        // A remedy missing from a summary was off: no setting to show.
+        assert_eq!(text("method.shifting.time"), "");
         assert_eq!(text("method.transfer"), "flip");
         assert_eq!(text("materials.water.K"), "");
         assert_eq!(text("method.no_such_key"), "");

@@ -18,8 +18,8 @@ use crate::tables;
 use crate::timeseries::{Peaks, Timeseries};
 use indicatif::ProgressBar;
 use monitor::{Event, Monitor, StepReport};
-use solver::drag::DragUpdate;
-use solver::pore_pressure::ramp_share;
+use solver::multiphase::drag::DragUpdate;
+use solver::multiphase::pore_pressure::ramp_share;
 use solver::{Mixture, Phase, Scene, Solver, StateView, Vec2};
 use std::path::Path;
 

@@ -7,7 +7,7 @@
 use indexmap::IndexMap;
 use monitor::MonitorConfig;
 use serde::{Deserialize, Serialize};
-use solver::drag::{Drag, DragModel, DragUpdate};
+use solver::multiphase::drag::{Drag, DragModel, DragUpdate};
 use solver::remedies::{Descriptor, DESCRIPTORS};
 use solver::{Material, Method, Perturb, Phase, Scene, SolverConfig, Wall};
 use std::collections::BTreeMap;
@@ -513,14 +513,14 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
             "it needs drag.pore_pressure = true (allowed: false without it)".into(),
         ));
     }
-    solver::mixture::check_drained(
+    solver::multiphase::mixture::check_drained(
         &solver.scene,
         &t.drained,
         t.drained_pressure,
         t.pore_pressure,
     )
     .map_err(|e| (e.key, e.message))?;
-    solver::mixture::check_inflow(
+    solver::multiphase::mixture::check_inflow(
         &solver.scene,
         &t.inflow,
         t.inflow_velocity,
@@ -1100,6 +1100,105 @@ mod tests {
         assert_eq!(k, "method.cfl");
         let (k, m) = bad("[materials.water]\nK = 1e5\n");
         assert_eq!((k.as_str(), m.as_str()), ("scene", "is required"));
+    }
+
+    /// A remedy written with its table gets the name its old flat keys gave.
+    #[test]
+    fn remedy_tables_are_named_as_their_old_flat_keys() {
+        let named = |text: &str| name_part("method", &toml(text));
+        for (new, old) in [
+            ("{ j_bar = true }", "j_bar1.0"),
+            ("{ j_bar = {} }", "j_bar1.0"),
+            ("{ j_bar = { blend = 0.5 } }", "j_bar0.5"),
+            (
+                "{ j_bar = { fit = \"linear\" }, bulk_damping = { coefficient = 0.3 } }",
+                "j_bar1.0-linear-bulk_damping0.3",
+            ),
+            (
+                "{ j_bar = { average_increment = true }, bulk_damping = true }",
+                "j_bar1.0-average_increment-bulk_damping0.3",
+            ),
+            ("{ j_bar = { carry = false } }", "j_bar1.0-no_carry_averaged_j"),
+            (
+                "{ transfer = \"flip\", pic_damping = { time = 5e-5 }, shifting = { time = 0.02, surface_share = 0.25 }, ppc = 3 }",
+                "flip-pic_damping_time0.00005-shift_time0.02-shift_surface_share0.25-ppc3",
+            ),
+            ("{ volume_relaxation = { time = 0.16 } }", "volume_relaxation_time0.16"),
+            ("{ min_node_mass = { share = 0.01 } }", "min_node_mass0.01"),
+            ("{ cell_dilatation = true }", "cell_dilatation1.0"),
+            ("{ f_reset = true }", "f_reset"),
+            ("{ force = \"mls\", f_reset = {} }", "mls-f_reset"),
+            ("{ null_space_filter = true }", "null_space_filter"),
+        ] {
+            assert_eq!(named(new), old, "{new}");
+        }
+        // A matrix axis that switches a remedy off and on.
+        assert_eq!(name_part("method.j_bar", &toml("false")), "j_bar0.0");
+        assert_eq!(name_part("method.j_bar", &toml("true")), "j_bar1.0");
+        assert_eq!(name_part("method.f_reset", &toml("false")), "no_f_reset");
+        // Switched on with its defaults, a remedy is never named like the plain method.
+        assert_ne!(named("{ pressure_smoothing = true }"), named("{ }"));
+    }
+
+    #[test]
+    fn old_flat_remedy_keys_are_refused_naming_the_new_key() {
+        let good =
+            "[scene]\n[[scene.body]]\nrect = [0.0, 0.0, 0.2, 0.4]\n[materials.water]\nK = 1e5\n";
+        let bad = |method: &str| -> KeyError {
+            let text = format!("{good}[method]\n{method}\n");
+            case("c".into(), text.parse().unwrap()).expect_err("refused")
+        };
+        let (k, m) = bad("j_bar_fit = \"linear\"");
+        assert_eq!(k, "method.j_bar_fit");
+        assert!(m.contains("[method.j_bar] fit"), "{m}");
+        let (k, m) = bad("shift_time = 0.02");
+        assert_eq!(k, "method.shift_time");
+        assert!(m.contains("[method.shifting] time"), "{m}");
+        let (k, m) = bad("carry_averaged_j = false");
+        assert_eq!(k, "method.carry_averaged_j");
+        assert!(m.contains("carry"), "{m}");
+        let (k, m) = bad("j_bar = 1.0");
+        assert_eq!(k, "method.j_bar");
+        assert!(m.contains("[method.j_bar] blend = 1.0"), "{m}");
+        let (k, m) = bad("min_node_mass = 0.01");
+        assert_eq!(k, "method.min_node_mass");
+        assert!(m.contains("[method.min_node_mass] share = 0.01"), "{m}");
+        let (k, m) = bad("[method.j_bar]\nbogus = 1");
+        assert_eq!(k, "method.j_bar.bogus");
+        assert!(m.contains("unknown key") && m.contains("fit"), "{m}");
+        let (k, m) = bad("bogus = 1");
+        assert_eq!(k, "method.bogus");
+        assert!(m.contains("j_bar") && m.contains("cfl"), "{m}");
+        let (k, m) = bad("[method.shifting]\ntime = -1.0");
+        assert_eq!(k, "method.shifting.time");
+        assert!(m.contains("out of range"), "{m}");
+        // The new keys are read.
+        let text = format!("{good}[method]\nshape = \"bspline2\"\n[method.j_bar]\nfit = \"linear\"\n");
+        let c = case("c".into(), text.parse().unwrap()).unwrap();
+        let j_bar = c.solver.method.remedies.j_bar.expect("j_bar on");
+        assert_eq!(j_bar.fit, solver::JBarFit::Linear);
+        assert_eq!(c.params["method.j_bar.blend"], Value::Float(1.0));
+    }
+
+    /// Every shipped study expands to unique case names.
+    #[test]
+    fn shipped_studies_have_unique_case_names() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../studies");
+        let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+            .collect();
+        files.sort();
+        assert!(files.len() >= 10, "{files:?}");
+        for file in files {
+            let study = load(&file, &[]).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+            let mut names: Vec<&str> = study.cases.iter().map(|c| c.name.as_str()).collect();
+            let n = names.len();
+            names.sort_unstable();
+            names.dedup();
+            assert_eq!(names.len(), n, "{}: repeated case names", file.display());
+        }
     }
 
     #[test]

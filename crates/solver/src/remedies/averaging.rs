@@ -6,10 +6,10 @@
 // The loops walk several arrays in step (weights, nodes, particles).
 #![allow(clippy::needless_range_loop)]
 
-use crate::config::JBarFit;
+use crate::choices::JBarFit;
 use crate::grid::Grid;
 use crate::particles::Particles;
-use crate::shape::{Shape, Stencil};
+use crate::shapes::{Shape, Stencil};
 
 /// Nodal sums and the averaged value per particle, allocated once.
 #[derive(Clone, Debug, Default)]
@@ -224,22 +224,17 @@ pub(super) fn averaged(
     fit: JBarFit,
     s: &mut Averager,
 ) {
-    use JBarFit::{Constant, Linear};
-    match (shape.width(), fit) {
-        (2, Constant) => round_trip::<2>(ps, q, stencils, shape, grid, s),
-        (3, Constant) => round_trip::<3>(ps, q, stencils, shape, grid, s),
-        (_, Constant) => round_trip::<4>(ps, q, stencils, shape, grid, s),
-        (2, Linear) => round_trip_linear::<2>(ps, q, stencils, shape, grid, s),
-        (3, Linear) => round_trip_linear::<3>(ps, q, stencils, shape, grid, s),
-        (_, Linear) => round_trip_linear::<4>(ps, q, stencils, shape, grid, s),
-    }
+    crate::shapes::with_width!(shape, W => match fit {
+        JBarFit::Constant => round_trip::<W>(ps, q, stencils, shape, grid, s),
+        JBarFit::Linear => round_trip_linear::<W>(ps, q, stencils, shape, grid, s),
+    })
 }
 
 
 /// `set_j`, returning the stored energy it changed, V0 (U(J_new) - U(J_old)).
 pub(super) fn set_j_booked(
     ps: &mut Particles,
-    materials: &[crate::config::Material],
+    materials: &[crate::material::Material],
     p: usize,
     j_new: f64,
 ) -> f64 {

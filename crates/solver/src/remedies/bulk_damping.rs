@@ -7,7 +7,8 @@
 //! Energy: its work, -dt sum V zeta tr(D)^2 (also counted as dissipated).
 
 use super::{Descriptor, EnergyChange, PointRule, Remedy, Setup};
-use crate::config::{Material, SolverConfig};
+use crate::material::Material;
+use super::Check;
 use crate::particles::Mat2;
 use crate::{viscosity, ConfigError};
 use serde::{Deserialize, Serialize};
@@ -36,10 +37,10 @@ impl super::Settings for Settings {
     fn descriptor(&self) -> &'static Descriptor {
         &DESCRIPTOR
     }
-    fn validate(&self, cfg: &SolverConfig) -> Result<(), ConfigError> {
+    fn validate(&self, cfg: &Check) -> Result<(), ConfigError> {
         super::positive_up_to(
             self.coefficient,
-            0.5 / cfg.method.cfl,
+            0.5 / cfg.cfl,
             "method.bulk_damping.coefficient",
         )
     }

@@ -11,8 +11,8 @@
 use super::averaging::{cell_of, set_j_booked, Own};
 use super::stress_work::StressWork;
 use super::{Descriptor, EnergyChange, GridStep, Remedy, Setup, Step, Supports};
-use crate::config::SolverConfig;
-use crate::ConfigError;
+use super::Check;
+use crate::config_error::ConfigError;
 use serde::{Deserialize, Serialize};
 
 pub static DESCRIPTOR: Descriptor = Descriptor {
@@ -49,7 +49,7 @@ impl super::Settings for Settings {
             ..Supports::ALL
         }
     }
-    fn validate(&self, _cfg: &SolverConfig) -> Result<(), ConfigError> {
+    fn validate(&self, _cfg: &Check) -> Result<(), ConfigError> {
         super::positive_up_to(self.blend, 1.0, "method.cell_dilatation.blend")
     }
     fn build(&self, setup: &Setup) -> Box<dyn Remedy> {

@@ -7,7 +7,7 @@
 //! Energy: none. J is kept, and a fluid's stored energy is V0 U(J).
 
 use super::{Descriptor, PointRule, Remedy, Setup, Supports};
-use crate::config::ShapeKind;
+use crate::choices::ShapeKind;
 use crate::particles::Mat2;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;

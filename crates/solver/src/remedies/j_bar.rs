@@ -19,8 +19,9 @@
 use super::averaging::{averaged, set_j_booked, Averager, Own};
 use super::stress_work::StressWork;
 use super::{Descriptor, EnergyChange, GridStep, Remedy, Setup, Step, Supports};
-use crate::config::{JBarFit, SolverConfig};
-use crate::ConfigError;
+use crate::choices::JBarFit;
+use super::Check;
+use crate::config_error::ConfigError;
 use serde::{Deserialize, Serialize};
 
 pub static DESCRIPTOR: Descriptor = Descriptor {
@@ -69,7 +70,7 @@ impl super::Settings for Settings {
             ..Supports::ALL
         }
     }
-    fn validate(&self, cfg: &SolverConfig) -> Result<(), ConfigError> {
+    fn validate(&self, cfg: &Check) -> Result<(), ConfigError> {
         super::positive_up_to(self.blend, 1.0, "method.j_bar.blend")?;
         let refuse = |key: &str, message: &str| {
             Err(ConfigError {
@@ -77,7 +78,7 @@ impl super::Settings for Settings {
                 message: message.into(),
             })
         };
-        if cfg.method.remedies.cell_dilatation.is_some() {
+        if cfg.remedies.cell_dilatation.is_some() {
             return refuse(
                 "method.j_bar",
                 "cannot be combined with method.cell_dilatation (two averagings of J: choose one)",

@@ -10,8 +10,8 @@
 //! . (v_i^n + v_i^{n+1}) / 2 over the guarded nodes.
 
 use super::{Descriptor, EnergyChange, GridStep, Remedy, Setup};
-use crate::config::SolverConfig;
-use crate::ConfigError;
+use super::Check;
+use crate::config_error::ConfigError;
 use serde::{Deserialize, Serialize};
 
 pub static DESCRIPTOR: Descriptor = Descriptor {
@@ -37,11 +37,11 @@ impl super::Settings for Settings {
     fn descriptor(&self) -> &'static Descriptor {
         &DESCRIPTOR
     }
-    fn validate(&self, _cfg: &SolverConfig) -> Result<(), ConfigError> {
+    fn validate(&self, _cfg: &Check) -> Result<(), ConfigError> {
         super::positive_up_to(self.share, 1.0, "method.min_node_mass.share")
     }
     fn build(&self, setup: &Setup) -> Box<dyn Remedy> {
-        let rho0 = setup.cfg.scene.materials.first().map_or(0.0, |m| m.rho0);
+        let rho0 = setup.rho0;
         let h = setup.grid.h;
         Box::new(MinNodeMass {
             min_mass: self.share * (rho0 * h * h),

@@ -15,11 +15,12 @@ mod stress_work;
 
 pub use registry::Descriptor;
 
-use crate::config::{Material, ShapeKind, SolverConfig, TransferKind};
+use crate::choices::{ShapeKind, TransferKind};
+use crate::material::Material;
 use crate::grid::Grid;
 use crate::particles::{Mat2, Particles, Vec2};
-use crate::shape::{Shape, Stencil};
-use crate::ConfigError;
+use crate::shapes::{Shape, Stencil};
+use crate::config_error::ConfigError;
 use std::sync::Arc;
 
 registry::registry! {
@@ -95,18 +96,34 @@ pub trait Settings {
         Supports::ALL
     }
     /// Ranges and combinations with the rest of the configuration.
-    fn validate(&self, _cfg: &SolverConfig) -> Result<(), ConfigError> {
+    fn validate(&self, _cfg: &Check) -> Result<(), ConfigError> {
         Ok(())
     }
     /// The hook, with its scratch sized for this grid and these particles.
     fn build(&self, setup: &Setup) -> Box<dyn Remedy>;
 }
 
+/// What a remedy is checked against: the rest of the method and the scene.
+pub struct Check<'a> {
+    pub shape: ShapeKind,
+    pub transfer: TransferKind,
+    pub flip_alpha: f64,
+    pub cfl: f64,
+    pub periodic: [bool; 2],
+    /// A material has a shear modulus.
+    pub solids: bool,
+    /// Every remedy of the method (for combinations).
+    pub remedies: &'a RemedySettings,
+}
+
 /// What a remedy may size its scratch by.
 pub struct Setup<'a> {
-    pub cfg: &'a SolverConfig,
     pub grid: &'a Grid,
     pub particles: usize,
+    /// Particles per cell along each axis (`scene.ppc`).
+    pub ppc: usize,
+    /// rho0 of the first material: what a full node is measured by.
+    pub rho0: f64,
 }
 
 /// The particle side of a step, as a hook sees it.
@@ -219,18 +236,11 @@ pub struct Remedies {
 }
 
 impl Remedies {
-    pub fn build(cfg: &SolverConfig, grid: &Grid, particles: usize) -> Self {
-        let setup = Setup {
-            cfg,
-            grid,
-            particles,
-        };
-        let list: Vec<Box<dyn Remedy>> = cfg
-            .method
-            .remedies
+    pub fn build(settings: &RemedySettings, setup: &Setup) -> Self {
+        let list: Vec<Box<dyn Remedy>> = settings
             .active()
             .iter()
-            .map(|s| s.build(&setup))
+            .map(|s| s.build(setup))
             .collect();
         let points = list.iter().filter_map(|r| r.point_rule()).collect();
         Remedies {

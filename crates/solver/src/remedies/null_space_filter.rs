@@ -24,11 +24,11 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::{Descriptor, EnergyChange, Remedy, Setup, Step, Supports};
-use crate::config::TransferKind;
+use crate::choices::TransferKind;
 use crate::grid::Grid;
 use crate::particles::{Particles, Vec2};
-use crate::shape::{Shape, Stencil};
-use crate::transfer_serial::{gather, scatter_mass_weighted};
+use crate::shapes::{Shape, Stencil};
+use crate::transfers::serial::{gather, scatter_mass_weighted};
 
 /// Conjugate-gradient stop: residual below this fraction of the right-hand side.
 pub const TOLERANCE: f64 = 1e-12;
@@ -172,7 +172,7 @@ pub fn filter(
     grid: &Grid,
     s: &mut Scratch,
 ) {
-    crate::shape::with_width!(shape, W => run::<W>(ps, stencils, shape, grid, s))
+    crate::shapes::with_width!(shape, W => run::<W>(ps, stencils, shape, grid, s))
 }
 
 pub static DESCRIPTOR: Descriptor = Descriptor {

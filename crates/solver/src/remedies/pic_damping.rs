@@ -8,10 +8,11 @@
 //! so that it can be taken out of the transfer loss, not counted twice.
 
 use super::{Descriptor, EnergyChange, Remedy, Setup, Step, Supports};
-use crate::config::{SolverConfig, TransferKind};
+use crate::choices::TransferKind;
+use super::Check;
 use crate::particles::Vec2;
-use crate::shape::with_width;
-use crate::ConfigError;
+use crate::shapes::with_width;
+use crate::config_error::ConfigError;
 use serde::{Deserialize, Serialize};
 
 pub static DESCRIPTOR: Descriptor = Descriptor {
@@ -43,14 +44,14 @@ impl super::Settings for Settings {
             ..Supports::ALL
         }
     }
-    fn validate(&self, cfg: &SolverConfig) -> Result<(), ConfigError> {
+    fn validate(&self, cfg: &Check) -> Result<(), ConfigError> {
         super::positive_up_to(self.time, 1e3, "method.pic_damping.time")?;
-        if cfg.method.flip_alpha != 1.0 {
+        if cfg.flip_alpha != 1.0 {
             return Err(ConfigError {
                 key: "method.pic_damping".into(),
                 message: format!(
                     "needs method.flip_alpha left at 1 (it sets the blend each step; got {})",
-                    cfg.method.flip_alpha
+                    cfg.flip_alpha
                 ),
             });
         }

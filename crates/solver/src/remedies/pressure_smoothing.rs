@@ -8,7 +8,7 @@
 use super::averaging::{averaged, Averager};
 use super::stress_work::StressWork;
 use super::{Descriptor, EnergyChange, GridStep, Remedy, Setup, Step, Supports};
-use crate::config::JBarFit;
+use crate::choices::JBarFit;
 use crate::particles::Mat2;
 use serde::{Deserialize, Serialize};
 

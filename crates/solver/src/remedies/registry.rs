@@ -4,8 +4,9 @@
 //! the solver builds its hooks from.
 
 use super::{Settings, Supports};
-use crate::config::{SolverConfig, METHOD_KEYS};
-use crate::ConfigError;
+use super::Check;
+use crate::choices::METHOD_KEYS;
+use crate::config_error::ConfigError;
 use serde::de::{self, Deserialize, Deserializer, MapAccess, Visitor};
 use std::fmt;
 use std::marker::PhantomData;
@@ -126,7 +127,7 @@ pub(super) fn within<E: de::Error>(key: &str, e: E) -> E {
 pub(crate) fn check_supports(
     key: &str,
     sup: &Supports,
-    cfg: &SolverConfig,
+    cfg: &Check,
 ) -> Result<(), ConfigError> {
     let refuse = |message: String| {
         Err(ConfigError {
@@ -134,17 +135,16 @@ pub(crate) fn check_supports(
             message,
         })
     };
-    let m = &cfg.method;
-    if !sup.solids && cfg.scene.materials.iter().any(|mat| mat.shear_modulus > 0.0) {
+    if !sup.solids && cfg.solids {
         return refuse("is for fluids only so far: a material has shear_modulus > 0".into());
     }
-    if !sup.periodic && cfg.scene.periodic.iter().any(|&p| p) {
+    if !sup.periodic && cfg.periodic.iter().any(|&p| p) {
         return refuse(
             "needs walls on both axes (scene.periodic = [false, false]): it mirrors at walls only"
                 .into(),
         );
     }
-    if !sup.shapes.is_empty() && !sup.shapes.contains(&m.shape) {
+    if !sup.shapes.is_empty() && !sup.shapes.contains(&cfg.shape) {
         return refuse(format!(
             "needs method.shape = {} (got {:?})",
             sup.shapes
@@ -152,10 +152,10 @@ pub(crate) fn check_supports(
                 .map(|s| format!("\"{}\"", format!("{s:?}").to_lowercase()))
                 .collect::<Vec<_>>()
                 .join(" | "),
-            m.shape
+            cfg.shape
         ));
     }
-    if !sup.transfers.is_empty() && !sup.transfers.contains(&m.transfer) {
+    if !sup.transfers.is_empty() && !sup.transfers.contains(&cfg.transfer) {
         return refuse(format!(
             "needs method.transfer = {} (got {:?})",
             sup.transfers
@@ -163,7 +163,7 @@ pub(crate) fn check_supports(
                 .map(|s| format!("\"{}\"", format!("{s:?}").to_lowercase()))
                 .collect::<Vec<_>>()
                 .join(" | "),
-            m.transfer
+            cfg.transfer
         ));
     }
     Ok(())
@@ -200,7 +200,7 @@ macro_rules! registry {
             }
 
             /// Every remedy's support checks and own validation.
-            pub fn validate(&self, cfg: &SolverConfig) -> Result<(), ConfigError> {
+            pub fn validate(&self, cfg: &Check) -> Result<(), ConfigError> {
                 for s in self.active() {
                     registry::check_supports(s.descriptor().key, &s.supports(), cfg)?;
                     s.validate(cfg)?;

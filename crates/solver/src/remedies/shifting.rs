@@ -27,12 +27,12 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::{Descriptor, EnergyChange, Remedy, Setup, Step, Supports};
-use crate::config::SolverConfig;
+use super::Check;
 use crate::grid::{Grid, FULL_NODE_SHARE};
-use crate::ConfigError;
+use crate::config_error::ConfigError;
 use crate::particles::{Particles, Vec2};
-use crate::shape::{Shape, Stencil};
-use crate::shape_bspline::quadratic;
+use crate::shapes::{Shape, Stencil};
+use crate::shapes::bspline::quadratic;
 use serde::{Deserialize, Serialize};
 
 /// The largest shift per step in units of l, a guard against dt / tau near
@@ -160,7 +160,7 @@ pub fn shift(
     surface_share: f64,
     s: &mut Scratch,
 ) {
-    crate::shape::with_width!(shape, W => shift_w::<W>(ps, stencils, shape, grid, rate, surface_share, s))
+    crate::shapes::with_width!(shape, W => shift_w::<W>(ps, stencils, shape, grid, rate, surface_share, s))
 }
 
 fn shift_w<const W: usize>(
@@ -274,7 +274,7 @@ impl super::Settings for Settings {
             ..Supports::ALL
         }
     }
-    fn validate(&self, _cfg: &SolverConfig) -> Result<(), ConfigError> {
+    fn validate(&self, _cfg: &Check) -> Result<(), ConfigError> {
         super::positive_up_to(self.time, 1e3, "method.shifting.time")?;
         if !(self.surface_share >= 0.05 && self.surface_share <= 1.0) {
             return Err(ConfigError {
@@ -290,7 +290,7 @@ impl super::Settings for Settings {
     fn build(&self, setup: &Setup) -> Box<dyn Remedy> {
         Box::new(Shifting {
             settings: self.clone(),
-            scratch: Scratch::new(setup.grid, setup.cfg.scene.ppc),
+            scratch: Scratch::new(setup.grid, setup.ppc),
         })
     }
 }

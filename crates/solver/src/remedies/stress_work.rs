@@ -8,7 +8,7 @@
 
 use super::GridStep;
 use crate::particles::Particles;
-use crate::shape::with_width;
+use crate::shapes::with_width;
 
 #[derive(Clone, Debug, Default)]
 pub struct StressWork {

@@ -11,10 +11,10 @@
 
 use super::averaging::{each_node, set_j_booked};
 use super::{Descriptor, EnergyChange, Remedy, Setup, Step, Supports};
-use crate::config::SolverConfig;
+use super::Check;
 use crate::grid::FULL_NODE_SHARE;
-use crate::shape::with_width;
-use crate::ConfigError;
+use crate::shapes::with_width;
+use crate::config_error::ConfigError;
 use serde::{Deserialize, Serialize};
 
 pub static DESCRIPTOR: Descriptor = Descriptor {
@@ -47,9 +47,9 @@ impl super::Settings for Settings {
             ..Supports::ALL
         }
     }
-    fn validate(&self, cfg: &SolverConfig) -> Result<(), ConfigError> {
+    fn validate(&self, cfg: &Check) -> Result<(), ConfigError> {
         super::positive_up_to(self.time, 1e3, "method.volume_relaxation.time")?;
-        let r = &cfg.method.remedies;
+        let r = cfg.remedies;
         let not_carried = r.j_bar.as_ref().is_some_and(|s| !s.carry)
             || r.cell_dilatation.as_ref().is_some_and(|s| !s.carry);
         if not_carried {

@@ -7,7 +7,7 @@ use crate::config::{JUpdate, Material};
 use crate::grid::Grid;
 use crate::par::{Pieces, CHUNK};
 use crate::particles::{Mat2, Particles, Vec2};
-use crate::shape::{Shape, Stencil};
+use crate::shapes::{Shape, Stencil};
 use crate::viscosity;
 use crate::remedies::PointRule;
 use rayon::prelude::*;
@@ -40,7 +40,7 @@ pub fn update(
     particles: &mut Particles,
     partials: &mut [[f64; 2]],
 ) -> (f64, f64) {
-    crate::shape::with_width!(inputs.shape, W => run::<W>(inputs, particles, partials))
+    crate::shapes::with_width!(inputs.shape, W => run::<W>(inputs, particles, partials))
 }
 
 /// Velocity gradient L = sum v grad N^T at a particle, summed row by row

@@ -2,9 +2,9 @@
 
 use crate::config::{ForceKind, QuadratureKind, SchemeKind, TransferKind};
 use crate::remedies::{GridStep, Step};
-use crate::stage_p2g::{self, Terms};
-use crate::stage_times::lap;
-use crate::{par, stage_g2p, stage_grid, stage_stress, Solver};
+use crate::stages::p2g::{self, Terms};
+use crate::timing::lap;
+use crate::{par, stages::g2p, stages::grid_update, stages::stress, Solver};
 use std::time::Instant;
 
 const MASS_MOMENTUM: Terms = Terms {
@@ -71,7 +71,7 @@ pub fn from_grid(s: &mut Solver, clock: &mut Instant) {
             // Re-project the updated particle velocities (weights of the step start).
             p2g(s, MOMENTUM, clock);
             let grid = &mut s.grid;
-            par::keep_warm(|| stage_grid::project_momentum(grid));
+            par::keep_warm(|| grid_update::project_momentum(grid));
             lap(&mut s.times.grid, clock);
             stress(s, StressVelocity::Grid, clock);
         }
@@ -82,13 +82,13 @@ pub fn from_grid(s: &mut Solver, clock: &mut Instant) {
 // keeps the pool's other worker awake for the particle stage that follows.
 fn grid_velocities(s: &mut Solver, clock: &mut Instant) {
     let grid = &mut s.grid;
-    s.ke_grid_p2g = par::keep_warm(|| stage_grid::velocities(grid));
+    s.ke_grid_p2g = par::keep_warm(|| grid_update::velocities(grid));
     lap(&mut s.times.grid, clock);
 }
 
 fn grid_update(s: &mut Solver, clock: &mut Instant) {
     let (grid, dt) = (&mut s.grid, s.dt);
-    par::keep_warm(|| stage_grid::update(grid, dt));
+    par::keep_warm(|| grid_update::update(grid, dt));
     if !s.remedies.is_empty() {
         let mut g = GridStep {
             grid: &mut s.grid,
@@ -101,11 +101,6 @@ fn grid_update(s: &mut Solver, clock: &mut Instant) {
         s.remedies.after_grid_update(&mut g);
     }
     lap(&mut s.times.grid, clock);
-}
-
-/// rho0 of the first material: what a "full" node or cell is measured by.
-fn first_rho0(cfg: &crate::config::SolverConfig) -> f64 {
-    cfg.scene.materials.first().map_or(0.0, |m| m.rho0)
 }
 
 /// The particle side of the step as the remedies' hooks see it.
@@ -124,12 +119,11 @@ macro_rules! step_view {
 }
 
 fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
-    let inputs = stage_p2g::Inputs {
+    let inputs = p2g::Inputs {
         particles: &s.particles,
         stencils: &s.stencils,
         shape: &s.shape,
         bins: &s.bins,
-        width: s.shape.width(),
         affine: s.cfg.method.transfer == TransferKind::Apic,
         mls: match s.cfg.method.force {
             ForceKind::Mls => s.shape.apic_inverse_inertia(),
@@ -142,10 +136,10 @@ fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
         force: terms.force && !mixed,
         ..terms
     };
-    stage_p2g::p2g(&inputs, scattered, &mut s.grid);
+    p2g::p2g(&inputs, scattered, &mut s.grid);
     if mixed {
-        let rho0 = first_rho0(&s.cfg);
-        crate::quadrature_mixed::forces(
+        let rho0 = s.cfg.first_rho0();
+        crate::stages::quadrature_mixed::forces(
             &s.particles,
             &s.stencils,
             &s.shape,
@@ -171,7 +165,7 @@ fn stress(s: &mut Solver, which: StressVelocity, clock: &mut Instant) {
         StressVelocity::Grid => &s.grid.vel,
         StressVelocity::Updated => &s.grid.vel_new,
     };
-    let inputs = stage_stress::Inputs {
+    let inputs = stress::Inputs {
         stencils: &s.stencils,
         shape: &s.shape,
         grid: &s.grid,
@@ -183,7 +177,7 @@ fn stress(s: &mut Solver, which: StressVelocity, clock: &mut Instant) {
         rules: &s.remedies.points,
         drop_inverted: s.cfg.scene.on_inversion == crate::config::OnLoss::Delete,
     };
-    let (dissipated, rule_work) = stage_stress::update(&inputs, &mut s.particles, &mut s.partials_stress);
+    let (dissipated, rule_work) = stress::update(&inputs, &mut s.particles, &mut s.partials_stress);
     s.dissipated += dissipated;
     if !s.remedies.is_empty() {
         s.remedies.book_point_work(rule_work);
@@ -196,7 +190,7 @@ fn g2p(s: &mut Solver, clock: &mut Instant) {
     let xpic = s.cfg.method.transfer == TransferKind::Xpic;
     if xpic {
         let order = s.cfg.method.xpic_order;
-        crate::transfer_xpic::smooth(
+        crate::transfers::xpic::smooth(
             &mut s.particles,
             &s.stencils,
             &s.shape,
@@ -205,7 +199,7 @@ fn g2p(s: &mut Solver, clock: &mut Instant) {
             &mut s.xpic,
         );
     }
-    let transfer = stage_g2p::Transfer {
+    let transfer = g2p::Transfer {
         kind: s.cfg.method.transfer,
         flip_alpha: if xpic {
             1.0
@@ -213,7 +207,7 @@ fn g2p(s: &mut Solver, clock: &mut Instant) {
             s.remedies.flip_fraction(s.dt, s.cfg.method.flip_alpha)
         },
     };
-    stage_g2p::g2p(
+    g2p::g2p(
         &mut s.particles,
         &s.stencils,
         &s.grid,

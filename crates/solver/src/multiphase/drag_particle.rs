@@ -12,7 +12,7 @@
 // The loops walk the weights and the stencil rows in step.
 #![allow(clippy::needless_range_loop)]
 
-use crate::drag::{mixture_volume, set_pair, Coupling, Drag, DragModel, Scratch};
+use crate::multiphase::drag::{mixture_volume, set_pair, Coupling, Drag, DragModel, Scratch};
 use crate::grid::Grid;
 use crate::particles::Vec2;
 use crate::Solver;
@@ -108,20 +108,10 @@ pub(crate) fn couple(
     } else {
         (None, None)
     };
-    match a.shape.width() {
-        2 => {
-            spread::<2>(a, &b.grid, drag, porosity, of_b, fa);
-            spread::<2>(b, &a.grid, drag, porosity, of_a, fb);
-        }
-        3 => {
-            spread::<3>(a, &b.grid, drag, porosity, of_b, fa);
-            spread::<3>(b, &a.grid, drag, porosity, of_a, fb);
-        }
-        _ => {
-            spread::<4>(a, &b.grid, drag, porosity, of_b, fa);
-            spread::<4>(b, &a.grid, drag, porosity, of_a, fb);
-        }
-    }
+    crate::shapes::with_width!(a.shape, W => {
+        spread::<W>(a, &b.grid, drag, porosity, of_b, fa);
+        spread::<W>(b, &a.grid, drag, porosity, of_a, fb);
+    });
     let (ga, gb) = (&mut a.grid, &mut b.grid);
     for k in 0..ga.inside.len() {
         let n = ga.inside[k] as usize;

@@ -24,7 +24,7 @@
 // The loops walk the weights and the stencil rows in step.
 #![allow(clippy::needless_range_loop)]
 
-use crate::boundary_inflow::{add_point, Inflow};
+use crate::multiphase::boundary_inflow::{add_point, Inflow};
 use crate::config::Material;
 use crate::grid::{Grid, PAD};
 use crate::particles::Vec2;
@@ -184,7 +184,7 @@ impl PorePressure {
         if self.mode == PoreMode::Constraint {
             reference_volume(solid, &mut self.grains);
             self.water.fill(0.0);
-            crate::drag::scatter_folded(&fluid.particles.vol, fluid, &mut self.water);
+            crate::multiphase::drag::scatter_folded(&fluid.particles.vol, fluid, &mut self.water);
             let k = self.fluid.k;
             for n in 0..self.pressure.len() {
                 let (grains, water) = (self.grains[n], self.water[n]);
@@ -199,14 +199,14 @@ impl PorePressure {
             return;
         }
         self.water.fill(0.0);
-        crate::drag::scatter_raw(&fluid.particles.vol0, fluid, &mut self.water);
+        crate::multiphase::drag::scatter_raw(&fluid.particles.vol0, fluid, &mut self.water);
         if let Some(inflow) = inflow {
             inflow.add_outside_rows(fluid, &mut self.water);
         }
         add_outer_images(fluid, self.drained, &mut self.tops, &mut self.water);
         g.fold(&mut self.water);
         self.grains.fill(0.0);
-        crate::drag::scatter_raw(&solid.particles.vol0, solid, &mut self.grains);
+        crate::multiphase::drag::scatter_raw(&solid.particles.vol0, solid, &mut self.grains);
         add_outer_images(solid, self.drained, &mut self.tops, &mut self.grains);
         solid.grid.fold(&mut self.grains);
         self.find_gaps(solid);
@@ -292,10 +292,10 @@ impl PorePressure {
             if k == 0 && fixed_a {
                 continue;
             }
-            let before = crate::drag::grid_kinetic(&s.grid);
+            let before = crate::multiphase::drag::grid_kinetic(&s.grid);
             gradient_force(s, &self.pressure, &mut self.force);
             add_force(&mut s.grid, &self.force, dt);
-            gained[k] = crate::drag::grid_kinetic(&s.grid) - before;
+            gained[k] = crate::multiphase::drag::grid_kinetic(&s.grid) - before;
         }
         gained
     }
@@ -355,11 +355,7 @@ impl PorePressure {
         if self.mode == PoreMode::Constraint {
             return;
         }
-        match fluid.shape.width() {
-            2 => interpolate::<2>(&self.pressure, fluid),
-            3 => interpolate::<3>(&self.pressure, fluid),
-            _ => interpolate::<4>(&self.pressure, fluid),
-        }
+        crate::shapes::with_width!(fluid.shape, W => interpolate::<W>(&self.pressure, fluid))
     }
 }
 
@@ -472,11 +468,7 @@ fn add_outer_images(
     let reach = PAD as f64 * g.h + g.h / s.cfg.scene.ppc as f64;
     let ps = &s.particles;
     let half = s.shape.half_widths(&crate::particles::Mat2::identity());
-    let add = |x: Vec2, q: f64, out: &mut [f64]| match s.shape.width() {
-        2 => add_point::<2>(g, &s.shape, half, x, q, out),
-        3 => add_point::<3>(g, &s.shape, half, x, q, out),
-        _ => add_point::<4>(g, &s.shape, half, x, q, out),
-    };
+    let add = |x: Vec2, q: f64, out: &mut [f64]| crate::shapes::with_width!(s.shape, W => add_point::<W>(g, &s.shape, half, x, q, out));
     for axis in 0..2 {
         for side in 0..2 {
             if drained[axis][side].is_none() {
@@ -628,7 +620,7 @@ fn wall_rows(
 /// nodes, which the solid's active set need not cover.
 fn reference_volume(s: &Solver, out: &mut [f64]) {
     out.fill(0.0);
-    crate::drag::scatter_folded(&s.particles.vol0, s, out);
+    crate::multiphase::drag::scatter_folded(&s.particles.vol0, s, out);
 }
 
 fn interpolate<const W: usize>(field: &[f64], s: &mut Solver) {
@@ -660,11 +652,7 @@ fn interpolate<const W: usize>(field: &[f64], s: &mut Solver) {
 
 /// f_i = -sum_p N_ip V_p^0 grad p(x_p) on the raw nodes, folded.
 fn gradient_force(s: &Solver, pressure: &[f64], force: &mut [Vec2]) {
-    match s.shape.width() {
-        2 => spread::<2>(s, pressure, force),
-        3 => spread::<3>(s, pressure, force),
-        _ => spread::<4>(s, pressure, force),
-    }
+    crate::shapes::with_width!(s.shape, W => spread::<W>(s, pressure, force));
     s.grid.fold(force);
 }
 
@@ -706,7 +694,7 @@ pub(crate) fn add_force(g: &mut Grid, force: &[Vec2], dt: f64) {
             g.accel[n] += a;
         }
     }
-    crate::drag::refill(g);
+    crate::multiphase::drag::refill(g);
 }
 
 /// A uniform traction q (Pa, downward) on the top surface of the solid: the
@@ -749,16 +737,12 @@ impl TopLoad {
     /// Adds the load of time `t` over `dt` to the solid's v^{n+1}; returns
     /// the kinetic energy it gave.
     pub(crate) fn apply(&mut self, s: &mut Solver, t: f64, dt: f64) -> f64 {
-        let before = crate::drag::grid_kinetic(&s.grid);
+        let before = crate::multiphase::drag::grid_kinetic(&s.grid);
         let per_particle = Vec2::new(0.0, -self.at(t) * s.grid.h / s.cfg.scene.ppc as f64);
-        match s.shape.width() {
-            2 => self.spread::<2>(s, per_particle),
-            3 => self.spread::<3>(s, per_particle),
-            _ => self.spread::<4>(s, per_particle),
-        }
+        crate::shapes::with_width!(s.shape, W => self.spread::<W>(s, per_particle));
         s.grid.fold(&mut self.force);
         add_force(&mut s.grid, &self.force, dt);
-        crate::drag::grid_kinetic(&s.grid) - before
+        crate::multiphase::drag::grid_kinetic(&s.grid) - before
     }
 
     fn spread<const W: usize>(&mut self, s: &Solver, f: Vec2) {

@@ -5,7 +5,7 @@
 use crate::grid::Grid;
 use crate::par::Pieces;
 use crate::particles::Particles;
-use crate::shape::{Shape, Stencil};
+use crate::shapes::{Shape, Stencil};
 use crate::StepError;
 use rayon::prelude::*;
 

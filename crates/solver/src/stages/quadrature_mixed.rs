@@ -19,7 +19,7 @@
 use crate::grid::{Grid, Mirrored, PAD};
 use crate::particles::{Particles, Vec2};
 use crate::grid::FULL_NODE_SHARE;
-use crate::shape::{Shape, Stencil};
+use crate::shapes::{Shape, Stencil};
 use std::ops::AddAssign;
 
 /// Offsets of the integration points in a cell (cell units, per axis).
@@ -93,11 +93,7 @@ pub fn forces(
     rho0: f64,
     s: &mut Scratch,
 ) {
-    match shape.width() {
-        2 => forces_w::<2>(ps, stencils, shape, grid, gravity, rho0, s),
-        3 => forces_w::<3>(ps, stencils, shape, grid, gravity, rho0, s),
-        _ => forces_w::<4>(ps, stencils, shape, grid, gravity, rho0, s),
-    }
+    crate::shapes::with_width!(shape, W => forces_w::<W>(ps, stencils, shape, grid, gravity, rho0, s))
 }
 
 /// Padded node and 1D weights of an integration point at `r` (cells from the origin).

@@ -1,5 +1,5 @@
 //! Particle-to-grid transfer as a coloured scatter. Particles are walked tile
-//! by tile (`stage_sort::TILE` bins a side); tiles of one colour never share a
+//! by tile (`sort::TILE` bins a side); tiles of one colour never share a
 //! node, so they scatter in parallel straight into the grid, and the colours
 //! run one after the other. Every node therefore sums its particles in the same
 //! order (colour, then bin, then particle index) for any thread count.
@@ -7,8 +7,8 @@
 use crate::grid::Grid;
 use crate::par::Pieces;
 use crate::particles::{Mat2, Particles, Vec2};
-use crate::shape::{Shape, Stencil};
-use crate::stage_sort::{Bins, TILE};
+use crate::shapes::{Shape, Stencil};
+use crate::stages::sort::{Bins, TILE};
 use rayon::prelude::*;
 
 /// Which nodal sums a P2G pass computes.
@@ -26,7 +26,6 @@ pub struct Inputs<'a> {
     pub stencils: &'a [Stencil],
     pub shape: &'a Shape,
     pub bins: &'a Bins,
-    pub width: usize,
     /// Include the APIC affine term in the momentum.
     pub affine: bool,
     /// MLS force: D^-1 h^2 of the B-spline (4 quadratic, 3 cubic); None =
@@ -77,11 +76,7 @@ pub fn p2g(inputs: &Inputs, terms: Terms, grid: &mut Grid) {
             *pass.force.add(n) = Vec2::zeros();
         }
     });
-    match inputs.width {
-        2 => scatter_colours::<2>(pass, terms),
-        3 => scatter_colours::<3>(pass, terms),
-        _ => scatter_colours::<4>(pass, terms),
-    }
+    crate::shapes::with_width!(inputs.shape, W => scatter_colours::<W>(pass, terms));
     if terms.force {
         // sum_p N m g = m_i g: gravity once per node rather than per particle.
         let g = inputs.gravity;

@@ -17,7 +17,7 @@
 
 use crate::grid::Grid;
 use crate::particles::Vec2;
-use crate::transfer_serial::scatter_scalar;
+use crate::transfers::serial::scatter_scalar;
 use crate::Solver;
 use serde::{Deserialize, Serialize};
 
@@ -173,11 +173,7 @@ pub(crate) fn scatter_folded(q: &[f64], s: &Solver, out: &mut [f64]) {
 /// first), not folded.
 pub(crate) fn scatter_raw(q: &[f64], s: &Solver, out: &mut [f64]) {
     let (st, shape, g) = (&s.stencils, &s.shape, &s.grid);
-    match shape.width() {
-        2 => scatter_scalar::<2>(q, st, shape, g, out),
-        3 => scatter_scalar::<3>(q, st, shape, g, out),
-        _ => scatter_scalar::<4>(q, st, shape, g, out),
-    }
+    crate::shapes::with_width!(shape, W => scatter_scalar::<W>(q, st, shape, g, out))
 }
 
 /// V_i = sum_p N_ip V_p on the raw nodes, folded, ghosts filled (particles
@@ -224,7 +220,7 @@ pub fn couple(
     }
     let before = [grid_kinetic(&a.grid), grid_kinetic(&b.grid)];
     if drag.model.is_particle_based() {
-        crate::drag_particle::couple(a, b, drag, scratch, dt, fixed_a, &mut out);
+        crate::multiphase::drag_particle::couple(a, b, drag, scratch, dt, fixed_a, &mut out);
     } else {
         couple_nodes(a, b, drag, scratch, dt, fixed_a, &mut out);
     }

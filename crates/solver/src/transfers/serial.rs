@@ -7,7 +7,7 @@
 
 use crate::grid::Grid;
 use crate::particles::Vec2;
-use crate::shape::{Shape, Stencil};
+use crate::shapes::{Shape, Stencil};
 
 /// out_p = sum_i N_ip field_i for every particle.
 pub fn gather<const W: usize>(

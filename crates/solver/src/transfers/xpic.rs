@@ -11,8 +11,8 @@
 
 use crate::grid::Grid;
 use crate::particles::{Particles, Vec2};
-use crate::shape::{Shape, Stencil};
-use crate::transfer_serial::{gather, scatter_mass_weighted};
+use crate::shapes::{Shape, Stencil};
+use crate::transfers::serial::{gather, scatter_mass_weighted};
 
 /// Grid and particle scratch, allocated once.
 #[derive(Clone, Debug, Default)]
@@ -119,9 +119,5 @@ pub fn smooth(
     order: u32,
     s: &mut Scratch,
 ) {
-    match shape.width() {
-        2 => run::<2>(ps, stencils, shape, grid, order, s),
-        3 => run::<3>(ps, stencils, shape, grid, order, s),
-        _ => run::<4>(ps, stencils, shape, grid, order, s),
-    }
+    crate::shapes::with_width!(shape, W => run::<W>(ps, stencils, shape, grid, order, s))
 }

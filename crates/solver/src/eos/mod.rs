@@ -1,8 +1,11 @@
 //! Equations of state (docs/physics.md section 2): pressure positive in compression,
 //! U' = -p, K_t = -J dp/dJ. The thermal option evaluates them at J / j_res.
 
-use crate::config::{EosKind, Material};
-use crate::{eos_linear, eos_power, eos_tait};
+use crate::choices::EosKind;
+use crate::material::Material;
+mod linear;
+mod power;
+pub mod tait;
 
 /// Pressure, tangent bulk modulus and stored energy per reference volume.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -25,9 +28,9 @@ impl Material {
     #[inline]
     fn eos_at(&self, je: f64) -> EosState {
         let (p, kt, u) = match self.eos {
-            EosKind::Power => eos_power::eval(self.k, self.gamma, je),
-            EosKind::Tait => eos_tait::eval(self.k, je),
-            EosKind::Linear => eos_linear::eval(self.k, je),
+            EosKind::Power => power::eval(self.k, self.gamma, je),
+            EosKind::Tait => tait::eval(self.k, je),
+            EosKind::Linear => linear::eval(self.k, je),
         };
         EosState {
             pressure: p,
@@ -42,11 +45,11 @@ impl Material {
     /// loops the compiler vectorises; the results are the bits of `eos`.
     pub fn eval_run(&self, j: &[f64], vol0: &[f64], out: (&mut [f64], &mut [f64], &mut [f64])) {
         let (k, gamma) = (self.k, self.gamma);
-        match (self.eos, eos_power::integer_exponent(gamma)) {
+        match (self.eos, power::integer_exponent(gamma)) {
             (EosKind::Power, Some(n)) if n != 1 => {
-                self.run_with(|je| eos_power::eval_integer(k, gamma, n, je), j, vol0, out)
+                self.run_with(|je| power::eval_integer(k, gamma, n, je), j, vol0, out)
             }
-            (EosKind::Linear, _) => self.run_with(|je| eos_linear::eval(k, je), j, vol0, out),
+            (EosKind::Linear, _) => self.run_with(|je| linear::eval(k, je), j, vol0, out),
             _ => self.run_with(
                 |je| {
                     let s = self.eos_at(je);
@@ -124,9 +127,9 @@ impl Material {
     /// J at which the (uncut) pressure equals `p`: the inverse EOS.
     pub fn j_at_pressure(&self, p: f64) -> f64 {
         let je = match self.eos {
-            EosKind::Power => eos_power::j_at(self.k, self.gamma, p),
-            EosKind::Tait => eos_tait::j_at(self.k, p),
-            EosKind::Linear => eos_linear::j_at(self.k, p),
+            EosKind::Power => power::j_at(self.k, self.gamma, p),
+            EosKind::Tait => tait::j_at(self.k, p),
+            EosKind::Linear => linear::j_at(self.k, p),
         };
         je * self.j_res
     }

@@ -109,7 +109,7 @@ impl Inflow {
     pub(crate) fn impose(&self, fluid: &mut Solver) -> f64 {
         let dt = fluid.dt;
         let g = &mut fluid.grid;
-        let before = crate::drag::grid_kinetic(g);
+        let before = crate::multiphase::drag::grid_kinetic(g);
         for idx in 0..g.active.len() {
             let n = g.active[idx] as usize;
             if g.mass[n] <= 0.0 {
@@ -127,8 +127,8 @@ impl Inflow {
                 }
             }
         }
-        crate::drag::refill(g);
-        crate::drag::grid_kinetic(g) - before
+        crate::multiphase::drag::refill(g);
+        crate::multiphase::drag::grid_kinetic(g) - before
     }
 
     /// Feeds the step's `dt` at each wall and lets a row in for every
@@ -160,11 +160,7 @@ impl Inflow {
     /// Adds the reference volumes of the rows still outside (the lattice
     /// continued beyond each wall, to two cells out) to raw nodal sums.
     pub(crate) fn add_outside_rows(&self, fluid: &Solver, out: &mut [f64]) {
-        match fluid.shape.width() {
-            2 => self.add_rows::<2>(fluid, out),
-            3 => self.add_rows::<3>(fluid, out),
-            _ => self.add_rows::<4>(fluid, out),
-        }
+        crate::shapes::with_width!(fluid.shape, W => self.add_rows::<W>(fluid, out))
     }
 
     fn add_rows<const W: usize>(&self, fluid: &Solver, out: &mut [f64]) {
@@ -210,7 +206,7 @@ fn inward(axis: usize, side: usize) -> Vec2 {
 /// q N_i(x) added to each node of x's stencil that lies on the padded grid.
 pub(crate) fn add_point<const W: usize>(
     g: &Grid,
-    shape: &crate::shape::Shape,
+    shape: &crate::shapes::Shape,
     half: [f64; 2],
     x: Vec2,
     q: f64,

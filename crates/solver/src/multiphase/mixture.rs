@@ -6,11 +6,11 @@
 //! solid, phase 1 the fluid (its volume fraction is the porosity). A single-phase
 //! run is a plain `Solver` and is untouched by this.
 
-use crate::boundary_inflow::Inflow;
+use crate::multiphase::boundary_inflow::Inflow;
 use crate::checkpoint::{unseal, CheckpointError, Reader, Writer};
 use crate::config::Wall;
-use crate::drag::{self, Coupling, Drag, DragUpdate};
-use crate::pore_pressure::{PoreMode, PorePressure, TopLoad};
+use crate::multiphase::drag::{self, Coupling, Drag, DragUpdate};
+use crate::multiphase::pore_pressure::{PoreMode, PorePressure, TopLoad};
 use crate::{ConfigError, Energy, Material, Scene, Solver, StepError, Vec2};
 
 const MAGIC: &[u8; 8] = b"KICKMIX2";

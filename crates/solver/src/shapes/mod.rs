@@ -1,8 +1,10 @@
 //! Shape functions as one enum over the families; each family's 1D kernel lives
 //! in its own `shape_*.rs`. 2D weights are tensor products.
 
-use crate::config::ShapeKind;
-use crate::{shape_bspline, shape_gimp, shape_linear};
+use crate::choices::ShapeKind;
+pub(crate) mod bspline;
+mod gimp;
+mod linear;
 
 /// Runs `$body` with the constant `$w` set to the shape's stencil width in
 /// nodes per axis (2, 3 or 4): the one place the width is matched, so every
@@ -116,11 +118,11 @@ impl Shape {
     #[inline]
     pub fn kernel_with_half(&self, r: f64, half: f64) -> (f64, f64) {
         match self.kind {
-            ShapeKind::Linear => shape_linear::kernel(r),
-            ShapeKind::Gimp => shape_gimp::kernel(r, self.gimp_half),
-            ShapeKind::Cpgimp => shape_gimp::kernel_any_width(r, half),
-            ShapeKind::Bspline2 => shape_bspline::quadratic(r),
-            ShapeKind::Bspline3 => shape_bspline::cubic(r),
+            ShapeKind::Linear => linear::kernel(r),
+            ShapeKind::Gimp => gimp::kernel(r, self.gimp_half),
+            ShapeKind::Cpgimp => gimp::kernel_any_width(r, half),
+            ShapeKind::Bspline2 => bspline::quadratic(r),
+            ShapeKind::Bspline3 => bspline::cubic(r),
         }
     }
 
@@ -141,11 +143,7 @@ impl Shape {
             out.w[..W].copy_from_slice(&w);
             out.dw[..W].copy_from_slice(&dw);
         }
-        match self.width() {
-            2 => put(&mut out, self.stencil_weights::<2>(f, half)),
-            3 => put(&mut out, self.stencil_weights::<3>(f, half)),
-            _ => put(&mut out, self.stencil_weights::<4>(f, half)),
-        }
+        crate::shapes::with_width!(self, W => put(&mut out, self.stencil_weights::<W>(f, half)));
         out
     }
 

@@ -8,7 +8,7 @@ use crate::config::TransferKind;
 use crate::grid::Grid;
 use crate::par::Pieces;
 use crate::particles::{Mat2, Particles, Vec2};
-use crate::shape::{Shape, Stencil};
+use crate::shapes::{Shape, Stencil};
 use rayon::prelude::*;
 
 pub struct Transfer {
@@ -41,23 +41,12 @@ pub fn g2p(
         TransferKind::Apic if shape.apic_inverse_inertia().is_some() => APIC_SPLINE,
         TransferKind::Apic => APIC_GRADIENT,
     };
-    macro_rules! go {
-        ($w:literal) => {
-            match mode {
-                PIC => run::<$w, PIC>(particles, stencils, grid, shape, transfer, dt),
-                FLIP => run::<$w, FLIP>(particles, stencils, grid, shape, transfer, dt),
-                APIC_SPLINE => {
-                    run::<$w, APIC_SPLINE>(particles, stencils, grid, shape, transfer, dt)
-                }
-                _ => run::<$w, APIC_GRADIENT>(particles, stencils, grid, shape, transfer, dt),
-            }
-        };
-    }
-    match shape.width() {
-        2 => go!(2),
-        3 => go!(3),
-        _ => go!(4),
-    }
+    crate::shapes::with_width!(shape, W => match mode {
+        PIC => run::<W, PIC>(particles, stencils, grid, shape, transfer, dt),
+        FLIP => run::<W, FLIP>(particles, stencils, grid, shape, transfer, dt),
+        APIC_SPLINE => run::<W, APIC_SPLINE>(particles, stencils, grid, shape, transfer, dt),
+        _ => run::<W, APIC_GRADIENT>(particles, stencils, grid, shape, transfer, dt),
+    })
 }
 
 fn run<const W: usize, const MODE: u8>(

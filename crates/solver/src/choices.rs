@@ -1,0 +1,186 @@
+//! The named choices of a study (shape family, transfer, scheme, EOS,
+//! walls, ...): plain enums that every module may use without depending on
+//! the configuration that holds them.
+
+use serde::{Deserialize, Serialize};
+
+/// The keys of `[method]` that are not remedies (serde's own list is not
+/// public; a test checks this one against `config::Method`'s serialisation).
+pub const METHOD_KEYS: &[&str] = &[
+    "shape",
+    "transfer",
+    "flip_alpha",
+    "scheme",
+    "cfl",
+    "dt",
+    "dt_value",
+    "j_update",
+    "force",
+    "quadrature",
+    "xpic_order",
+];
+
+/// Shape-function family.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ShapeKind {
+    /// Bilinear hat functions.
+    Linear,
+    /// Undeformed GIMP (particle half-width h / (2 ppc)).
+    Gimp,
+    /// Convected-particle GIMP: the half-widths follow F's diagonal
+    /// (a suspect for "once highly deformed" mattering, not a remedy).
+    Cpgimp,
+    /// Quadratic B-spline.
+    Bspline2,
+    /// Cubic B-spline.
+    Bspline3,
+}
+
+/// Particle/grid velocity transfer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TransferKind {
+    Pic,
+    /// FLIP blended with PIC by `Method::flip_alpha` (1 = pure FLIP).
+    Flip,
+    Apic,
+    /// XPIC(m) (Hammerquist & Nairn 2017), m = `Method::xpic_order`.
+    Xpic,
+}
+
+/// When the stress is updated relative to the grid momentum update.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SchemeKind {
+    /// Update stress first (from the P2G velocity).
+    Usf,
+    /// Update stress last (from the updated grid velocity).
+    Usl,
+    /// Modified USL: stress from the velocity re-projected from the particles.
+    Musl,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DtMode {
+    /// CFL step taken once at t = 0 (the problem statement's setting).
+    Fixed,
+    /// CFL step recomputed every step.
+    Dynamic,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum JUpdate {
+    /// J = det((I + dt L) F).
+    Det,
+    /// J <- J exp(dt tr L): stays positive.
+    Exp,
+}
+
+/// How `method.j_bar` reconstructs J on the grid before interpolating it
+/// back.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum JBarFit {
+    /// Each node takes the mass-weighted mean of J (Zhao, Jiang & Choo
+    /// 2023): a linear J field is bent at the edges of the material.
+    #[default]
+    Constant,
+    /// Each node fits J by mass-weighted least squares to a plane over its
+    /// support and the particle reads the planes back: any linear J field
+    /// (the hydrostatic one) is kept wherever the support spans both axes.
+    Linear,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InitialState {
+    /// Zero stress, gravity jumps on at t = 0.
+    ZeroStress,
+    /// Discrete hydrostatic equilibrium (spaced by J, then damped relaxation).
+    Hydrostatic,
+    /// The same equilibrium reached behind gates at the bodies' left and right
+    /// edges, lifted at t = 0: a dam-break column standing at rest before its
+    /// release, as in the experiments (zero stress would add a fall under
+    /// gravity that the experiment does not have).
+    HydrostaticGate,
+}
+
+/// How the internal force and the velocity gradient are discretised.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ForceKind {
+    /// f_i = -sum V sigma grad N_i, L = sum v_i grad N_i^T.
+    #[default]
+    Gradient,
+    /// MLS-MPM (Hu et al. 2018): f_i = -sum V sigma D^-1 (x_i - x_p) N_i and
+    /// L = C (the APIC affine matrix); B-splines and APIC only.
+    Mls,
+}
+
+/// Where the internal force is integrated.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum QuadratureKind {
+    /// At the material points (MPM's own quadrature).
+    #[default]
+    Particles,
+    /// At fixed points in the cells full of material, at the material
+    /// points elsewhere (mixed integration, Beuth 2012; `quadrature_mixed`).
+    Mixed,
+}
+
+/// A wall of the box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Wall {
+    Left,
+    Right,
+    Floor,
+    Top,
+}
+
+/// What happens to a particle that leaves the box or inverts (J <= 0).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OnLoss {
+    /// The monitor stops the run (status `blew_up`).
+    #[default]
+    Stop,
+    /// The solver deletes it at the end of the step and counts it (Uintah's
+    /// behaviour); the run stops once `lost_mass_limit` of the mass is gone.
+    Delete,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum EosKind {
+    /// p = K (J^-gamma - 1).
+    Power,
+    /// p = C K [exp((1 - J)/C) - 1], C = 0.0894.
+    Tait,
+    /// p = K (1 - J) (the mpm88 benchmark's fluid).
+    Linear,
+}
+
+impl Wall {
+    /// The axis the wall is normal to.
+    pub fn axis(self) -> usize {
+        match self {
+            Wall::Left | Wall::Right => 0,
+            Wall::Floor | Wall::Top => 1,
+        }
+    }
+
+    /// Flags per [axis][low side, high side] of the given walls.
+    pub fn mask(walls: &[Wall]) -> [[bool; 2]; 2] {
+        let mut mask = [[false; 2]; 2];
+        for w in walls {
+            let side = usize::from(matches!(w, Wall::Right | Wall::Top));
+            mask[w.axis()][side] = true;
+        }
+        mask
+    }
+}
