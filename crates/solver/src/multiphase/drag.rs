@@ -56,7 +56,7 @@ impl DragModel {
     }
 
     /// The models that need each phase's smooth nodal presence.
-    fn uses_presence(self) -> bool {
+    pub(super) fn uses_presence(self) -> bool {
         matches!(
             self,
             DragModel::SvfNode | DragModel::SvfCapped | DragModel::SvfParticle
@@ -155,7 +155,7 @@ pub(crate) fn mixture_volume(s: &Solver, p: usize) -> f64 {
 
 /// sum_p N_ip V_p / n_p on the raw nodes, folded, ghosts filled: the volume
 /// the phase's bodies cover in each node's support.
-fn nodal_presence(s: &Solver, per_particle: &mut Vec<f64>, out: &mut [f64]) {
+pub(super) fn nodal_presence(s: &Solver, per_particle: &mut Vec<f64>, out: &mut [f64]) {
     per_particle.clear();
     per_particle.extend((0..s.particles.len()).map(|p| mixture_volume(s, p)));
     scatter_folded(per_particle, s, out);
@@ -178,68 +178,14 @@ pub(crate) fn scatter_raw(q: &[f64], s: &Solver, out: &mut [f64]) {
 
 /// V_i = sum_p N_ip V_p on the raw nodes, folded, ghosts filled (particles
 /// near a periodic edge or wall read them).
-fn nodal_volume(s: &Solver, out: &mut [f64]) {
+pub(super) fn nodal_volume(s: &Solver, out: &mut [f64]) {
     scatter_folded(&s.particles.vol, s, out);
     s.grid.fill(out);
 }
 
-/// Corrects both phases' v^{n+1} (and the nodal accelerations) for the drag
-/// over a step of `dt`; both must have run `begin_step` with the same dt.
-/// With `fixed_a` phase a is a fixed skeleton: its grid velocities are held
-/// at zero (infinite mass in the drag) and only b's velocity changes.
-pub fn couple(
-    a: &mut Solver,
-    b: &mut Solver,
-    drag: &Drag,
-    scratch: &mut Scratch,
-    dt: f64,
-    fixed_a: bool,
-) -> Coupling {
-    {
-        let [va, vb] = &mut scratch.volume;
-        nodal_volume(a, va);
-        nodal_volume(b, vb);
-    }
-    if drag.model.uses_presence() {
-        let [pa, pb] = &mut scratch.presence;
-        nodal_presence(a, &mut scratch.per_particle, pa);
-        nodal_presence(b, &mut scratch.per_particle, pb);
-    }
-    let mut out = Coupling {
-        stable_dt: f64::INFINITY,
-        ..Coupling::default()
-    };
-    if fixed_a {
-        let ga = &mut a.grid;
-        for &n in &ga.active {
-            let n = n as usize;
-            ga.vel[n] = Vec2::zeros();
-            ga.vel_new[n] = Vec2::zeros();
-            ga.accel[n] = Vec2::zeros();
-        }
-    }
-    let before = [grid_kinetic(&a.grid), grid_kinetic(&b.grid)];
-    if drag.model.is_particle_based() {
-        crate::multiphase::drag_particle::couple(a, b, drag, scratch, dt, fixed_a, &mut out);
-    } else {
-        couple_nodes(a, b, drag, scratch, dt, fixed_a, &mut out);
-    }
-    let (ga, gb) = (&mut a.grid, &mut b.grid);
-    for g in [&mut *ga, &mut *gb] {
-        refill(g);
-    }
-    // Each phase's budget counts what the drag took from it (negative when
-    // it gained), so each closes alone and their sum is the dissipation.
-    let lost = [before[0] - grid_kinetic(ga), before[1] - grid_kinetic(gb)];
-    a.dissipated += lost[0];
-    b.dissipated += lost[1];
-    out.dissipated = lost[0] + lost[1];
-    out
-}
-
 /// The node-based models (bang-bang, SVF, SVF-capped): one relative-velocity
 /// update per node both phases occupy.
-fn couple_nodes(
+pub(super) fn couple_nodes(
     a: &mut Solver,
     b: &mut Solver,
     drag: &Drag,

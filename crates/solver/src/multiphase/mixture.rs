@@ -2,7 +2,7 @@
 //! docs/physics.md section 6): each phase is a `Solver` with its own
 //! particles, material and grid over the same box, stepped by the same
 //! stages with one shared time step; between each phase's grid update and
-//! its G2P the drag couples the two grids (`drag::couple`). Phase 0 is the
+//! its G2P the drag couples the two grids (`coupling::couple`). Phase 0 is the
 //! solid, phase 1 the fluid (its volume fraction is the porosity). A single-phase
 //! run is a plain `Solver` and is untouched by this.
 
@@ -121,7 +121,7 @@ impl Mixture {
         if a.begin_step(dt).is_err() || b.begin_step(dt).is_err() {
             return f64::INFINITY;
         }
-        drag::couple(&mut a, &mut b, &self.drag, &mut self.scratch, dt, false).stable_dt
+        super::coupling::couple(&mut a, &mut b, &self.drag, &mut self.scratch, dt, false).stable_dt
     }
 
     /// Holds the solid (phase 0) as a fixed porous skeleton: its grid
@@ -333,7 +333,7 @@ impl Mixture {
             a.dissipated -= gained[0];
             b.dissipated -= gained[1];
         }
-        self.last = drag::couple(a, b, &self.drag, &mut self.scratch, dt, self.fixed_solid);
+        self.last = super::coupling::couple(a, b, &self.drag, &mut self.scratch, dt, self.fixed_solid);
         self.drag_dissipated += self.last.dissipated;
         if let Some(inflow) = self.inflow.as_mut() {
             // The wall's work on the fluid is exchange, like the pore force's.

@@ -3,6 +3,7 @@
 //! through drag, the pore pressure, a top load and an inflow wall.
 
 pub mod boundary_inflow;
+pub mod coupling;
 pub mod drag;
 mod drag_particle;
 pub mod mixture;
