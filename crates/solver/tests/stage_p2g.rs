@@ -43,7 +43,7 @@ fn mls_force_sums_to_zero_and_works_on_c() {
         let g = view.grid;
         let dt = view.dt;
         let (mut total, mut power, mut scale) = (Vec2::zeros(), 0.0, 0.0);
-        let kernel = shape::Shape::new(shape, 2);
+        let kernel = shapes::Shape::new(shape, 2);
         let x_p = view.x[0];
         let inertia = kernel.apic_inverse_inertia().unwrap() / (g.h * g.h);
         let mut checked = 0;
