@@ -11,11 +11,11 @@ use crate::{Solver, StepError};
 const PERIODS: f64 = 3.0;
 
 pub fn relax(s: &mut Solver) -> Result<(), StepError> {
-    let method = s.cfg.method.clone();
-    let perturb = std::mem::take(&mut s.cfg.perturb);
-    s.cfg.method.transfer = TransferKind::Pic;
-    s.cfg.method.dt = DtMode::Dynamic;
-    let scene = &s.cfg.scene;
+    let method = s.config().method.clone();
+    let perturb = std::mem::take(s.perturbations_mut());
+    s.method_mut().transfer = TransferKind::Pic;
+    s.method_mut().dt = DtMode::Dynamic;
+    let scene = s.scene();
     let height = scene
         .bodies
         .iter()
@@ -39,13 +39,13 @@ pub fn relax(s: &mut Solver) -> Result<(), StepError> {
             break Err(e);
         }
         let damp = (1.0 - 2.0 * omega * dt).max(0.0);
-        s.particles.v.iter_mut().for_each(|v| *v *= damp);
+        s.particles_mut().v.iter_mut().for_each(|v| *v *= damp);
         s.refresh_signal_speed();
         t += dt;
     };
-    s.cfg.method = method;
-    s.cfg.perturb = perturb;
-    let ps = &mut s.particles;
+    *s.method_mut() = method;
+    *s.perturbations_mut() = perturb;
+    let ps = s.particles_mut();
     ps.v.iter_mut().for_each(|v| *v = Vec2::zeros());
     ps.v_prev.iter_mut().for_each(|v| *v = Vec2::zeros());
     ps.accel.iter_mut().for_each(|a| *a = Vec2::zeros());
@@ -60,5 +60,5 @@ pub fn relax_behind_gates(cfg: SolverConfig, particles: Particles) -> Result<Sol
     held_cfg.scene = cfg.scene.gated();
     let mut held = Solver::with_particles(held_cfg, particles);
     relax(&mut held)?;
-    Ok(Solver::with_particles(cfg, held.particles))
+    Ok(Solver::with_particles(cfg, held.into_particles()))
 }

@@ -447,6 +447,110 @@ impl Solver {
         Ok(())
     }
 
+    // The state as the multiphase coupling and the set-up read and change it:
+    // through these methods, never through the fields.
+
+    pub(crate) fn grid(&self) -> &Grid {
+        &self.grid
+    }
+
+    pub(crate) fn grid_mut(&mut self) -> &mut Grid {
+        &mut self.grid
+    }
+
+    pub(crate) fn particles(&self) -> &Particles {
+        &self.particles
+    }
+
+    pub(crate) fn particles_mut(&mut self) -> &mut Particles {
+        &mut self.particles
+    }
+
+    /// This step's stencils (one per particle, after the sort stage).
+    pub(crate) fn stencils(&self) -> &[Stencil] {
+        &self.stencils
+    }
+
+    pub(crate) fn shape(&self) -> &Shape {
+        &self.shape
+    }
+
+    pub(crate) fn scene(&self) -> &Scene {
+        &self.cfg.scene
+    }
+
+    /// The size of the step being taken (or last taken).
+    pub(crate) fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    /// The grid with the particles and their stencils, borrowed apart.
+    pub(crate) fn grid_and_particles(&mut self) -> (&mut Grid, &mut Particles, &[Stencil], &Shape) {
+        (&mut self.grid, &mut self.particles, &self.stencils, &self.shape)
+    }
+
+    /// Energy that came in from outside this phase (a load's work, drag
+    /// from the other phase; negative: it left), booked so that the
+    /// budget does not read it as an injection.
+    pub(crate) fn book_exchange(&mut self, energy: f64) {
+        self.dissipated -= energy;
+    }
+
+    /// Energy this phase dissipated (drag taken from it).
+    pub(crate) fn book_dissipated(&mut self, energy: f64) {
+        self.dissipated += energy;
+    }
+
+    /// Particle `p` gives part of its mass and volume away through a drained
+    /// wall (keeping its J): what leaves is counted as drained, with its
+    /// kinetic and stored energy.
+    pub(crate) fn drain_particle(&mut self, p: usize, mass: f64, vol0: f64) {
+        let ps = &mut self.particles;
+        let j = if ps.vol0[p] > 0.0 {
+            ps.vol[p] / ps.vol0[p]
+        } else {
+            ps.j[p]
+        };
+        let ratio = if ps.vol0[p] > 0.0 {
+            vol0 / ps.vol0[p]
+        } else {
+            0.0
+        };
+        let given = ps.mass[p] - mass;
+        self.energy.kinetic -= 0.5 * given * ps.v[p].norm_squared();
+        self.energy.stored -= (1.0 - ratio) * ps.stored_energy[p];
+        ps.stored_energy[p] *= ratio;
+        self.losses.mass_drained += given;
+        ps.mass[p] = mass;
+        ps.vol0[p] = vol0;
+        ps.vol[p] = j * vol0;
+    }
+
+    /// The method, changed by the set-up (the relaxation to equilibrium
+    /// runs PIC with a dynamic step, then restores it).
+    pub(crate) fn method_mut(&mut self) -> &mut Method {
+        &mut self.cfg.method
+    }
+
+    pub(crate) fn perturbations_mut(&mut self) -> &mut Vec<Perturb> {
+        &mut self.cfg.perturb
+    }
+
+    /// The EOS figures (wave speed, stored energy) of every particle again.
+    pub(crate) fn refresh_eos_cache(&mut self) {
+        timestep::refresh_eos_cache(&mut self.particles, &self.cfg.scene.materials);
+    }
+
+    /// The particles, handed on to another solver (the set-up behind gates).
+    pub(crate) fn into_particles(self) -> Particles {
+        self.particles
+    }
+
+    /// The materials, changed before t = 0 (a mixture's pore fluid).
+    pub(crate) fn materials_mut(&mut self) -> &mut [Material] {
+        &mut self.cfg.scene.materials
+    }
+
     /// Particles deleted since t = 0 (`on_escape` / `on_inversion = "delete"`).
     pub fn losses(&self) -> Losses {
         self.losses

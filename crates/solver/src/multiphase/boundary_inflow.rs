@@ -35,10 +35,10 @@ impl Inflow {
     /// Inflow through `walls` at `velocity`, its particles copied from the
     /// fluid particle nearest a wall. None when the fluid has no particles.
     pub(crate) fn new(fluid: &Solver, walls: &[Wall], velocity: f64) -> Option<Self> {
-        let scene = &fluid.cfg.scene;
+        let scene = fluid.scene();
         let mask = Wall::mask(walls);
         let (lo, size) = (Vec2::from(scene.origin), Vec2::from(scene.size));
-        let ps = &fluid.particles;
+        let ps = fluid.particles();
         let gap = |p: usize| {
             let mut best = f64::INFINITY;
             for (axis, sides) in mask.iter().enumerate() {
@@ -75,13 +75,13 @@ impl Inflow {
 
     /// Particles per row on the wall normal to `axis`.
     fn row_len(&self, fluid: &Solver, axis: usize) -> usize {
-        (fluid.cfg.scene.size[1 - axis] / self.spacing).round() as usize
+        (fluid.scene().size[1 - axis] / self.spacing).round() as usize
     }
 
     /// Particles that enter by t_end (one row more for the round-off of the
     /// feed), to be reserved at set-up.
     pub(crate) fn expected_entries(&self, fluid: &Solver) -> usize {
-        let fed = self.velocity * fluid.cfg.scene.t_end;
+        let fed = self.velocity * fluid.scene().t_end;
         self.walls()
             .map(|(axis, _, _)| {
                 ((fed / self.spacing).ceil() as usize + 1) * self.row_len(fluid, axis)
@@ -92,7 +92,7 @@ impl Inflow {
     /// The position of a row `depth` inside the wall (negative: outside) and
     /// of its k-th particle.
     fn row_point(&self, fluid: &Solver, axis: usize, side: usize, depth: f64, k: usize) -> Vec2 {
-        let s = &fluid.cfg.scene;
+        let s = fluid.scene();
         let mut x = Vec2::zeros();
         x[axis] = if side == 0 {
             s.origin[axis] + depth
@@ -107,8 +107,8 @@ impl Inflow {
     /// inflow velocity (its nodal acceleration with it); returns the grid
     /// kinetic energy this gave.
     pub(crate) fn impose(&self, fluid: &mut Solver) -> f64 {
-        let dt = fluid.dt;
-        let g = &mut fluid.grid;
+        let dt = fluid.dt();
+        let g = fluid.grid_mut();
         let before = crate::multiphase::drag::grid_kinetic(g);
         for idx in 0..g.active.len() {
             let n = g.active[idx] as usize;
@@ -160,11 +160,11 @@ impl Inflow {
     /// Adds the reference volumes of the rows still outside (the lattice
     /// continued beyond each wall, to two cells out) to raw nodal sums.
     pub(crate) fn add_outside_rows(&self, fluid: &Solver, out: &mut [f64]) {
-        crate::shapes::with_width!(fluid.shape, W => self.add_rows::<W>(fluid, out))
+        crate::shapes::with_width!(fluid.shape(), W => self.add_rows::<W>(fluid, out))
     }
 
     fn add_rows<const W: usize>(&self, fluid: &Solver, out: &mut [f64]) {
-        let (g, shape) = (&fluid.grid, &fluid.shape);
+        let (g, shape) = (fluid.grid(), fluid.shape());
         let half = shape.half_widths(&Mat2::identity());
         let reach = PAD as f64 * g.h;
         for (axis, side, fed) in self.walls() {

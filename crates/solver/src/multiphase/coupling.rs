@@ -35,7 +35,7 @@ pub fn couple(
         ..Coupling::default()
     };
     if fixed_a {
-        let ga = &mut a.grid;
+        let ga = a.grid_mut();
         for &n in &ga.active {
             let n = n as usize;
             ga.vel[n] = Vec2::zeros();
@@ -43,21 +43,23 @@ pub fn couple(
             ga.accel[n] = Vec2::zeros();
         }
     }
-    let before = [grid_kinetic(&a.grid), grid_kinetic(&b.grid)];
+    let before = [grid_kinetic(a.grid()), grid_kinetic(b.grid())];
     if drag.model.is_particle_based() {
         super::drag_particle::couple(a, b, drag, scratch, dt, fixed_a, &mut out);
     } else {
         couple_nodes(a, b, drag, scratch, dt, fixed_a, &mut out);
     }
-    let (ga, gb) = (&mut a.grid, &mut b.grid);
+    let (ga, gb) = (a.grid_mut(), b.grid_mut());
     for g in [&mut *ga, &mut *gb] {
         refill(g);
     }
     // Each phase's budget counts what the drag took from it (negative when
     // it gained), so each closes alone and their sum is the dissipation.
     let lost = [before[0] - grid_kinetic(ga), before[1] - grid_kinetic(gb)];
-    a.dissipated += lost[0];
-    b.dissipated += lost[1];
+    let energy = lost[0];
+    a.book_dissipated(energy);
+    let energy = lost[1];
+    b.book_dissipated(energy);
     out.dissipated = lost[0] + lost[1];
     out
 }

@@ -149,38 +149,38 @@ impl Scratch {
 /// A particle's mixture volume V_p / n_p (its lattice cell, deformed): the
 /// volume its body covers whatever its phase's fraction.
 pub(crate) fn mixture_volume(s: &Solver, p: usize) -> f64 {
-    let l = s.grid.h / s.cfg.scene.ppc as f64;
-    s.particles.vol[p] / s.particles.vol0[p] * l * l
+    let l = s.grid().h / s.scene().ppc as f64;
+    s.particles().vol[p] / s.particles().vol0[p] * l * l
 }
 
 /// sum_p N_ip V_p / n_p on the raw nodes, folded, ghosts filled: the volume
 /// the phase's bodies cover in each node's support.
 pub(super) fn nodal_presence(s: &Solver, per_particle: &mut Vec<f64>, out: &mut [f64]) {
     per_particle.clear();
-    per_particle.extend((0..s.particles.len()).map(|p| mixture_volume(s, p)));
+    per_particle.extend((0..s.particles().len()).map(|p| mixture_volume(s, p)));
     scatter_folded(per_particle, s, out);
-    s.grid.fill(out);
+    s.grid().fill(out);
 }
 
 /// sum_p N_ip q_p over a phase's particles on its active raw nodes, folded
 /// (a wall or periodic node then looks like an interior one).
 pub(crate) fn scatter_folded(q: &[f64], s: &Solver, out: &mut [f64]) {
     scatter_raw(q, s, out);
-    s.grid.fold(out);
+    s.grid().fold(out);
 }
 
 /// sum_p N_ip q_p over a phase's particles on its active raw nodes (zeroed
 /// first), not folded.
 pub(crate) fn scatter_raw(q: &[f64], s: &Solver, out: &mut [f64]) {
-    let (st, shape, g) = (&s.stencils, &s.shape, &s.grid);
+    let (st, shape, g) = (s.stencils(), s.shape(), s.grid());
     crate::shapes::with_width!(shape, W => scatter_scalar::<W>(q, st, shape, g, out))
 }
 
 /// V_i = sum_p N_ip V_p on the raw nodes, folded, ghosts filled (particles
 /// near a periodic edge or wall read them).
 pub(super) fn nodal_volume(s: &Solver, out: &mut [f64]) {
-    scatter_folded(&s.particles.vol, s, out);
-    s.grid.fill(out);
+    scatter_folded(&s.particles().vol, s, out);
+    s.grid().fill(out);
 }
 
 /// The node-based models (bang-bang, SVF, SVF-capped): one relative-velocity
@@ -196,8 +196,8 @@ pub(super) fn couple_nodes(
 ) {
     let [va, vb] = &scratch.volume;
     let [pa, pb] = &scratch.presence;
-    let capacity = a.grid.h * a.grid.h;
-    let (ga, gb) = (&mut a.grid, &mut b.grid);
+    let capacity = a.grid().h * a.grid().h;
+    let (ga, gb) = (a.grid_mut(), b.grid_mut());
     for k in 0..ga.inside.len() {
         let n = ga.inside[k] as usize;
         let (ma, mb) = (ga.mass[n], gb.mass[n]);

@@ -30,16 +30,16 @@ fn spread<const W: usize>(
     other_fraction: Option<&[f64]>,
     force: &mut [Vec2],
 ) {
-    let g = &from.grid;
+    let g = from.grid();
     let nx = g.dims[0];
     for &n in &g.active {
         force[n as usize] = Vec2::zeros();
     }
     let present = |n: usize| other.is_active(n) && other.mass[n] > 0.0;
     let capacity = g.h * g.h;
-    for (p, st) in from.stencils.iter().enumerate() {
-        let (wx, _) = from.shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-        let (wy, _) = from.shape.stencil_weights::<W>(st.frac[1], st.half[1]);
+    for (p, st) in from.stencils().iter().enumerate() {
+        let (wx, _) = from.shape().stencil_weights::<W>(st.frac[0], st.half[0]);
+        let (wy, _) = from.shape().stencil_weights::<W>(st.frac[1], st.half[1]);
         let (mut v_other, mut n_p, mut inside, mut phi) = (Vec2::zeros(), 0.0, true, 0.0);
         for c in 0..W {
             let row = st.node as usize + c * nx;
@@ -70,7 +70,7 @@ fn spread<const W: usize>(
             continue;
         }
         let f = (drag.coefficient_at(n_p) * mixture_volume(from, p) * weight)
-            * (v_other - from.particles.v[p]);
+            * (v_other - from.particles().v[p]);
         for c in 0..W {
             let row = st.node as usize + c * nx;
             for a in 0..W {
@@ -108,11 +108,11 @@ pub(crate) fn couple(
     } else {
         (None, None)
     };
-    crate::shapes::with_width!(a.shape, W => {
-        spread::<W>(a, &b.grid, drag, porosity, of_b, fa);
-        spread::<W>(b, &a.grid, drag, porosity, of_a, fb);
+    crate::shapes::with_width!(a.shape(), W => {
+        spread::<W>(a, b.grid(), drag, porosity, of_b, fa);
+        spread::<W>(b, a.grid(), drag, porosity, of_a, fb);
     });
-    let (ga, gb) = (&mut a.grid, &mut b.grid);
+    let (ga, gb) = (a.grid_mut(), b.grid_mut());
     for k in 0..ga.inside.len() {
         let n = ga.inside[k] as usize;
         let (ma, mb) = (ga.mass[n], gb.mass[n]);

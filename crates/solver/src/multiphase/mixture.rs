@@ -54,11 +54,11 @@ impl Mixture {
         }
         for p in phases.iter() {
             // A phase fills only its share of each node and of the space.
-            p.cfg.method.remedies.refuse_in_mixture()?;
+            p.config().method.remedies.refuse_in_mixture()?;
         }
         if phases
             .iter()
-            .any(|p| p.cfg.method.quadrature == crate::config::QuadratureKind::Mixed)
+            .any(|p| p.config().method.quadrature == crate::config::QuadratureKind::Mixed)
         {
             // Its full cells are judged by one phase's density.
             return Err(ConfigError {
@@ -138,24 +138,24 @@ impl Mixture {
     /// stays below cfl h / c with c^2 = K_f / rho_f + K_f (1 - n) / (n rho_s).
     pub fn with_pore_pressure(mut self) -> Self {
         let [solid, fluid] = &mut self.phases;
-        let scene = &fluid.cfg.scene;
+        let scene = fluid.scene();
         let body = &scene.bodies[0];
         let index = scene.material_index(body).expect("validated");
         let pore_fluid = scene.materials[index].clone();
         let n = body.fraction;
-        let solid_scene = &solid.cfg.scene;
+        let solid_scene = solid.scene();
         let rho_s = solid_scene
             .material_index(&solid_scene.bodies[0])
             .map_or(pore_fluid.rho0, |m| solid_scene.materials[m].rho0);
         let k_f = pore_fluid.k;
         self.pore_wave_speed = (k_f / pore_fluid.rho0 + k_f * (1.0 - n) / (n * rho_s)).sqrt();
-        for m in fluid.cfg.scene.materials.iter_mut() {
+        for m in fluid.materials_mut().iter_mut() {
             m.k = 0.0;
         }
-        crate::timestep::refresh_eos_cache(&mut fluid.particles, &fluid.cfg.scene.materials);
-        let gravity = fluid.cfg.scene.gravity;
+        fluid.refresh_eos_cache();
+        let gravity = fluid.scene().gravity;
         self.pore = Some(PorePressure::new(
-            &fluid.grid,
+            fluid.grid(),
             pore_fluid,
             PoreMode::Balance,
             gravity,
@@ -187,14 +187,14 @@ impl Mixture {
     /// skeleton's porosity (both pressures on water that fills only its pores).
     pub fn with_volume_constraint(mut self) -> Self {
         let [solid, fluid] = &self.phases;
-        let scene = &fluid.cfg.scene;
+        let scene = fluid.scene();
         let index = scene.material_index(&scene.bodies[0]).expect("validated");
         let water = scene.materials[index].clone();
-        let porosity = (1.0 - solid.cfg.scene.bodies[0].fraction).max(1e-3);
+        let porosity = (1.0 - solid.scene().bodies[0].fraction).max(1e-3);
         self.pore_wave_speed = (water.k / water.rho0 * (1.0 + 1.0 / porosity)).sqrt();
         let gravity = scene.gravity;
         self.pore = Some(PorePressure::new(
-            &fluid.grid,
+            fluid.grid(),
             water,
             PoreMode::Constraint,
             gravity,
@@ -245,7 +245,7 @@ impl Mixture {
             key: "drag.inflow".into(),
             message: "the fluid holds no particles to copy the inflow's from".into(),
         })?;
-        let mut open = fluid.grid.open;
+        let mut open = fluid.grid().open;
         for (axis, sides) in inflow.mask().iter().enumerate() {
             for (side, &on) in sides.iter().enumerate() {
                 open[axis][side] |= on;
@@ -287,7 +287,7 @@ impl Mixture {
         let mut dt = self.phases[0].next_dt().min(self.phases[1].next_dt());
         if self.pore.is_some() {
             let s = &self.phases[0];
-            dt = dt.min(s.cfg.method.cfl * s.cfg.scene.cell / self.pore_wave_speed);
+            dt = dt.min(s.config().method.cfl * s.scene().cell / self.pore_wave_speed);
         }
         match self.drag.update {
             DragUpdate::Explicit => dt.min(self.phases[0].cfg.method.cfl * self.last.stable_dt),
@@ -317,30 +317,35 @@ impl Mixture {
         a.begin_step(dt)?;
         b.begin_step(dt)?;
         for (s, v) in [&*a, &*b].into_iter().zip(&mut self.before_exchange) {
-            for &n in &s.grid.active {
-                v[n as usize] = s.grid.vel_new[n as usize];
+            for &n in &s.grid().active {
+                v[n as usize] = s.grid().vel_new[n as usize];
             }
         }
         // External and pore forces first (each phase's budget books the
         // energy they give as exchange, like the drag's), then the drag.
         if let Some(load) = self.load.as_mut() {
             if !self.fixed_solid {
-                a.dissipated -= load.apply(a, t, dt);
+                let energy = load.apply(a, t, dt);
+                a.book_exchange(energy);
             }
         }
         if let Some(pore) = self.pore.as_mut() {
             let gained = pore.apply(a, b, dt, self.fixed_solid, self.inflow.as_ref());
-            a.dissipated -= gained[0];
-            b.dissipated -= gained[1];
+            let energy = gained[0];
+            a.book_exchange(energy);
+            let energy = gained[1];
+            b.book_exchange(energy);
         }
         self.last = super::coupling::couple(a, b, &self.drag, &mut self.scratch, dt, self.fixed_solid);
         self.drag_dissipated += self.last.dissipated;
         if let Some(inflow) = self.inflow.as_mut() {
             // The wall's work on the fluid is exchange, like the pore force's.
-            b.dissipated -= inflow.impose(b);
+            let energy = inflow.impose(b);
+            b.book_exchange(energy);
         }
         for (s, v) in [&mut *a, &mut *b].into_iter().zip(&self.before_exchange) {
-            s.dissipated += exchange_cross_term(&s.grid, v);
+            let energy = exchange_cross_term(s.grid(), v);
+            s.book_dissipated(energy);
         }
         a.finish_step();
         b.finish_step();
@@ -428,7 +433,7 @@ impl Mixture {
         self.phases
             .iter()
             .map(|s| {
-                let p = &s.particles;
+                let p = s.particles();
                 p.v.iter()
                     .zip(&p.mass)
                     .fold(Vec2::zeros(), |sum, (v, m)| sum + *m * v)

@@ -133,7 +133,7 @@ impl PorePressure {
     /// outermost grain particle, interpolated between the columns' centres;
     /// 0 where a column holds no grains).
     fn find_gaps(&mut self, solid: &Solver) {
-        let g = &solid.grid;
+        let g = solid.grid();
         for axis in 0..2 {
             for side in 0..2 {
                 if self.drained[axis][side].is_none() {
@@ -157,7 +157,7 @@ impl PorePressure {
                         (w.wall - top.first - 0.5 * w.l).clamp(0.0, deepest)
                     }
                 };
-                let origin = solid.cfg.scene.origin[w.along];
+                let origin = solid.scene().origin[w.along];
                 for (k, slot) in self.gaps[axis][side].iter_mut().enumerate() {
                     let x = g.origin[w.along] + (k as f64 - PAD as f64) * g.h;
                     let u = (x - origin) / w.l - 0.5;
@@ -179,12 +179,12 @@ impl PorePressure {
     /// tension is kept, so that the water does not cavitate and open a
     /// drained gap inside a saturated body.
     fn nodal_pressure(&mut self, solid: &Solver, fluid: &Solver, inflow: Option<&Inflow>) {
-        let g = &fluid.grid;
+        let g = fluid.grid();
         let capacity = g.h * g.h;
         if self.mode == PoreMode::Constraint {
             reference_volume(solid, &mut self.grains);
             self.water.fill(0.0);
-            crate::multiphase::drag::scatter_folded(&fluid.particles.vol, fluid, &mut self.water);
+            crate::multiphase::drag::scatter_folded(&fluid.particles().vol, fluid, &mut self.water);
             let k = self.fluid.k;
             for n in 0..self.pressure.len() {
                 let (grains, water) = (self.grains[n], self.water[n]);
@@ -199,16 +199,16 @@ impl PorePressure {
             return;
         }
         self.water.fill(0.0);
-        crate::multiphase::drag::scatter_raw(&fluid.particles.vol0, fluid, &mut self.water);
+        crate::multiphase::drag::scatter_raw(&fluid.particles().vol0, fluid, &mut self.water);
         if let Some(inflow) = inflow {
             inflow.add_outside_rows(fluid, &mut self.water);
         }
         add_outer_images(fluid, self.drained, &mut self.tops, &mut self.water);
         g.fold(&mut self.water);
         self.grains.fill(0.0);
-        crate::multiphase::drag::scatter_raw(&solid.particles.vol0, solid, &mut self.grains);
+        crate::multiphase::drag::scatter_raw(&solid.particles().vol0, solid, &mut self.grains);
         add_outer_images(solid, self.drained, &mut self.tops, &mut self.grains);
-        solid.grid.fold(&mut self.grains);
+        solid.grid().fold(&mut self.grains);
         self.find_gaps(solid);
         for n in 0..self.pressure.len() {
             let w = self.water[n];
@@ -292,10 +292,10 @@ impl PorePressure {
             if k == 0 && fixed_a {
                 continue;
             }
-            let before = crate::multiphase::drag::grid_kinetic(&s.grid);
+            let before = crate::multiphase::drag::grid_kinetic(s.grid());
             gradient_force(s, &self.pressure, &mut self.force);
-            add_force(&mut s.grid, &self.force, dt);
-            gained[k] = crate::multiphase::drag::grid_kinetic(&s.grid) - before;
+            add_force(s.grid_mut(), &self.force, dt);
+            gained[k] = crate::multiphase::drag::grid_kinetic(s.grid()) - before;
         }
         gained
     }
@@ -320,29 +320,12 @@ impl PorePressure {
                 for top in self.tops.iter().filter(|t| t.drains()) {
                     let keep = 1.0 - top.theta(w.wall, w.l);
                     let (p, full) = (top.index, top.second_index);
-                    let ps = &mut s.particles;
+                    let ps = s.particles();
                     let (mass, vol0) = (keep * ps.mass[full], keep * ps.vol0[full]);
                     if mass == ps.mass[p] && vol0 == ps.vol0[p] {
                         continue;
                     }
-                    let j = if ps.vol0[p] > 0.0 {
-                        ps.vol[p] / ps.vol0[p]
-                    } else {
-                        ps.j[p]
-                    };
-                    let ratio = if ps.vol0[p] > 0.0 {
-                        vol0 / ps.vol0[p]
-                    } else {
-                        0.0
-                    };
-                    let given = ps.mass[p] - mass;
-                    s.energy.kinetic -= 0.5 * given * ps.v[p].norm_squared();
-                    s.energy.stored -= (1.0 - ratio) * ps.stored_energy[p];
-                    ps.stored_energy[p] *= ratio;
-                    s.losses.mass_drained += given;
-                    ps.mass[p] = mass;
-                    ps.vol0[p] = vol0;
-                    ps.vol[p] = j * vol0;
+                    s.drain_particle(p, mass, vol0);
                 }
             }
         }
@@ -355,7 +338,7 @@ impl PorePressure {
         if self.mode == PoreMode::Constraint {
             return;
         }
-        crate::shapes::with_width!(fluid.shape, W => interpolate::<W>(&self.pressure, fluid))
+        crate::shapes::with_width!(fluid.shape(), W => interpolate::<W>(&self.pressure, fluid))
     }
 }
 
@@ -414,8 +397,8 @@ struct DrainedWall {
 
 impl DrainedWall {
     fn of(s: &Solver, axis: usize, side: usize) -> Self {
-        let scene = &s.cfg.scene;
-        let l = s.grid.h / scene.ppc as f64;
+        let scene = s.scene();
+        let l = s.grid().h / scene.ppc as f64;
         let along = 1 - axis;
         let out_sign = if side == 1 { 1.0 } else { -1.0 };
         DrainedWall {
@@ -428,7 +411,7 @@ impl DrainedWall {
     }
 
     fn column(&self, s: &Solver, x: &Vec2) -> usize {
-        let origin = s.cfg.scene.origin[self.along];
+        let origin = s.scene().origin[self.along];
         (((x[self.along] - origin) / self.l).floor().max(0.0) as usize).min(self.columns - 1)
     }
 
@@ -436,7 +419,7 @@ impl DrainedWall {
     fn find_tops(&self, s: &Solver, axis: usize, tops: &mut Vec<ColumnTop>) {
         tops.clear();
         tops.resize(self.columns, ColumnTop::EMPTY);
-        for (p, x) in s.particles.x.iter().enumerate() {
+        for (p, x) in s.particles().x.iter().enumerate() {
             tops[self.column(s, x)].push(self.out_sign * x[axis], p);
         }
     }
@@ -464,11 +447,11 @@ fn add_outer_images(
     tops: &mut Vec<ColumnTop>,
     out: &mut [f64],
 ) {
-    let g = &s.grid;
-    let reach = PAD as f64 * g.h + g.h / s.cfg.scene.ppc as f64;
-    let ps = &s.particles;
-    let half = s.shape.half_widths(&crate::particles::Mat2::identity());
-    let add = |x: Vec2, q: f64, out: &mut [f64]| crate::shapes::with_width!(s.shape, W => add_point::<W>(g, &s.shape, half, x, q, out));
+    let g = s.grid();
+    let reach = PAD as f64 * g.h + g.h / s.scene().ppc as f64;
+    let ps = s.particles();
+    let half = s.shape().half_widths(&crate::particles::Mat2::identity());
+    let add = |x: Vec2, q: f64, out: &mut [f64]| crate::shapes::with_width!(s.shape(), W => add_point::<W>(g, s.shape(), half, x, q, out));
     for axis in 0..2 {
         for side in 0..2 {
             if drained[axis][side].is_none() {
@@ -620,13 +603,12 @@ fn wall_rows(
 /// nodes, which the solid's active set need not cover.
 fn reference_volume(s: &Solver, out: &mut [f64]) {
     out.fill(0.0);
-    crate::multiphase::drag::scatter_folded(&s.particles.vol0, s, out);
+    crate::multiphase::drag::scatter_folded(&s.particles().vol0, s, out);
 }
 
 fn interpolate<const W: usize>(field: &[f64], s: &mut Solver) {
-    let (g, shape) = (&s.grid, &s.shape);
+    let (g, ps, _, shape) = s.grid_and_particles();
     let (inv_h, pad, nx) = (1.0 / g.h, crate::grid::PAD as i64, g.dims[0] as i64);
-    let ps = &mut s.particles;
     for p in 0..ps.len() {
         let r = (ps.x[p] - g.origin) * inv_h;
         let (bx, fx) = shape.locate(r.x);
@@ -652,19 +634,19 @@ fn interpolate<const W: usize>(field: &[f64], s: &mut Solver) {
 
 /// f_i = -sum_p N_ip V_p^0 grad p(x_p) on the raw nodes, folded.
 fn gradient_force(s: &Solver, pressure: &[f64], force: &mut [Vec2]) {
-    crate::shapes::with_width!(s.shape, W => spread::<W>(s, pressure, force));
-    s.grid.fold(force);
+    crate::shapes::with_width!(s.shape(), W => spread::<W>(s, pressure, force));
+    s.grid().fold(force);
 }
 
 fn spread<const W: usize>(s: &Solver, pressure: &[f64], force: &mut [Vec2]) {
-    let g = &s.grid;
+    let g = s.grid();
     let (nx, inv_h) = (g.dims[0], 1.0 / g.h);
     for &n in &g.active {
         force[n as usize] = Vec2::zeros();
     }
-    for (p, st) in s.stencils.iter().enumerate() {
-        let (wx, dwx) = s.shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-        let (wy, dwy) = s.shape.stencil_weights::<W>(st.frac[1], st.half[1]);
+    for (p, st) in s.stencils().iter().enumerate() {
+        let (wx, dwx) = s.shape().stencil_weights::<W>(st.frac[0], st.half[0]);
+        let (wy, dwy) = s.shape().stencil_weights::<W>(st.frac[1], st.half[1]);
         let mut sum = Vec2::zeros();
         for c in 0..W {
             let row = st.node as usize + c * nx;
@@ -673,7 +655,7 @@ fn spread<const W: usize>(s: &Solver, pressure: &[f64], force: &mut [Vec2]) {
                 sum += Vec2::new(dwx[a] * wy[c], wx[a] * dwy[c]) * (q * inv_h);
             }
         }
-        let f = -s.particles.vol0[p] * sum;
+        let f = -s.particles().vol0[p] * sum;
         for c in 0..W {
             let row = st.node as usize + c * nx;
             for a in 0..W {
@@ -713,8 +695,8 @@ pub struct TopLoad {
 
 impl TopLoad {
     pub fn new(solid: &Solver, traction: f64, ramp: f64) -> Self {
-        let ps = &solid.particles;
-        let l = solid.grid.h / solid.cfg.scene.ppc as f64;
+        let ps = solid.particles();
+        let l = solid.grid().h / solid.scene().ppc as f64;
         let top = ps.x.iter().map(|x| x.y).fold(f64::NEG_INFINITY, f64::max);
         let ids = ps.id.iter().map(|&i| i as usize + 1).max().unwrap_or(0);
         let mut loaded = vec![false; ids];
@@ -725,7 +707,7 @@ impl TopLoad {
             traction,
             ramp,
             loaded,
-            force: vec![Vec2::zeros(); solid.grid.dims[0] * solid.grid.dims[1]],
+            force: vec![Vec2::zeros(); solid.grid().dims[0] * solid.grid().dims[1]],
         }
     }
 
@@ -737,30 +719,30 @@ impl TopLoad {
     /// Adds the load of time `t` over `dt` to the solid's v^{n+1}; returns
     /// the kinetic energy it gave.
     pub(crate) fn apply(&mut self, s: &mut Solver, t: f64, dt: f64) -> f64 {
-        let before = crate::multiphase::drag::grid_kinetic(&s.grid);
-        let per_particle = Vec2::new(0.0, -self.at(t) * s.grid.h / s.cfg.scene.ppc as f64);
-        crate::shapes::with_width!(s.shape, W => self.spread::<W>(s, per_particle));
-        s.grid.fold(&mut self.force);
-        add_force(&mut s.grid, &self.force, dt);
-        crate::multiphase::drag::grid_kinetic(&s.grid) - before
+        let before = crate::multiphase::drag::grid_kinetic(s.grid());
+        let per_particle = Vec2::new(0.0, -self.at(t) * s.grid().h / s.scene().ppc as f64);
+        crate::shapes::with_width!(s.shape(), W => self.spread::<W>(s, per_particle));
+        s.grid().fold(&mut self.force);
+        add_force(s.grid_mut(), &self.force, dt);
+        crate::multiphase::drag::grid_kinetic(s.grid()) - before
     }
 
     fn spread<const W: usize>(&mut self, s: &Solver, f: Vec2) {
-        let nx = s.grid.dims[0];
-        for &n in &s.grid.active {
+        let nx = s.grid().dims[0];
+        for &n in &s.grid().active {
             self.force[n as usize] = Vec2::zeros();
         }
-        for (p, st) in s.stencils.iter().enumerate() {
+        for (p, st) in s.stencils().iter().enumerate() {
             if !self
                 .loaded
-                .get(s.particles.id[p] as usize)
+                .get(s.particles().id[p] as usize)
                 .copied()
                 .unwrap_or(false)
             {
                 continue;
             }
-            let (wx, _) = s.shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-            let (wy, _) = s.shape.stencil_weights::<W>(st.frac[1], st.half[1]);
+            let (wx, _) = s.shape().stencil_weights::<W>(st.frac[0], st.half[0]);
+            let (wy, _) = s.shape().stencil_weights::<W>(st.frac[1], st.half[1]);
             for c in 0..W {
                 let row = st.node as usize + c * nx;
                 for a in 0..W {
