@@ -10,8 +10,6 @@ pub use crate::material::Material;
 use crate::remedies::RemedySettings;
 use serde::{Deserialize, Serialize};
 
-
-
 /// A `[[scene.body]]`: a rectangle of one material.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -135,7 +133,6 @@ impl Default for Scene {
         }
     }
 }
-
 
 impl Scene {
     /// No-slip flags per [axis][low side, high side].
@@ -269,7 +266,6 @@ pub struct SolverConfig {
     pub perturb: Vec<Perturb>,
 }
 
-
 impl SolverConfig {
     /// rho0 of the first material: what a "full" node or cell is measured by.
     pub fn first_rho0(&self) -> f64 {
@@ -358,7 +354,11 @@ impl SolverConfig {
             flip_alpha: m.flip_alpha,
             cfl: m.cfl,
             periodic: self.scene.periodic,
-            solids: self.scene.materials.iter().any(|mat| mat.shear_modulus > 0.0),
+            solids: self
+                .scene
+                .materials
+                .iter()
+                .any(|mat| mat.shear_modulus > 0.0),
             remedies: &m.remedies,
         })?;
         for (i, p) in self.perturb.iter().enumerate() {

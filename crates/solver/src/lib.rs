@@ -37,19 +37,19 @@ mod view;
 pub mod viscosity;
 
 pub use checkpoint::CheckpointError;
-pub use remedies::EnergyChange;
 pub use config::*;
+pub use deletion::{CullReason, Culled, Losses};
 pub use energy::Energy;
 pub use multiphase::mixture::Mixture;
 pub use particles::{Mat2, Vec2};
-pub use deletion::{CullReason, Culled, Losses};
+pub use remedies::EnergyChange;
 pub use timing::StageTimes;
 pub use view::{GridView, StateView};
 
+use deletion::CullRules;
 use grid::Grid;
 use particles::Particles;
 use shapes::{Shape, Stencil};
-use deletion::CullRules;
 use stages::sort::Bins;
 
 /// Why a step could not be taken.
@@ -411,7 +411,9 @@ impl Solver {
     }
 
     /// Each remedy's key and the energy it changed in the last step.
-    pub fn remedy_energy(&self) -> impl Iterator<Item = (&'static str, remedies::EnergyChange)> + '_ {
+    pub fn remedy_energy(
+        &self,
+    ) -> impl Iterator<Item = (&'static str, remedies::EnergyChange)> + '_ {
         self.remedies.energy()
     }
 
@@ -486,7 +488,12 @@ impl Solver {
 
     /// The grid with the particles and their stencils, borrowed apart.
     pub(crate) fn grid_and_particles(&mut self) -> (&mut Grid, &mut Particles, &[Stencil], &Shape) {
-        (&mut self.grid, &mut self.particles, &self.stencils, &self.shape)
+        (
+            &mut self.grid,
+            &mut self.particles,
+            &self.stencils,
+            &self.shape,
+        )
     }
 
     /// Energy that came in from outside this phase (a load's work, drag

@@ -1,9 +1,9 @@
 //! The narrow read-only view of the state that the monitor observes.
 
 use crate::config::{JUpdate, Material, Scene, ShapeKind, TransferKind};
+use crate::deletion::{Culled, Losses};
 use crate::energy::Energy;
 use crate::particles::{Mat2, Vec2};
-use crate::deletion::{Culled, Losses};
 use crate::Solver;
 
 /// Grid geometry and nodal fields after the last step (ghost layers included).

@@ -1173,7 +1173,8 @@ mod tests {
         assert_eq!(k, "method.shifting.time");
         assert!(m.contains("out of range"), "{m}");
         // The new keys are read.
-        let text = format!("{good}[method]\nshape = \"bspline2\"\n[method.j_bar]\nfit = \"linear\"\n");
+        let text =
+            format!("{good}[method]\nshape = \"bspline2\"\n[method.j_bar]\nfit = \"linear\"\n");
         let c = case("c".into(), text.parse().unwrap()).unwrap();
         let j_bar = c.solver.method.remedies.j_bar.expect("j_bar on");
         assert_eq!(j_bar.fit, solver::JBarFit::Linear);

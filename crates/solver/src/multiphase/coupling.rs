@@ -63,4 +63,3 @@ pub fn couple(
     out.dissipated = lost[0] + lost[1];
     out
 }
-

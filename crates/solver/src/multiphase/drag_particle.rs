@@ -12,8 +12,8 @@
 // The loops walk the weights and the stencil rows in step.
 #![allow(clippy::needless_range_loop)]
 
-use crate::multiphase::drag::{mixture_volume, set_pair, Coupling, Drag, DragModel, Scratch};
 use crate::grid::Grid;
+use crate::multiphase::drag::{mixture_volume, set_pair, Coupling, Drag, DragModel, Scratch};
 use crate::particles::Vec2;
 use crate::Solver;
 

@@ -6,9 +6,9 @@
 //! solid, phase 1 the fluid (its volume fraction is the porosity). A single-phase
 //! run is a plain `Solver` and is untouched by this.
 
-use crate::multiphase::boundary_inflow::Inflow;
 use crate::checkpoint::{unseal, CheckpointError, Reader, Writer};
 use crate::config::Wall;
+use crate::multiphase::boundary_inflow::Inflow;
 use crate::multiphase::drag::{self, Coupling, Drag, DragUpdate};
 use crate::multiphase::pore_pressure::{PoreMode, PorePressure, TopLoad};
 use crate::{ConfigError, Energy, Material, Scene, Solver, StepError, Vec2};
@@ -336,7 +336,8 @@ impl Mixture {
             let energy = gained[1];
             b.book_exchange(energy);
         }
-        self.last = super::coupling::couple(a, b, &self.drag, &mut self.scratch, dt, self.fixed_solid);
+        self.last =
+            super::coupling::couple(a, b, &self.drag, &mut self.scratch, dt, self.fixed_solid);
         self.drag_dissipated += self.last.dissipated;
         if let Some(inflow) = self.inflow.as_mut() {
             // The wall's work on the fluid is exchange, like the pore force's.

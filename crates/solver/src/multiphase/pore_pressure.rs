@@ -24,9 +24,9 @@
 // The loops walk the weights and the stencil rows in step.
 #![allow(clippy::needless_range_loop)]
 
-use crate::multiphase::boundary_inflow::{add_point, Inflow};
 use crate::config::Material;
 use crate::grid::{Grid, PAD};
+use crate::multiphase::boundary_inflow::{add_point, Inflow};
 use crate::particles::Vec2;
 use crate::Solver;
 

@@ -230,7 +230,6 @@ pub(super) fn averaged(
     })
 }
 
-
 /// `set_j`, returning the stored energy it changed, V0 (U(J_new) - U(J_old)).
 pub(super) fn set_j_booked(
     ps: &mut Particles,
@@ -244,7 +243,8 @@ pub(super) fn set_j_booked(
     if j == j_old {
         0.0
     } else {
-        super::stored_energy_at(ps, materials, p, j) - super::stored_energy_at(ps, materials, p, j_old)
+        super::stored_energy_at(ps, materials, p, j)
+            - super::stored_energy_at(ps, materials, p, j_old)
     }
 }
 
@@ -255,7 +255,8 @@ pub(super) fn set_j_booked(
 pub(super) struct Own {
     pub j: Vec<f64>,
     pub f: Vec<crate::particles::Mat2>,
-    pub pressure: Vec<f64>,
+    pub vol: Vec<f64>,
+    pub stress: Vec<crate::particles::Mat2>,
 }
 
 impl Own {
@@ -263,7 +264,8 @@ impl Own {
         Own {
             j: vec![0.0; particles],
             f: vec![crate::particles::Mat2::zeros(); particles],
-            pressure: vec![0.0; particles],
+            vol: vec![0.0; particles],
+            stress: vec![crate::particles::Mat2::zeros(); particles],
         }
     }
 
@@ -271,7 +273,8 @@ impl Own {
         if self.j.len() < n {
             self.j.resize(n, 0.0);
             self.f.resize(n, crate::particles::Mat2::zeros());
-            self.pressure.resize(n, 0.0);
+            self.vol.resize(n, 0.0);
+            self.stress.resize(n, crate::particles::Mat2::zeros());
         }
     }
 
@@ -279,7 +282,8 @@ impl Own {
         let n = ps.len();
         self.j[..n].copy_from_slice(&ps.j);
         self.f[..n].copy_from_slice(&ps.f);
-        self.pressure[..n].copy_from_slice(&ps.pressure);
+        self.vol[..n].copy_from_slice(&ps.vol);
+        self.stress[..n].copy_from_slice(&ps.stress);
     }
 
     /// Gives each particle its own J and F back; the pressure, stress and

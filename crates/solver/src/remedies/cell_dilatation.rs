@@ -106,7 +106,7 @@ impl Remedy for CellDilatation {
 
     fn after_pressure(&mut self, s: &mut Step) -> EnergyChange {
         if !self.settings.carry {
-            self.work.record(s.particles, &self.own.pressure);
+            self.work.record(s.particles, &self.own.vol, &self.own.stress);
             self.own.restore(s.particles);
         }
         EnergyChange::default()

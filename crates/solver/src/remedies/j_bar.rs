@@ -13,8 +13,8 @@
 //!
 //! Skipped for the whole step when some J <= 0: averaging would hide the
 //! inversion. Energy: the stored energy its J change makes (carried), or the
-//! work of the pressure change (`carry = false`, booked at the grid update
-//! that uses it).
+//! work of the stress and volume change (`carry = false`, booked at the grid
+//! update that uses it).
 
 use super::averaging::{averaged, set_j_booked, Averager, Own};
 use super::stress_work::StressWork;
@@ -155,7 +155,7 @@ impl Remedy for JBar {
 
     fn after_pressure(&mut self, s: &mut Step) -> EnergyChange {
         if !self.settings.carry {
-            self.work.record(s.particles, &self.own.pressure);
+            self.work.record(s.particles, &self.own.vol, &self.own.stress);
             self.own.restore(s.particles);
         }
         EnergyChange::default()

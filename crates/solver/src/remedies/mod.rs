@@ -16,11 +16,11 @@ mod stress_work;
 pub use registry::Descriptor;
 
 use crate::choices::{ShapeKind, TransferKind};
-use crate::material::Material;
+use crate::config_error::ConfigError;
 use crate::grid::Grid;
+use crate::material::Material;
 use crate::particles::{Mat2, Particles, Vec2};
 use crate::shapes::{Shape, Stencil};
-use crate::config_error::ConfigError;
 use std::sync::Arc;
 
 registry::registry! {
@@ -237,11 +237,7 @@ pub struct Remedies {
 
 impl Remedies {
     pub fn build(settings: &RemedySettings, setup: &Setup) -> Self {
-        let list: Vec<Box<dyn Remedy>> = settings
-            .active()
-            .iter()
-            .map(|s| s.build(setup))
-            .collect();
+        let list: Vec<Box<dyn Remedy>> = settings.active().iter().map(|s| s.build(setup)).collect();
         let points = list.iter().filter_map(|r| r.point_rule()).collect();
         Remedies {
             energy: vec![EnergyChange::default(); list.len()],
@@ -266,7 +262,10 @@ impl Remedies {
 
     /// Each remedy's key and the energy it changed in the last step.
     pub fn energy(&self) -> impl Iterator<Item = (&'static str, EnergyChange)> + '_ {
-        self.list.iter().map(|r| r.key()).zip(self.energy.iter().copied())
+        self.list
+            .iter()
+            .map(|r| r.key())
+            .zip(self.energy.iter().copied())
     }
 
     pub(crate) fn after_grid_update(&mut self, g: &mut GridStep) {

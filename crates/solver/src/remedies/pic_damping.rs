@@ -7,6 +7,9 @@
 //! sum 1/2 m (|v|^2 - |v_FLIP|^2) with v_FLIP = v^n + sum N (v_i^{n+1} - v_i^n),
 //! so that it can be taken out of the transfer loss, not counted twice.
 
+// The loop walks the particles and their stencils in step.
+#![allow(clippy::needless_range_loop)]
+
 use super::{Descriptor, EnergyChange, Remedy, Setup, Step, Supports};
 use crate::choices::TransferKind;
 use super::Check;

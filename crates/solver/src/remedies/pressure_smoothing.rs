@@ -36,7 +36,7 @@ impl super::Settings for Settings {
         let n = setup.particles;
         Box::new(PressureSmoothing {
             averager: Averager::new(setup.grid, n, false),
-            before: vec![0.0; n],
+            before: vec![Mat2::zeros(); n],
             work: StressWork::new(n),
         })
     }
@@ -45,8 +45,8 @@ impl super::Settings for Settings {
 #[derive(Clone)]
 struct PressureSmoothing {
     averager: Averager,
-    /// Per particle: the pressure before smoothing.
-    before: Vec<f64>,
+    /// Per particle: the stress before smoothing.
+    before: Vec<Mat2>,
     work: StressWork,
 }
 
@@ -58,7 +58,7 @@ impl Remedy for PressureSmoothing {
     fn fit_particles(&mut self, n: usize) {
         self.averager.fit_particles(n);
         if self.before.len() < n {
-            self.before.resize(n, 0.0);
+            self.before.resize(n, Mat2::zeros());
         }
         self.work.fit_particles(n);
     }
@@ -66,7 +66,7 @@ impl Remedy for PressureSmoothing {
     fn after_pressure(&mut self, s: &mut Step) -> EnergyChange {
         let ps = &mut *s.particles;
         let n = ps.len();
-        self.before[..n].copy_from_slice(&ps.pressure);
+        self.before[..n].copy_from_slice(&ps.stress);
         let pressure = std::mem::take(&mut ps.pressure);
         let av = &mut self.averager;
         averaged(ps, &pressure, s.stencils, s.shape, s.grid, JBarFit::Constant, av);
@@ -78,7 +78,7 @@ impl Remedy for PressureSmoothing {
                 ps.pressure[p] = p_new;
             }
         }
-        self.work.record(ps, &self.before[..n]);
+        self.work.record(ps, &ps.vol, &self.before[..n]);
         EnergyChange::default()
     }
 

@@ -3,8 +3,8 @@
 //! the refusal of the old flat keys, the generic support checks and the list
 //! the solver builds its hooks from.
 
-use super::{Settings, Supports};
 use super::Check;
+use super::{Settings, Supports};
 use crate::choices::METHOD_KEYS;
 use crate::config_error::ConfigError;
 use serde::de::{self, Deserialize, Deserializer, MapAccess, Visitor};
@@ -95,7 +95,9 @@ impl<'de, T: Deserialize<'de> + Default + Settings> Deserialize<'de> for Toggle<
 pub(super) fn unknown_key<E: de::Error>(key: &str, remedies: &[&Descriptor]) -> E {
     for desc in remedies {
         if let Some(new) = desc.replacement(key) {
-            return E::custom(format!("old key `{key}`: the flat key is gone; write {new}"));
+            return E::custom(format!(
+                "old key `{key}`: the flat key is gone; write {new}"
+            ));
         }
     }
     E::unknown_field(key, METHOD_KEYS_AND_REMEDIES)
@@ -124,11 +126,7 @@ pub(super) fn within<E: de::Error>(key: &str, e: E) -> E {
 }
 
 /// The support checks every remedy gets from its [`Supports`].
-pub(crate) fn check_supports(
-    key: &str,
-    sup: &Supports,
-    cfg: &Check,
-) -> Result<(), ConfigError> {
+pub(crate) fn check_supports(key: &str, sup: &Supports, cfg: &Check) -> Result<(), ConfigError> {
     let refuse = |message: String| {
         Err(ConfigError {
             key: format!("method.{key}"),
@@ -146,24 +144,24 @@ pub(crate) fn check_supports(
     }
     if !sup.shapes.is_empty() && !sup.shapes.contains(&cfg.shape) {
         return refuse(format!(
-            "needs method.shape = {} (got {:?})",
+            "needs method.shape = {} (got \"{}\")",
             sup.shapes
                 .iter()
                 .map(|s| format!("\"{}\"", format!("{s:?}").to_lowercase()))
                 .collect::<Vec<_>>()
                 .join(" | "),
-            cfg.shape
+            format!("{:?}", cfg.shape).to_lowercase()
         ));
     }
     if !sup.transfers.is_empty() && !sup.transfers.contains(&cfg.transfer) {
         return refuse(format!(
-            "needs method.transfer = {} (got {:?})",
+            "needs method.transfer = {} (got \"{}\")",
             sup.transfers
                 .iter()
                 .map(|s| format!("\"{}\"", format!("{s:?}").to_lowercase()))
                 .collect::<Vec<_>>()
                 .join(" | "),
-            cfg.transfer
+            format!("{:?}", cfg.transfer).to_lowercase()
         ));
     }
     Ok(())

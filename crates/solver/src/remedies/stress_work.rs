@@ -1,19 +1,24 @@
-//! The work of a pressure change made by a remedy (pressure smoothing, an
-//! averaged J that is not carried): the change dp_p is kept until the grid
-//! update that uses it (the same step under USF, the next under USL and
-//! MUSL), which books dt sum_i df_i . v_i^{n+1/2} = dt sum_p V_p dp_p
-//! div v^{n+1/2}(x_p), with the force's gradient form (df_i = sum_p V_p dp_p
-//! grad N_ip). A particle deleted in between drops the step's booking (the
-//! kept changes no longer line up with the particles).
+//! The work of a stress change made by a remedy (pressure smoothing, an
+//! averaged J that is not carried, which also leaves this step's volume):
+//! the change of V sigma per particle is kept until the grid update that
+//! uses it (the same step under USF, the next under USL and MUSL), which
+//! books dt sum_i df_i . v_i^{n+1/2} = -dt sum_p d(V sigma)_p : L_p^{n+1/2},
+//! with the force's gradient form (df_i = -sum_p d(V sigma)_p grad N_ip)
+//! and L^{n+1/2} = sum_i v_i^{n+1/2} grad N_ip^T. A particle deleted in
+//! between, or a method changed mid-run (`Solver::set_method`), drops the
+//! pending booking (the kept changes no longer line up with the particles).
+
+// The loops walk the particles and their kept changes in step.
+#![allow(clippy::needless_range_loop)]
 
 use super::GridStep;
-use crate::particles::Particles;
+use crate::particles::{Mat2, Particles};
 use crate::shapes::with_width;
 
 #[derive(Clone, Debug, Default)]
 pub struct StressWork {
-    /// Per particle: the pressure change not yet booked.
-    dp: Vec<f64>,
+    /// Per particle: the change of V sigma not yet booked.
+    d: Vec<Mat2>,
     /// Particles when it was recorded (None: nothing pending).
     recorded: Option<usize>,
 }
@@ -21,23 +26,28 @@ pub struct StressWork {
 impl StressWork {
     pub fn new(particles: usize) -> Self {
         StressWork {
-            dp: vec![0.0; particles],
+            d: vec![Mat2::zeros(); particles],
             recorded: None,
         }
     }
 
     pub fn fit_particles(&mut self, n: usize) {
-        if self.dp.len() < n {
-            self.dp.resize(n, 0.0);
+        if self.d.len() < n {
+            self.d.resize(n, Mat2::zeros());
         }
     }
 
-    /// Keeps p - `before` per particle (0 where either is not finite).
-    pub fn record(&mut self, ps: &Particles, before: &[f64]) {
+    /// Keeps V sigma - `volume` `stress` per particle, the state without
+    /// the remedy being given (0 where it is not finite).
+    pub fn record(&mut self, ps: &Particles, volume: &[f64], stress: &[Mat2]) {
         let n = ps.len();
         for p in 0..n {
-            let d = ps.pressure[p] - before[p];
-            self.dp[p] = if d.is_finite() { d } else { 0.0 };
+            let d = ps.vol[p] * ps.stress[p] - volume[p] * stress[p];
+            self.d[p] = if d.iter().all(|v| v.is_finite()) {
+                d
+            } else {
+                Mat2::zeros()
+            };
         }
         self.recorded = Some(n);
     }
@@ -54,26 +64,27 @@ impl StressWork {
     }
 
     fn work<const W: usize>(&self, g: &GridStep) -> f64 {
-        let (ps, grid) = (g.particles, &*g.grid);
+        let grid = &*g.grid;
         let nx = grid.dims[0];
         let inv_h = 1.0 / grid.h;
         let mut sum = 0.0;
         for (p, st) in g.stencils.iter().enumerate() {
-            if self.dp[p] == 0.0 {
+            if self.d[p] == Mat2::zeros() {
                 continue;
             }
             let (wx, dwx) = g.shape.stencil_weights::<W>(st.frac[0], st.half[0]);
             let (wy, dwy) = g.shape.stencil_weights::<W>(st.frac[1], st.half[1]);
-            let mut div = 0.0;
+            let mut l = Mat2::zeros();
             for c in 0..W {
                 let row = st.node as usize + c * nx;
                 for a in 0..W {
                     let v = 0.5 * (grid.vel[row + a] + grid.vel_new[row + a]);
-                    div += dwx[a] * wy[c] * v.x + wx[a] * dwy[c] * v.y;
+                    let grad = crate::Vec2::new(dwx[a] * wy[c], wx[a] * dwy[c]);
+                    l += v * grad.transpose();
                 }
             }
-            sum += ps.vol[p] * self.dp[p] * div * inv_h;
+            sum += self.d[p].component_mul(&l).sum() * inv_h;
         }
-        g.dt * sum
+        -g.dt * sum
     }
 }

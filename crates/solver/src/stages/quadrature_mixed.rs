@@ -16,9 +16,9 @@
 // The loops walk several arrays in step (weights, nodes, particles).
 #![allow(clippy::needless_range_loop)]
 
+use crate::grid::FULL_NODE_SHARE;
 use crate::grid::{Grid, Mirrored, PAD};
 use crate::particles::{Particles, Vec2};
-use crate::grid::FULL_NODE_SHARE;
 use crate::shapes::{Shape, Stencil};
 use std::ops::AddAssign;
 

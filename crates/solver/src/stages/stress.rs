@@ -7,9 +7,9 @@ use crate::config::{JUpdate, Material};
 use crate::grid::Grid;
 use crate::par::{Pieces, CHUNK};
 use crate::particles::{Mat2, Particles, Vec2};
+use crate::remedies::PointRule;
 use crate::shapes::{Shape, Stencil};
 use crate::viscosity;
-use crate::remedies::PointRule;
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -35,11 +35,7 @@ pub struct Inputs<'a> {
 /// Updates F, J, V, stress, pressure, |dev D| and xi; returns the energy
 /// dissipated this step (viscous work, the rules' extra stress and what
 /// softening released) and the rules' share of it.
-pub fn update(
-    inputs: &Inputs,
-    particles: &mut Particles,
-    partials: &mut [[f64; 2]],
-) -> (f64, f64) {
+pub fn update(inputs: &Inputs, particles: &mut Particles, partials: &mut [[f64; 2]]) -> (f64, f64) {
     crate::shapes::with_width!(inputs.shape, W => run::<W>(inputs, particles, partials))
 }
 
