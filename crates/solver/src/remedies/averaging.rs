@@ -294,3 +294,65 @@ impl Own {
         ps.f.copy_from_slice(&self.f[..n]);
     }
 }
+
+/// `carry = false` of an averaged J: the particle's own J and F are kept
+/// while the average sets this step's pressure and volume, and the work of
+/// that stress change is booked at the grid update that uses it. With
+/// `carry = true` it does nothing and the average's stored energy is booked.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Uncarried {
+    on: bool,
+    own: Own,
+    work: super::stress_work::StressWork,
+}
+
+impl Uncarried {
+    pub fn new(carry: bool, particles: usize) -> Self {
+        let n = if carry { 0 } else { particles };
+        Uncarried {
+            on: !carry,
+            own: Own::new(n),
+            work: super::stress_work::StressWork::new(n),
+        }
+    }
+
+    pub fn fit_particles(&mut self, n: usize) {
+        if self.on {
+            self.own.fit_particles(n);
+            self.work.fit_particles(n);
+        }
+    }
+
+    /// Before the average: the particle's own state.
+    pub fn keep(&mut self, ps: &Particles) {
+        if self.on {
+            self.own.save(ps);
+        }
+    }
+
+    /// What the average changed: its stored energy when carried (the EOS
+    /// is evaluated again either way).
+    pub fn averaged(&self, stored: f64) -> (super::EnergyChange, bool) {
+        let stored = if self.on { 0.0 } else { stored };
+        let change = super::EnergyChange {
+            stored,
+            ..super::EnergyChange::default()
+        };
+        (change, true)
+    }
+
+    /// After the pressure: the stress change kept, the own J and F back.
+    pub fn restore(&mut self, ps: &mut Particles) {
+        if self.on {
+            self.work.record(ps, &self.own.vol, &self.own.stress);
+            self.own.restore(ps);
+        }
+    }
+
+    pub fn book(&mut self, g: &super::GridStep) -> super::EnergyChange {
+        super::EnergyChange {
+            work: self.work.book(g),
+            ..super::EnergyChange::default()
+        }
+    }
+}

@@ -8,8 +8,7 @@
 //! Energy: the stored energy its J change makes (carried), or the work of
 //! the pressure change (`carry = false`).
 
-use super::averaging::{cell_of, set_j_booked, Own};
-use super::stress_work::StressWork;
+use super::averaging::{cell_of, set_j_booked, Uncarried};
 use super::{Descriptor, EnergyChange, GridStep, Remedy, Setup, Step, Supports};
 use super::Check;
 use crate::config_error::ConfigError;
@@ -60,8 +59,7 @@ impl super::Settings for Settings {
             cell_volume: vec![0.0; cells],
             cell_volume0: vec![0.0; cells],
             cell_bad: vec![false; cells],
-            own: Own::new(if self.carry { 0 } else { n }),
-            work: StressWork::new(if self.carry { 0 } else { n }),
+            uncarried: Uncarried::new(self.carry, n),
         })
     }
 }
@@ -73,8 +71,7 @@ struct CellDilatation {
     cell_volume: Vec<f64>,
     cell_volume0: Vec<f64>,
     cell_bad: Vec<bool>,
-    own: Own,
-    work: StressWork,
+    uncarried: Uncarried,
 }
 
 impl Remedy for CellDilatation {
@@ -83,40 +80,22 @@ impl Remedy for CellDilatation {
     }
 
     fn fit_particles(&mut self, n: usize) {
-        if !self.settings.carry {
-            self.own.fit_particles(n);
-            self.work.fit_particles(n);
-        }
+        self.uncarried.fit_particles(n);
     }
 
     fn after_stress(&mut self, s: &mut Step) -> (EnergyChange, bool) {
-        if !self.settings.carry {
-            self.own.save(s.particles);
-        }
+        self.uncarried.keep(s.particles);
         let stored = self.average(s);
-        let stored = if self.settings.carry { stored } else { 0.0 };
-        (
-            EnergyChange {
-                stored,
-                ..EnergyChange::default()
-            },
-            true,
-        )
+        self.uncarried.averaged(stored)
     }
 
     fn after_pressure(&mut self, s: &mut Step) -> EnergyChange {
-        if !self.settings.carry {
-            self.work.record(s.particles, &self.own.vol, &self.own.stress);
-            self.own.restore(s.particles);
-        }
+        self.uncarried.restore(s.particles);
         EnergyChange::default()
     }
 
     fn after_grid_update(&mut self, g: &mut GridStep) -> EnergyChange {
-        EnergyChange {
-            work: self.work.book(g),
-            ..EnergyChange::default()
-        }
+        self.uncarried.book(g)
     }
 }
 

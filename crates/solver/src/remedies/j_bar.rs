@@ -16,8 +16,7 @@
 //! work of the stress and volume change (`carry = false`, booked at the grid
 //! update that uses it).
 
-use super::averaging::{averaged, set_j_booked, Averager, Own};
-use super::stress_work::StressWork;
+use super::averaging::{averaged, set_j_booked, Averager, Uncarried};
 use super::{Descriptor, EnergyChange, GridStep, Remedy, Setup, Step, Supports};
 use crate::choices::JBarFit;
 use super::Check;
@@ -97,9 +96,9 @@ impl super::Settings for Settings {
         Box::new(JBar {
             settings: self.clone(),
             averager: Averager::new(setup.grid, n, self.fit == JBarFit::Linear),
-            own: Own::new(n),
+            j_before: vec![0.0; if self.average_increment { n } else { 0 }],
             ratio: vec![0.0; n],
-            work: StressWork::new(if self.carry { 0 } else { n }),
+            uncarried: Uncarried::new(self.carry, n),
         })
     }
 }
@@ -108,10 +107,11 @@ impl super::Settings for Settings {
 struct JBar {
     settings: Settings,
     averager: Averager,
-    own: Own,
+    /// Per particle: J before this step's update (`average_increment`).
+    j_before: Vec<f64>,
     /// Per particle: this step's volume ratio J_new / J_old.
     ratio: Vec<f64>,
-    work: StressWork,
+    uncarried: Uncarried,
 }
 
 impl Remedy for JBar {
@@ -121,51 +121,37 @@ impl Remedy for JBar {
 
     fn fit_particles(&mut self, n: usize) {
         self.averager.fit_particles(n);
-        self.own.fit_particles(n);
         if self.ratio.len() < n {
             self.ratio.resize(n, 0.0);
         }
-        if !self.settings.carry {
-            self.work.fit_particles(n);
+        if self.settings.average_increment && self.j_before.len() < n {
+            self.j_before.resize(n, 0.0);
         }
+        self.uncarried.fit_particles(n);
     }
 
     fn before_stress(&mut self, s: &mut Step) -> EnergyChange {
         if self.settings.average_increment {
             // J before this step's update: the increment is averaged.
-            self.own.save(s.particles);
+            let n = s.particles.len();
+            self.j_before[..n].copy_from_slice(&s.particles.j);
         }
         EnergyChange::default()
     }
 
     fn after_stress(&mut self, s: &mut Step) -> (EnergyChange, bool) {
-        if !self.settings.carry {
-            self.own.save(s.particles);
-        }
+        self.uncarried.keep(s.particles);
         let stored = self.average(s);
-        let stored = if self.settings.carry { stored } else { 0.0 };
-        (
-            EnergyChange {
-                stored,
-                ..EnergyChange::default()
-            },
-            true,
-        )
+        self.uncarried.averaged(stored)
     }
 
     fn after_pressure(&mut self, s: &mut Step) -> EnergyChange {
-        if !self.settings.carry {
-            self.work.record(s.particles, &self.own.vol, &self.own.stress);
-            self.own.restore(s.particles);
-        }
+        self.uncarried.restore(s.particles);
         EnergyChange::default()
     }
 
     fn after_grid_update(&mut self, g: &mut GridStep) -> EnergyChange {
-        EnergyChange {
-            work: self.work.book(g),
-            ..EnergyChange::default()
-        }
+        self.uncarried.book(g)
     }
 }
 
@@ -188,11 +174,11 @@ impl JBar {
             // A state at rest is left alone.
             let n = ps.len();
             for p in 0..n {
-                self.ratio[p] = ps.j[p] / self.own.j[p];
+                self.ratio[p] = ps.j[p] / self.j_before[p];
             }
             averaged(ps, &self.ratio[..n], s.stencils, s.shape, s.grid, fit, av);
             for p in 0..n {
-                av.averaged[p] *= self.own.j[p];
+                av.averaged[p] *= self.j_before[p];
             }
         } else {
             let j = std::mem::take(&mut ps.j);

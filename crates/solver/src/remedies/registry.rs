@@ -143,28 +143,19 @@ pub(crate) fn check_supports(key: &str, sup: &Supports, cfg: &Check) -> Result<(
         );
     }
     if !sup.shapes.is_empty() && !sup.shapes.contains(&cfg.shape) {
-        return refuse(format!(
-            "needs method.shape = {} (got \"{}\")",
-            sup.shapes
-                .iter()
-                .map(|s| format!("\"{}\"", format!("{s:?}").to_lowercase()))
-                .collect::<Vec<_>>()
-                .join(" | "),
-            format!("{:?}", cfg.shape).to_lowercase()
-        ));
+        return refuse(needs("method.shape", sup.shapes, &cfg.shape));
     }
     if !sup.transfers.is_empty() && !sup.transfers.contains(&cfg.transfer) {
-        return refuse(format!(
-            "needs method.transfer = {} (got \"{}\")",
-            sup.transfers
-                .iter()
-                .map(|s| format!("\"{}\"", format!("{s:?}").to_lowercase()))
-                .collect::<Vec<_>>()
-                .join(" | "),
-            format!("{:?}", cfg.transfer).to_lowercase()
-        ));
+        return refuse(needs("method.transfer", sup.transfers, &cfg.transfer));
     }
     Ok(())
+}
+
+/// "needs KEY = "a" | "b" (got "c")", the choices spelled as in a study file.
+fn needs<T: fmt::Debug>(key: &str, allowed: &[T], got: &T) -> String {
+    let spell = |v: &T| format!("\"{}\"", format!("{v:?}").to_lowercase());
+    let allowed: Vec<String> = allowed.iter().map(spell).collect();
+    format!("needs {key} = {} (got {})", allowed.join(" | "), spell(got))
 }
 
 /// Declares the remedy modules and, from them, `RemedySettings` (one
