@@ -383,9 +383,10 @@ fn case(name: String, table: Table) -> Result<Case, KeyError> {
     if let Some(ppc) = ppc {
         params.insert("scene.ppc".into(), ppc);
     }
-    // Every method key appears in every case, defaults included.
+    // Every method key appears in every case, defaults included (a remedy
+    // switched on with every one of its settings).
     if let Ok(Value::Table(m)) = Value::try_from(&solver.method) {
-        for (k, v) in m {
+        for (k, v) in flatten(&m) {
             params.entry(format!("method.{k}")).or_insert(v);
         }
     }
