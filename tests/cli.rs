@@ -305,19 +305,49 @@ fn bad_study_files_exit_2_naming_file_key_and_range() {
     );
 }
 
+/// A TOML syntax error names the file, the line and the column (toml's span,
+/// counted from the text), quotes the line, and exits 2.
+#[test]
+fn toml_syntax_errors_name_file_line_and_column() {
+    // A malformed table header on line 3: toml stops at column 12, after `[scene.body`.
+    let e = bad(
+        "[scene]\nt_end = 0.01\n[scene.body\nrect = [0, 0, 1, 1]\n",
+        &[],
+    );
+    assert!(e.contains("not valid TOML"), "{e}");
+    assert!(e.contains("line 3, column 12"), "{e}");
+    assert!(e.contains("[scene.body"), "quotes the line: {e}");
+    // A bad value further down, after a multi-byte character on the same line.
+    let e = bad(&format!("{GOOD}\n[method]\nshape = \"é\" x\n"), &[]);
+    let line = GOOD.lines().count() + 3;
+    assert!(e.contains(&format!("line {line}, column 13")), "{e}");
+}
+
 /// The flat remedy keys of older study files exit 2 and name the sub-table
 /// that replaced them; a remedy's own table is checked like any section.
 #[test]
 fn old_flat_remedy_keys_exit_2_naming_the_new_key() {
     for (method, key, new) in [
-        ("j_bar = 1.0", "`method.j_bar`", "[method.j_bar] blend = 1.0"),
-        ("j_bar_fit = \"linear\"", "`method.j_bar_fit`", "[method.j_bar] fit"),
+        (
+            "j_bar = 1.0",
+            "`method.j_bar`",
+            "[method.j_bar] blend = 1.0",
+        ),
+        (
+            "j_bar_fit = \"linear\"",
+            "`method.j_bar_fit`",
+            "[method.j_bar] fit",
+        ),
         (
             "volume_relaxation_time = 0.16",
             "`method.volume_relaxation_time`",
             "[method.volume_relaxation] time",
         ),
-        ("shift_time = 0.02", "`method.shift_time`", "[method.shifting] time"),
+        (
+            "shift_time = 0.02",
+            "`method.shift_time`",
+            "[method.shifting] time",
+        ),
         (
             "pic_damping_time = 5e-5",
             "`method.pic_damping_time`",
@@ -333,9 +363,18 @@ fn old_flat_remedy_keys_exit_2_naming_the_new_key() {
         assert!(e.contains(key) && e.contains(new), "{method}: {e}");
     }
     let e = bad(&format!("{GOOD}\n[method.j_bar]\nblend = 2.0\n"), &[]);
-    assert!(e.contains("method.j_bar.blend") && e.contains("allowed"), "{e}");
-    let e = bad(&format!("{GOOD}\n[method.shifting]\n"), &["--set", "scene.periodic=[true, false]"]);
-    assert!(e.contains("`method.shifting`") && e.contains("walls"), "{e}");
+    assert!(
+        e.contains("method.j_bar.blend") && e.contains("allowed"),
+        "{e}"
+    );
+    let e = bad(
+        &format!("{GOOD}\n[method.shifting]\n"),
+        &["--set", "scene.periodic=[true, false]"],
+    );
+    assert!(
+        e.contains("`method.shifting`") && e.contains("walls"),
+        "{e}"
+    );
 }
 
 #[test]

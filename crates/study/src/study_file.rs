@@ -207,6 +207,41 @@ pub struct Study {
 }
 
 /// Reads, overrides, expands and validates a study file.
+/// A TOML syntax error as "line L, column C: message" (1-based, columns
+/// counted in characters), with the offending line quoted and a caret under
+/// the column, so the reader need not count. Falls back to the bare message
+/// when toml gives no span.
+fn toml_error_message(text: &str, e: &toml::de::Error) -> String {
+    let message = e
+        .message()
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join("; ");
+    let Some(span) = e.span() else {
+        return format!("not valid TOML: {message}");
+    };
+    let (line, column) = line_column(text, span.start);
+    let source = text.lines().nth(line - 1).unwrap_or("");
+    let caret = format!("{}^", " ".repeat(column - 1));
+    format!(
+        "not valid TOML at line {line}, column {column}: {message}\n  {line:>4} | {source}\n       | {caret}"
+    )
+}
+
+/// The 1-based line and column (in characters) of byte offset `at` in `text`.
+fn line_column(text: &str, at: usize) -> (usize, usize) {
+    let mut at = at.min(text.len());
+    while !text.is_char_boundary(at) {
+        at -= 1;
+    }
+    let before = &text[..at];
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    (line, before[line_start..].chars().count() + 1)
+}
+
 pub fn load(path: &Path, overrides: &[String]) -> Result<Study, StudyError> {
     let file = path.display().to_string();
     let err = |key: &str, message: String| StudyError {
@@ -217,7 +252,7 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Study, StudyError> {
     let text = std::fs::read_to_string(path).map_err(|e| err("", format!("cannot read: {e}")))?;
     let mut root: Table = text
         .parse()
-        .map_err(|e: toml::de::Error| err("", format!("not valid TOML: {}", e.message())))?;
+        .map_err(|e: toml::de::Error| err("", toml_error_message(&text, &e)))?;
     for o in overrides {
         let (key, value) = parse_override(o).map_err(|m| err(o, m))?;
         set_path(&mut root, &key, value).map_err(|m| err(&key, m))?;
@@ -807,6 +842,21 @@ mod tests {
             .unwrap()
             .remove("v")
             .unwrap()
+    }
+
+    #[test]
+    fn line_column_counts_lines_and_characters_from_one() {
+        let text = "a = 1\nbé = 2\n\nc";
+        assert_eq!(line_column(text, 0), (1, 1));
+        assert_eq!(line_column(text, 4), (1, 5));
+        assert_eq!(line_column(text, 6), (2, 1));
+        // After the two-byte é, byte 9 is the third character; byte 8
+        // (inside é) counts as é.
+        assert_eq!(line_column(text, 9), (2, 3));
+        assert_eq!(line_column(text, 8), (2, 2));
+        assert_eq!(line_column(text, 14), (3, 1));
+        assert_eq!(line_column(text, 15), (4, 1));
+        assert_eq!(line_column(text, 99), (4, 2));
     }
 
     #[test]
