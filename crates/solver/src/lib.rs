@@ -116,7 +116,7 @@ pub struct Solver {
     stencils: Vec<Stencil>,
     bins: Bins,
     measure_partials: Vec<measure::Partial>,
-    partials_stress: Vec<[f64; 2]>,
+    partials_stress: Vec<stages::stress::Partial>,
     gravity: Vec2,
     step: u64,
     time: f64,
@@ -195,7 +195,7 @@ impl Solver {
             stencils: vec![Stencil::default(); n],
             bins: Bins::new(grid.dims, n),
             measure_partials: vec![measure::Partial::default(); chunks],
-            partials_stress: vec![[0.0; 2]; chunks],
+            partials_stress: vec![Default::default(); chunks],
             grid,
             particles,
             cfg,
@@ -382,7 +382,7 @@ impl Solver {
         if self.measure_partials.len() < chunks {
             self.measure_partials
                 .resize(chunks, measure::Partial::default());
-            self.partials_stress.resize(chunks, [0.0; 2]);
+            self.partials_stress.resize(chunks, Default::default());
         }
         self.xpic.fit_particles(n);
         self.remedies.fit_particles(n);

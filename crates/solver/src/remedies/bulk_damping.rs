@@ -71,9 +71,9 @@ impl Remedy for BulkDamping {
     fn point_rule(&self) -> Option<Arc<dyn PointRule>> {
         Some(Arc::new(self.clone()))
     }
-    fn point_work(&self, stress_work: f64) -> EnergyChange {
+    fn point_work(&self, dissipated: f64) -> EnergyChange {
         EnergyChange {
-            work: -stress_work,
+            work: -dissipated,
             ..EnergyChange::default()
         }
     }

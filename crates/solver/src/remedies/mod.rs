@@ -183,11 +183,16 @@ pub trait Remedy: Send + Sync + RemedyClone {
     fn after_pressure(&mut self, _s: &mut Step) -> EnergyChange {
         EnergyChange::default()
     }
-    /// The energy the point rule removed this step (its work, negative).
-    fn point_work(&self, _stress_work: f64) -> EnergyChange {
+    /// The energy change of this step's work of its point rule's extra
+    /// stress (`dissipated`: the work the stage summed for this rule).
+    fn point_work(&self, _dissipated: f64) -> EnergyChange {
         EnergyChange::default()
     }
 }
+
+/// The most point rules one method may have: the stress stage sums each
+/// rule's work apart in a fixed array.
+pub const MAX_POINT_RULES: usize = 4;
 
 /// Per-particle rules inside the stress stage's loop (kept there so that
 /// their arithmetic and its order are the loop's own).
@@ -231,18 +236,28 @@ impl Clone for Box<dyn Remedy> {
 pub struct Remedies {
     pub(crate) list: Vec<Box<dyn Remedy>>,
     pub(crate) energy: Vec<EnergyChange>,
-    /// The point rules, gathered once.
+    /// The point rules, gathered once, and the remedy each belongs to.
     pub(crate) points: Vec<Arc<dyn PointRule>>,
+    point_owner: Vec<usize>,
 }
 
 impl Remedies {
     pub fn build(settings: &RemedySettings, setup: &Setup) -> Self {
         let list: Vec<Box<dyn Remedy>> = settings.active().iter().map(|s| s.build(setup)).collect();
-        let points = list.iter().filter_map(|r| r.point_rule()).collect();
+        let (point_owner, points): (Vec<usize>, Vec<Arc<dyn PointRule>>) = list
+            .iter()
+            .enumerate()
+            .filter_map(|(i, r)| Some((i, r.point_rule()?)))
+            .unzip();
+        debug_assert!(
+            points.len() <= MAX_POINT_RULES,
+            "more point rules than the stress stage books apart"
+        );
         Remedies {
             energy: vec![EnergyChange::default(); list.len()],
             list,
             points,
+            point_owner,
         }
     }
 
@@ -294,10 +309,10 @@ impl Remedies {
         }
     }
 
-    /// The point rules' share of the stress stage's dissipated work.
-    pub(crate) fn book_point_work(&mut self, work: f64) {
-        for (r, e) in self.list.iter_mut().zip(&mut self.energy) {
-            *e += r.point_work(work);
+    /// Each point rule's share of the stress stage's dissipated work.
+    pub(crate) fn book_point_work(&mut self, work: &[f64]) {
+        for (&owner, w) in self.point_owner.iter().zip(work) {
+            self.energy[owner] += self.list[owner].point_work(*w);
         }
     }
 

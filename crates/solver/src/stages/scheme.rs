@@ -180,7 +180,7 @@ fn stress(s: &mut Solver, which: StressVelocity, clock: &mut Instant) {
     let (dissipated, rule_work) = stress::update(&inputs, &mut s.particles, &mut s.partials_stress);
     s.dissipated += dissipated;
     if !s.remedies.is_empty() {
-        s.remedies.book_point_work(rule_work);
+        s.remedies.book_point_work(&rule_work);
         s.remedies.after_stress(&mut step_view!(s));
     }
     lap(&mut s.times.stress, clock);

@@ -13,6 +13,12 @@ use crate::viscosity;
 use rayon::prelude::*;
 use std::sync::Arc;
 
+/// The most per-particle rules a step applies (each books its own work).
+pub use crate::remedies::MAX_POINT_RULES as MAX_RULES;
+
+/// A chunk's sums: the dissipated work, then each rule's share of it.
+pub type Partial = [f64; 1 + MAX_RULES];
+
 pub struct Inputs<'a> {
     pub stencils: &'a [Stencil],
     pub shape: &'a Shape,
@@ -24,7 +30,8 @@ pub struct Inputs<'a> {
     pub dt: f64,
     /// MLS-MPM: the velocity gradient is the particle's affine matrix C.
     pub mls: bool,
-    /// The remedies' per-particle rules (F kept, extra stress), in order.
+    /// The remedies' per-particle rules (F kept, extra stress), in order;
+    /// at most `MAX_RULES`.
     pub rules: &'a [Arc<dyn PointRule>],
     /// `scene.on_inversion = "delete"`: a particle that inverts here carries
     /// no stress (it is deleted at the end of the step; under USF its
@@ -34,8 +41,12 @@ pub struct Inputs<'a> {
 
 /// Updates F, J, V, stress, pressure, |dev D| and xi; returns the energy
 /// dissipated this step (viscous work, the rules' extra stress and what
-/// softening released) and the rules' share of it.
-pub fn update(inputs: &Inputs, particles: &mut Particles, partials: &mut [[f64; 2]]) -> (f64, f64) {
+/// softening released) and each rule's share of it.
+pub fn update(
+    inputs: &Inputs,
+    particles: &mut Particles,
+    partials: &mut [Partial],
+) -> (f64, [f64; MAX_RULES]) {
     crate::shapes::with_width!(inputs.shape, W => run::<W>(inputs, particles, partials))
 }
 
@@ -70,8 +81,8 @@ fn velocity_gradient<const W: usize>(
 fn run<const W: usize>(
     inputs: &Inputs,
     particles: &mut Particles,
-    partials: &mut [[f64; 2]],
-) -> (f64, f64) {
+    partials: &mut [Partial],
+) -> (f64, [f64; MAX_RULES]) {
     let Inputs {
         stencils,
         shape,
@@ -125,7 +136,7 @@ fn run<const W: usize>(
                 (st, affine),
                 work,
             )| {
-                let (mut acc, mut rule_acc) = (0.0, 0.0);
+                let (mut acc, mut rule_acc) = (0.0, [0.0; MAX_RULES]);
                 // This step's history increments (softening solids only).
                 let mut dxi = [0.0; CHUNK];
                 for k in 0..f.len() {
@@ -160,12 +171,14 @@ fn run<const W: usize>(
                         dxi[k] = crate::solid_neo_hookean::history_increment(&d, dt);
                     }
                     acc += visc.power * vol[k] * dt;
-                    for rule in rules {
+                    for (r, rule) in rules.iter().enumerate() {
                         // The wave speed is the previous step's (the EOS runs below).
                         if let Some((s, power)) = rule.extra_stress(m, wave[k], grid.h, &d) {
                             stress[k] += s;
                             acc += power * vol[k] * dt;
-                            rule_acc += power * vol[k] * dt;
+                            if let Some(w) = rule_acc.get_mut(r) {
+                                *w += power * vol[k] * dt;
+                            }
                         }
                     }
                 }
@@ -204,14 +217,15 @@ fn run<const W: usize>(
                     }
                 }
                 work[0] = acc;
-                work[1] = rule_acc;
+                work[1..].copy_from_slice(&rule_acc);
             },
         );
     let parts = &partials[..n_chunks];
-    (
-        parts.iter().map(|w| w[0]).sum(),
-        parts.iter().map(|w| w[1]).sum(),
-    )
+    let mut rule_work = [0.0; MAX_RULES];
+    for (r, w) in rule_work.iter_mut().enumerate() {
+        *w = parts.iter().map(|p| p[1 + r]).sum();
+    }
+    (parts.iter().map(|p| p[0]).sum(), rule_work)
 }
 
 /// The EOS particle by particle when several materials are present.
