@@ -4,6 +4,7 @@
 
 pub mod bench;
 pub mod case_checkpoint;
+pub mod labels;
 pub mod matrix;
 pub mod metrics;
 pub mod output_files;

@@ -322,7 +322,7 @@ fn main() -> ExitCode {
                     .scene
                     .materials
                     .iter()
-                    .map(|m| format!("{:?} K={} gamma={} mu={}", m.eos, m.k, m.gamma, m.viscosity))
+                    .map(study::labels::named_material_label)
                     .collect();
                 let line = writeln!(
                     out,

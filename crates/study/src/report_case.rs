@@ -115,6 +115,13 @@ fn summary_section(c: &CaseInputs, page: &mut Page) {
         s.wall_s,
         s.particle_steps_per_s / 1e6
     ));
+    let materials: Vec<String> = c
+        .scene
+        .materials
+        .iter()
+        .map(|m| escape(&crate::labels::named_material_label(m)))
+        .collect();
+    page.p(&format!("Materials: {}.", materials.join("; ")));
     page.h2("Metrics");
     let rows: Vec<(String, Vec<Cell>)> = match serde_json::to_value(&s.metrics) {
         Ok(serde_json::Value::Object(m)) => m

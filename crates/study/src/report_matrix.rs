@@ -201,6 +201,32 @@ fn param_or_default(
         .unwrap_or_default()
 }
 
+/// A param as the matrix labels it: a material's `eos` by its own
+/// parameters (`labels::eos_label_of_params`: "power gamma=7", "tait
+/// C=0.0894", "linear"), its `gamma` as "-" unless it is a power law (only
+/// the power law has one); any other key as `param_or_default`.
+fn axis_text(
+    params: &BTreeMap<String, serde_json::Value>,
+    key: &str,
+    defaults: &serde_json::Value,
+) -> String {
+    let material = key
+        .strip_prefix("materials.")
+        .and_then(|k| k.rsplit_once('.'))
+        .map(|(name, field)| (format!("materials.{name}"), field));
+    let raw = |k: &str| param_or_default(params, k, defaults);
+    match material {
+        Some((m, "eos")) => {
+            let (eos, gamma) = (raw(&format!("{m}.eos")), raw(&format!("{m}.gamma")));
+            crate::labels::eos_label_of_params(Some(&eos), Some(&gamma)).unwrap_or(eos)
+        }
+        Some((m, "gamma")) if !matches!(raw(&format!("{m}.eos")).as_str(), "" | "power") => {
+            "-".into()
+        }
+        _ => raw(key),
+    }
+}
+
 /// The rows of a matrix, sorted by the varying parameters, and those parameters' keys.
 pub struct Matrix {
     pub axes: Vec<String>,
@@ -225,8 +251,8 @@ impl Matrix {
             .filter(|k| !ENSEMBLE_KEYS.contains(&k.as_str()))
             .collect();
         let defaults = method_defaults();
-        let text = |s: &Summary, k: &String| param_or_default(&s.params, k, &defaults);
-        let axes: Vec<String> = keys
+        let text = |s: &Summary, k: &String| axis_text(&s.params, k, &defaults);
+        let varying: Vec<String> = keys
             .into_iter()
             .filter(|k| {
                 summaries
@@ -235,6 +261,16 @@ impl Matrix {
                     .collect::<BTreeSet<_>>()
                     .len()
                     > 1
+            })
+            .cloned()
+            .collect();
+        // A material's `eos` axis is labelled with its gamma (power law
+        // only): its `gamma` axis would repeat it.
+        let axes: Vec<String> = varying
+            .iter()
+            .filter(|k| {
+                !k.strip_suffix(".gamma")
+                    .is_some_and(|m| varying.contains(&format!("{m}.eos")))
             })
             .cloned()
             .collect();
@@ -834,5 +870,36 @@ mod tests {
         assert_eq!(text("method.transfer"), "flip");
         assert_eq!(text("materials.water.K"), "");
         assert_eq!(text("method.no_such_key"), "");
+    }
+
+    /// A Tait or linear material never reads "gamma 7": its `eos` axis
+    /// carries its own parameter and its `gamma` does not apply.
+    #[test]
+    fn materials_are_labelled_by_their_own_eos_parameters() {
+        let defaults = method_defaults();
+        let params = |eos: Option<&str>, gamma: f64| {
+            let mut p = BTreeMap::new();
+            if let Some(eos) = eos {
+                p.insert("materials.water.eos".to_string(), serde_json::json!(eos));
+            }
+            p.insert(
+                "materials.water.gamma".to_string(),
+                serde_json::json!(gamma),
+            );
+            p.insert("materials.water.K".to_string(), serde_json::json!(1.5e4));
+            p
+        };
+        let text = |p: &BTreeMap<String, serde_json::Value>, k: &str| axis_text(p, k, &defaults);
+        let tait = params(Some("tait"), 7.0);
+        assert_eq!(text(&tait, "materials.water.eos"), "tait C=0.0894");
+        assert_eq!(text(&tait, "materials.water.gamma"), "-");
+        let power = params(Some("power"), 4.0);
+        assert_eq!(text(&power, "materials.water.eos"), "power gamma=4");
+        assert_eq!(text(&power, "materials.water.gamma"), "4");
+        let default = params(None, 7.0);
+        assert_eq!(text(&default, "materials.water.eos"), "power gamma=7");
+        let linear = params(Some("linear"), 7.0);
+        assert_eq!(text(&linear, "materials.water.eos"), "linear");
+        assert_eq!(text(&linear, "materials.water.K"), "1.5e4");
     }
 }
