@@ -48,8 +48,22 @@ fn run_completes_and_writes_the_case_folder() {
     let csv = std::fs::read_to_string(dir.join("timeseries.csv")).unwrap();
     let last = csv.lines().last().unwrap();
     assert!(last.starts_with(&format!("{steps},")), "{last}");
-    let vtk: Vec<_> = std::fs::read_dir(dir.join("particles")).unwrap().collect();
-    assert!(vtk.len() >= 2);
+    // Particle files as .vtu, one ParaView time series (.pvd) listing them all.
+    let vtu: Vec<String> = std::fs::read_dir(dir.join("particles"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".vtu"))
+        .collect();
+    assert!(vtu.len() >= 2, "{vtu:?}");
+    let pvd = std::fs::read_to_string(dir.join("particles").join("particles.pvd")).unwrap();
+    for f in &vtu {
+        assert!(pvd.contains(&format!("file=\"{f}\"")), "{f} in {pvd}");
+    }
+    assert!(pvd.contains("timestep=\"0\""), "{pvd}");
+    let last =
+        study::snapshot::read_file(&dir.join("particles").join(vtu.iter().max().unwrap())).unwrap();
+    assert_eq!(last.x.len(), 3200);
+    assert_eq!(last.t, s.t_end);
     let parquet = std::fs::read(dir.join("timeseries.parquet")).unwrap();
     assert_eq!(&parquet[..4], b"PAR1");
     let header = csv.lines().next().unwrap();
@@ -865,7 +879,7 @@ dv = [1.0, 0.0]
     );
     assert!(replay
         .join("particles")
-        .join(format!("particles_{first:09}.vtk"))
+        .join(format!("particles_{first:09}.vtu"))
         .exists());
 
     // Unknown event and a corrupted checkpoint: clear errors, exit 2.

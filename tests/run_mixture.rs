@@ -78,9 +78,15 @@ fn drag_decay_study_meets_the_exact_and_discrete_decay() {
             }
             let step = s.steps;
             for phase in ["solid", "fluid"] {
-                let vtk = dir.join("particles").join(format!("{phase}_{step:09}.vtk"));
+                let vtk = dir.join("particles").join(format!("{phase}_{step:09}.vtu"));
                 assert!(vtk.exists(), "{}", vtk.display());
             }
+            // One ParaView time series: the phases are parts of each step.
+            let pvd = std::fs::read_to_string(dir.join("particles").join("particles.pvd")).unwrap();
+            assert!(
+                pvd.contains(&format!("part=\"1\" file=\"solid_{step:09}.vtu\"")),
+                "{pvd}"
+            );
             seen += 1;
         }
     }

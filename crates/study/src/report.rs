@@ -57,16 +57,3 @@ pub(crate) fn text_column(df: &DataFrame, name: &str) -> Option<Vec<String>> {
             .collect(),
     )
 }
-
-/// The `.vtk` files of a folder, sorted by name (= by step).
-pub(crate) fn vtk_files(dir: &Path) -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map(|r| {
-            r.filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|x| x == "vtk"))
-                .collect()
-        })
-        .unwrap_or_default();
-    v.sort();
-    v
-}

@@ -9,9 +9,10 @@ use crate::plot_case::{
     TimeseriesFigure,
 };
 use crate::plot_common::{err, render, short, Res};
-use crate::report::{f64_column, read_parquet, vtk_files};
+use crate::report::{f64_column, read_parquet};
 use crate::report_html::{escape, Cell, Page};
 use crate::run_case::front_wall_z;
+use crate::snapshot::particle_files;
 use crate::snapshot::Snapshot;
 use crate::study_file;
 use crate::summary::Summary;
@@ -75,8 +76,7 @@ impl CaseInputs {
 }
 
 fn load_snapshot(path: &Path) -> Res<Snapshot> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    Snapshot::from_vtk(&text).map_err(|e| format!("{}: {e}", path.display()))
+    crate::snapshot::read_file(path)
 }
 
 /// The per-case page; returns its path.
@@ -288,7 +288,7 @@ fn timeseries_section(c: &CaseInputs, page: &mut Page) -> Res {
 
 /// Particle maps at four of the study's times, and late pressure against depth.
 fn particles_section(c: &CaseInputs, page: &mut Page) -> Res {
-    let files = vtk_files(&c.dir.join("particles"));
+    let files = particle_files(&c.dir.join("particles"));
     let Some(last_file) = files.last() else {
         return Ok(());
     };
@@ -350,7 +350,7 @@ fn particles_section(c: &CaseInputs, page: &mut Page) -> Res {
 /// One event: before, at and after with its region outlined, and an animation.
 fn event_section(c: &CaseInputs, e: &Event, page: &mut Page) -> Res {
     let id = e.id;
-    let files = vtk_files(&c.dir.join("particles").join(format!("event_{id}")));
+    let files = particle_files(&c.dir.join("particles").join(format!("event_{id}")));
     if files.is_empty() {
         return Ok(());
     }

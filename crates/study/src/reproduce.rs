@@ -7,7 +7,7 @@
 use crate::case_checkpoint;
 use crate::output_files::write_atomic;
 use crate::run_case::{with_threads, Driver, Stepped};
-use crate::snapshot::Snapshot;
+use crate::snapshot::{self, Snapshot};
 use crate::study_file;
 use crate::summary::Summary;
 use crate::tables;
@@ -118,11 +118,7 @@ pub fn reproduce(
             d.push_row(false);
             if step >= vtk_from {
                 let v = d.solver.view();
-                write_atomic(
-                    &out.join("particles")
-                        .join(format!("particles_{step:09}.vtk")),
-                    &Snapshot::of(&v).vtk(),
-                )?;
+                snapshot::write_file(&out.join("particles"), "particles", &Snapshot::of(&v))?;
             }
             if step == logged.first_step {
                 hash_at_first = Some(format!("{:016x}", d.solver.state_hash()));
@@ -168,6 +164,7 @@ fn finish(
         hash_at_first,
         replayed,
     } = replay;
+    snapshot::write_collections(&out.join("particles"))?;
     let mut diverged = vec![];
     match (&hash_at_first, &logged.state_hash) {
         (Some(h), Some(l)) if h == l => {}

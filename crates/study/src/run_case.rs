@@ -7,7 +7,7 @@ use crate::case_checkpoint;
 use crate::metrics;
 use crate::output_files::write_atomic;
 use crate::run_mixture;
-use crate::snapshot::Snapshot;
+use crate::snapshot::{self, Snapshot};
 use crate::study_file::Case;
 use crate::summary::{Metrics, PhaseSummary, Status, Summary, SCHEMA_VERSION};
 use crate::tables;
@@ -129,6 +129,8 @@ pub fn run_case(case: &Case, dir: &Path, opts: &RunOptions) -> std::io::Result<S
         })
     }));
     let wall_s = started.elapsed().as_secs_f64();
+    // ParaView's time series of what was written, however the run ended.
+    snapshot::write_collections(&dir.join("particles"))?;
     let run = match outcome {
         Ok(r) => r?,
         Err(panic) => Simulated::failed(format!("panic: {}", panic_message(panic))),
@@ -316,11 +318,7 @@ impl EventFrames {
     }
 
     fn write(dir: &Path, id: u32, snap: &Snapshot) -> std::io::Result<()> {
-        write_atomic(
-            &dir.join(format!("event_{id}"))
-                .join(format!("particles_{:09}.vtk", snap.step)),
-            &snap.vtk(),
-        )
+        snapshot::write_file(&dir.join(format!("event_{id}")), "particles", snap)
     }
 
     /// Events `ids` opened at `step`: the recent frames and this one.
@@ -360,7 +358,7 @@ impl EventFrames {
     }
 }
 
-/// VTK files at the study's times (`output.vtk_times`), in order.
+/// Particle files at the study's times (`output.vtk_times`), in order.
 struct VtkSchedule {
     dir: PathBuf,
     times: Vec<f64>,
@@ -378,11 +376,7 @@ impl VtkSchedule {
     }
 
     fn write(&self, s: &Solver) -> std::io::Result<()> {
-        let v = s.view();
-        write_atomic(
-            &self.dir.join(format!("particles_{:09}.vtk", v.step)),
-            &Snapshot::of(&v).vtk(),
-        )
+        snapshot::write_file(&self.dir, "particles", &Snapshot::of(&s.view()))
     }
 
     /// Writes one file per time reached since the last call.

@@ -9,9 +9,8 @@
 
 use crate::case_checkpoint;
 use crate::metrics::{self, line_fit};
-use crate::output_files::write_atomic;
 use crate::run_case::{CheckpointRing, RunOptions, Simulated};
-use crate::snapshot::Snapshot;
+use crate::snapshot::{self, Snapshot};
 use crate::study_file::{Case, MixtureSpec};
 use crate::summary::{Metrics, PhaseSummary, Status};
 use crate::tables;
@@ -740,10 +739,7 @@ impl MixtureRows {
 fn write_vtk(dir: &Path, mix: &Mixture) -> std::io::Result<()> {
     for phase in Phase::ALL {
         let v = mix.phase(phase.index()).view();
-        write_atomic(
-            &dir.join(format!("{}_{:09}.vtk", phase.name(), v.step)),
-            &Snapshot::of(&v).vtk(),
-        )?;
+        snapshot::write_file(dir, phase.name(), &Snapshot::of(&v))?;
     }
     Ok(())
 }
