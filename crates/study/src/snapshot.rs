@@ -450,9 +450,9 @@ impl Snapshot {
                     .collect(),
             ))
         };
-        let pairs = |v: Vec<f64>| -> Vec<Vec2> {
+        fn pairs(v: Vec<f64>) -> Vec<Vec2> {
             v.chunks_exact(3).map(|c| Vec2::new(c[0], c[1])).collect()
-        };
+        }
         snap.x = pairs(values("Points", 3)?.ok_or("no points")?);
         snap.v = values("velocity", 3)?
             .map(pairs)
