@@ -19,6 +19,7 @@ pub mod report_html;
 pub mod report_matrix;
 pub mod report_mixture;
 pub mod report_refinement;
+pub mod report_verdict;
 pub mod reproduce;
 pub mod run_case;
 pub mod run_mixture;

@@ -4,7 +4,7 @@
 //! hallmark), that blew up, and the survival time as median [min, max].
 
 use crate::report_html::{Cell, Page};
-use crate::report_matrix::{spread_text, Matrix, Row};
+use crate::report_matrix::{median, spread_text, Matrix, Row};
 use crate::summary::Status;
 use std::collections::BTreeMap;
 
@@ -128,6 +128,60 @@ fn method_cells(label: &str, runs: &[&Row]) -> Vec<Cell> {
     ]
 }
 
+/// One method's standing for the verdict.
+pub struct MethodStanding {
+    pub label: String,
+    pub runs: usize,
+    /// Runs that completed without a kick.
+    pub clean: usize,
+    /// Median late hydrostatic departure over its completed runs.
+    pub late: Option<f64>,
+}
+
+/// The `k` methods that best avoid the kick: by the share of their runs
+/// that completed without one, then by the median late hydrostatic
+/// departure of their completed runs. Empty when no method key varies.
+pub fn best_methods(m: &Matrix, k: usize) -> Vec<MethodStanding> {
+    let base = baseline(m);
+    if base.is_empty() {
+        return vec![];
+    }
+    let groups = method_groups(m, &base);
+    if groups.len() < 2 {
+        return vec![];
+    }
+    let mut v: Vec<MethodStanding> = groups
+        .iter()
+        .map(|(label, runs)| {
+            let completed = || {
+                runs.iter()
+                    .filter(|r| r.summary.status == Status::Completed)
+            };
+            let late: Vec<f64> = completed()
+                .filter_map(|r| r.summary.metrics.hydro_rel_rms_late)
+                .collect();
+            MethodStanding {
+                label: label.clone(),
+                runs: runs.len(),
+                clean: completed()
+                    .filter(|r| !r.summary.events.iter().any(|e| e.is_kick()))
+                    .count(),
+                late: median(&late),
+            }
+        })
+        .collect();
+    let share = |s: &MethodStanding| s.clean as f64 / s.runs.max(1) as f64;
+    v.sort_by(|a, b| {
+        share(b).total_cmp(&share(a)).then(
+            a.late
+                .unwrap_or(f64::INFINITY)
+                .total_cmp(&b.late.unwrap_or(f64::INFINITY)),
+        )
+    });
+    v.truncate(k);
+    v
+}
+
 pub fn ablation_table(m: &Matrix, page: &mut Page) {
     let base = baseline(m);
     if base.is_empty() {
@@ -236,6 +290,17 @@ mod tests {
         assert_eq!(apic[column("late departure")], "0.300 [0.200, 0.400]");
         assert_eq!(apic[column("late checkerboard")], "0.200 [0.100, 0.300]");
         assert_eq!(apic[column("wall (s)")], "30");
+        // PIC's one run completed without a kick; the baseline's one of three.
+        let best = best_methods(&m, 3);
+        let order: Vec<(&str, usize, usize)> = best
+            .iter()
+            .map(|b| (b.label.as_str(), b.clean, b.runs))
+            .collect();
+        assert_eq!(order, [("transfer = pic", 1, 1), ("baseline", 1, 3)]);
+        assert!(
+            (best[1].late.unwrap() - 0.3).abs() < 1e-12,
+            "the median of 0.2 and 0.4"
+        );
         let pic = cells(1);
         assert_eq!(pic[column("kicked")], "0 %", "an impact is not a kick");
         assert_eq!(pic[column("late departure")], "0.050");

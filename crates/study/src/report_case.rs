@@ -1,6 +1,7 @@
-//! The per-case report page: summary, metrics, events, time series, surge
-//! front, particle maps, pressure against depth, and each event before, at
-//! and after (with an animation).
+//! The per-case report page: the verdict (status, kicks by cause with their
+//! times and places), the first kick before, at and after, the metrics that
+//! apply, events, time series, surge front, particle maps, pressure against
+//! depth, and each other event before, at and after (with an animation).
 
 use crate::metrics::martin_moyce;
 use crate::output_files::write_atomic;
@@ -11,6 +12,7 @@ use crate::plot_case::{
 use crate::plot_common::{err, render, short, Res};
 use crate::report::{f64_column, read_parquet};
 use crate::report_html::{escape, Cell, Page};
+use crate::report_verdict;
 use crate::run_case::front_wall_z;
 use crate::snapshot::particle_files;
 use crate::snapshot::Snapshot;
@@ -79,16 +81,27 @@ fn load_snapshot(path: &Path) -> Res<Snapshot> {
     crate::snapshot::read_file(path)
 }
 
-/// The per-case page; returns its path.
+/// The per-case page; returns its path. It opens with the verdict (how the
+/// run ended, its kicks by cause with times and places), then the picture
+/// of the first kick, then the metrics that apply to the scene.
 pub fn case_report(dir: &Path) -> Res<PathBuf> {
     let c = CaseInputs::read(dir)?;
     let mut page = Page::default();
-    summary_section(&c, &mut page);
-    events_section(&c.summary.events, &mut page);
+    verdict_section(&c, &mut page);
+    let events = &c.summary.events;
+    let first_kick = report_verdict::kicks(events).first().copied();
+    if let Some(e) = first_kick {
+        event_section(&c, e, "First kick: ", &mut page)?;
+    }
+    metrics_section(&c, &mut page);
+    events_section(&c, &mut page);
     timeseries_section(&c, &mut page)?;
     particles_section(&c, &mut page)?;
-    for e in &c.summary.events {
-        event_section(&c, e, &mut page)?;
+    for e in events
+        .iter()
+        .filter(|e| !first_kick.is_some_and(|f| std::ptr::eq(*e, f)))
+    {
+        event_section(&c, e, "", &mut page)?;
     }
     let index = c.out.join("index.html");
     write_atomic(
@@ -100,46 +113,109 @@ pub fn case_report(dir: &Path) -> Res<PathBuf> {
     Ok(index)
 }
 
-fn summary_section(c: &CaseInputs, page: &mut Page) {
+/// Status, kicks by cause with their times and places, materials, cost.
+fn verdict_section(c: &CaseInputs, page: &mut Page) {
     let s = &c.summary;
-    let reason = if s.reason.is_empty() {
-        String::new()
-    } else {
-        format!(" ({})", escape(&s.reason))
-    };
-    page.p(&format!(
-        "Status <b>{}</b>{reason} after {} steps, t = {:.4} s; wall {:.1} s, {:.2} M particle-steps/s.",
-        s.status.as_str(),
-        s.steps,
-        s.t_end,
-        s.wall_s,
-        s.particle_steps_per_s / 1e6
-    ));
+    page.begin_section("verdict");
+    page.h2("Verdict");
+    page.p(&report_verdict::status_sentence(s));
+    page.p(&report_verdict::kicks_sentence(&s.events, &c.scene));
+    causes_table(c, page);
     let materials: Vec<String> = c
         .scene
         .materials
         .iter()
         .map(|m| escape(&crate::labels::named_material_label(m)))
         .collect();
-    page.p(&format!("Materials: {}.", materials.join("; ")));
-    page.h2("Metrics");
-    let rows: Vec<(String, Vec<Cell>)> = match serde_json::to_value(&s.metrics) {
-        Ok(serde_json::Value::Object(m)) => m
-            .iter()
-            .map(|(k, v)| {
-                let shown = match v {
-                    serde_json::Value::Null => "-".into(),
-                    v => v.as_f64().map(short).unwrap_or_else(|| v.to_string()),
-                };
-                (String::new(), vec![Cell::Text(k.clone()), Cell::Num(shown)])
-            })
-            .collect(),
-        _ => vec![],
-    };
-    page.table("", &[], &rows);
+    page.p(&format!(
+        "Materials: {}. {} particles; wall {:.1} s, {:.2} M particle-steps/s.",
+        materials.join("; "),
+        s.particles,
+        s.wall_s,
+        s.particle_steps_per_s / 1e6
+    ));
+    page.end_section();
 }
 
-fn events_section(events: &[Event], page: &mut Page) {
+/// Events by cause, kicks first: how many, and the times and places of the
+/// first three.
+fn causes_table(c: &CaseInputs, page: &mut Page) {
+    const SHOWN: usize = 3;
+    let events = &c.summary.events;
+    let rows: Vec<(String, Vec<Cell>)> = report_verdict::CAUSE_ORDER
+        .iter()
+        .filter_map(|&cause| {
+            let mut of: Vec<&Event> = events.iter().filter(|e| e.cause == cause).collect();
+            let first = *of.first()?;
+            of.sort_by(|a, b| a.t.total_cmp(&b.t));
+            let mut places: Vec<String> = of
+                .iter()
+                .take(SHOWN)
+                .map(|e| {
+                    format!(
+                        "t = {:.4} s, step {}: {}",
+                        e.t,
+                        e.first_step,
+                        escape(&report_verdict::place(&e.region, &c.scene))
+                    )
+                })
+                .collect();
+            if of.len() > SHOWN {
+                places.push(format!("and {} more", of.len() - SHOWN));
+            }
+            let kind = if first.is_kick() {
+                "kick"
+            } else {
+                "not a kick"
+            };
+            Some((
+                String::new(),
+                vec![
+                    Cell::Text(format!(
+                        "<span style=\"color:{}\">{}</span> ({kind})",
+                        cause_css(first),
+                        cause.name()
+                    )),
+                    Cell::Num(of.len().to_string()),
+                    Cell::Text(places.join("<br>")),
+                ],
+            ))
+        })
+        .collect();
+    if rows.is_empty() {
+        page.p("No event.");
+        return;
+    }
+    let headers = ["cause", "events", "times and places (first three)"].map(String::from);
+    page.table("causes", &headers, &rows);
+}
+
+/// The metrics that apply to this scene, with units (report_verdict).
+fn metrics_section(c: &CaseInputs, page: &mut Page) {
+    page.h2("Metrics");
+    let rows: Vec<(String, Vec<Cell>)> = report_verdict::metric_rows(&c.summary.metrics)
+        .into_iter()
+        .map(|r| {
+            (
+                String::new(),
+                vec![
+                    Cell::Text(escape(r.label)),
+                    Cell::Num(r.value),
+                    Cell::Text(escape(r.unit)),
+                ],
+            )
+        })
+        .collect();
+    if rows.is_empty() {
+        page.p("No metric is defined for this run.");
+        return;
+    }
+    let headers = ["metric", "value", "unit"].map(String::from);
+    page.table("metrics", &headers, &rows);
+}
+
+fn events_section(c: &CaseInputs, page: &mut Page) {
+    let events = &c.summary.events;
     page.h2("Events");
     if events.is_empty() {
         page.p("No event.");
@@ -150,7 +226,7 @@ fn events_section(events: &[Event], page: &mut Page) {
         "kind",
         "first step",
         "t (s)",
-        "region (m)",
+        "place",
         "particles",
         "peak a/g",
         "peak z",
@@ -169,7 +245,6 @@ fn events_section(events: &[Event], page: &mut Page) {
     let rows: Vec<(String, Vec<Cell>)> = events
         .iter()
         .map(|e| {
-            let r = &e.region;
             (
                 String::new(),
                 vec![
@@ -177,10 +252,7 @@ fn events_section(events: &[Event], page: &mut Page) {
                     Cell::Text(kind_name(e.kind)),
                     Cell::Num(e.first_step.to_string()),
                     Cell::Num(format!("{:.4}", e.t)),
-                    Cell::Text(format!(
-                        "x {:.3}-{:.3}, y {:.3}-{:.3}",
-                        r.x_min, r.x_max, r.y_min, r.y_max
-                    )),
+                    Cell::Text(escape(&report_verdict::place(&e.region, &c.scene))),
                     Cell::Num(e.n_particles.to_string()),
                     Cell::Num(short(e.peak_accel_g)),
                     Cell::Num(short(e.peak_z)),
@@ -347,8 +419,9 @@ fn particles_section(c: &CaseInputs, page: &mut Page) -> Res {
     Ok(())
 }
 
-/// One event: before, at and after with its region outlined, and an animation.
-fn event_section(c: &CaseInputs, e: &Event, page: &mut Page) -> Res {
+/// One event: before, at and after with its region outlined, and an
+/// animation; `note` leads its heading ("First kick: ").
+fn event_section(c: &CaseInputs, e: &Event, note: &str, page: &mut Page) -> Res {
     let id = e.id;
     let files = particle_files(&c.dir.join("particles").join(format!("event_{id}")));
     if files.is_empty() {
@@ -385,7 +458,17 @@ fn event_section(c: &CaseInputs, e: &Event, page: &mut Page) -> Res {
         gravity: c.gravity(),
         title: format!("{}: {kind} #{id} (region outlined)", c.name()),
     };
-    page.h2(&format!("Event {id} ({kind}, step {})", e.first_step));
+    let lead = if note.is_empty() {
+        "Event".to_string()
+    } else {
+        format!("{note}event")
+    };
+    page.h2(&format!(
+        "{lead} {id} ({kind}, {}, step {}, t = {:.4} s)",
+        e.cause.name(),
+        e.first_step,
+        e.t
+    ));
     page.figure(
         &render(&fig, &c.out, &format!("event_{id}_maps"))?,
         "Before, at and after the event: pressure (top), a/g (bottom)",

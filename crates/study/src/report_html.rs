@@ -14,7 +14,8 @@ const STYLE: &str = "body{font-family:sans-serif;max-width:1400px;margin:1em aut
 img{max-width:100%;border:1px solid #ddd;margin:.3em 0}table{border-collapse:collapse;font-size:13px}\
 td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}th{background:#eee}td.l{text-align:left}\
 .blew_up{background:#f8d0d0}.failed{background:#ddd}.kicked{background:#fde3c0}.completed{background:#d8f0d8}\
-figure{margin:0 0 1.2em 0}figcaption{font-size:13px;color:#555}";
+figure{margin:0 0 1.2em 0}figcaption{font-size:13px;color:#555}\
+#verdict{border-left:4px solid #888;padding:0 1em;margin-bottom:1.5em}b.status{padding:0 .3em}";
 
 /// A table cell: right-aligned (numbers) or left-aligned (text); the content is HTML.
 pub enum Cell {
@@ -31,6 +32,15 @@ pub struct Page {
 impl Page {
     pub fn h2(&mut self, text: &str) {
         let _ = writeln!(self.body, "<h2>{}</h2>", escape(text));
+    }
+
+    /// Opens `<section id="ID">`; `end_section` closes it.
+    pub fn begin_section(&mut self, id: &str) {
+        let _ = writeln!(self.body, "<section id=\"{id}\">");
+    }
+
+    pub fn end_section(&mut self) {
+        self.body.push_str("</section>\n");
     }
 
     /// A paragraph of HTML (callers escape what they insert).

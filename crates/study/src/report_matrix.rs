@@ -313,7 +313,7 @@ pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
     }
     std::fs::create_dir_all(&out).map_err(err)?;
     let mut page = Page::default();
-    text_summary(&m.rows, &mut page);
+    verdict(&m, &mut page);
     if !m.axes.is_empty() {
         crate::report_behaviours::behaviours(&m, &mut page);
         crate::report_ablation::ablation_table(&m, &mut page);
@@ -336,40 +336,135 @@ pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
     Ok(index)
 }
 
-fn text_summary(rows: &[Row], page: &mut Page) {
+/// At most this many cases are named in one sentence of the verdict.
+const NAMED: usize = 6;
+
+/// "a (x), b (y) and 3 more" over the first `NAMED` items.
+fn named_list(items: Vec<String>) -> String {
+    let n = items.len();
+    let mut shown: Vec<String> = items.into_iter().take(NAMED).collect();
+    if n > NAMED {
+        shown.push(format!("and {} more", n - NAMED));
+    }
+    shown.join(", ")
+}
+
+fn failed_none(rows: &[Row]) -> bool {
+    rows.iter()
+        .all(|r| !matches!(r.summary.status, Status::Failed | Status::BlewUp))
+}
+
+/// The page opens with what failed, what kicked and the best methods.
+fn verdict(m: &Matrix, page: &mut Page) {
+    let rows = &m.rows;
+    page.begin_section("verdict");
+    page.h2("Verdict");
     let count = |o: &str| rows.iter().filter(|r| r.outcome() == o).count();
-    let kicked = rows.iter().filter(|r| r.summary.kicked()).count();
+    let kicked: Vec<&Row> = rows.iter().filter(|r| r.summary.kicked()).collect();
     page.p(&format!(
         "{} cases ran: {} survived without a kick, {} kicked at least once ({} of them then completed), {} blew up, {} failed.",
         rows.len(),
         count("completed"),
-        kicked,
+        kicked.len(),
         count("kicked"),
         count("blew_up"),
         count("failed")
     ));
+    // What failed.
+    let failed: Vec<String> = rows
+        .iter()
+        .filter(|r| r.summary.status == Status::Failed)
+        .map(|r| format!("{} ({})", r.link_html(), escape(&r.summary.reason)))
+        .collect();
+    if !failed.is_empty() {
+        page.p(&format!("<b>Failed to run</b>: {}.", named_list(failed)));
+    }
+    let mut blew: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.summary.status == Status::BlewUp)
+        .collect();
+    blew.sort_by(|a, b| a.t_end().total_cmp(&b.t_end()));
+    if !blew.is_empty() {
+        page.p(&format!(
+            "<b>Blew up</b>, earliest first: {}.",
+            named_list(
+                blew.iter()
+                    .map(|r| format!("{} at t = {:.3} s", r.link_html(), r.t_end()))
+                    .collect()
+            )
+        ));
+    }
+    if failed_none(rows) {
+        page.p("<b>No case failed or blew up.</b>");
+    }
+    // What kicked.
+    if kicked.is_empty() {
+        page.p("<b>No case kicked.</b>");
+    } else {
+        let first_by = |c: usize| rows.iter().filter(|r| r.class() == c).count();
+        let mut by_time = kicked.clone();
+        by_time.sort_by(|a, b| a.t_first_kick().total_cmp(&b.t_first_kick()));
+        page.p(&format!(
+            "<b>Kicked</b>: {} of {} cases; the first kick was an injection in {}, an inversion in {} and had the hallmark (the anomaly) in {}. Earliest first: {}.",
+            kicked.len(),
+            rows.len(),
+            first_by(2),
+            first_by(3),
+            first_by(4),
+            named_list(
+                by_time
+                    .iter()
+                    .map(|r| format!("{} at t = {:.3} s", r.link_html(), r.t_first_kick()))
+                    .collect()
+            )
+        ));
+    }
+    // The best methods (or cases, when no method key varies).
+    let best = crate::report_ablation::best_methods(m, 3);
+    if !best.is_empty() {
+        let items: Vec<String> = best
+            .iter()
+            .map(|b| {
+                format!(
+                    "<b>{}</b> ({} of {} runs completed without a kick, median late departure {})",
+                    escape(&b.label),
+                    b.clean,
+                    b.runs,
+                    b.late.map_or("-".into(), short)
+                )
+            })
+            .collect();
+        page.p(&format!(
+            "<b>Best methods</b> (most runs completed without a kick, then the lowest late hydrostatic departure): {}.",
+            items.join("; ")
+        ));
+    }
     let mut ranked: Vec<&Row> = rows
         .iter()
         .filter(|r| r.summary.status == Status::Completed && r.hydro_late().is_finite())
         .collect();
-    ranked.sort_by(|a, b| a.hydro_late().total_cmp(&b.hydro_late()));
-    if let (Some(best), Some(worst)) = (ranked.first(), ranked.last()) {
+    ranked.sort_by(|a, b| {
+        (a.summary.kicked(), a.hydro_late())
+            .partial_cmp(&(b.summary.kicked(), b.hydro_late()))
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    if !ranked.is_empty() {
         page.p(&format!(
-            "Closest to hydrostatic at the end: {} (late rel. RMS {}). Furthest among completed cases: {} ({}).",
-            best.link_html(), short(best.hydro_late()), worst.link_html(), short(worst.hydro_late())
+            "<b>Best cases</b> (completed, without a kick first, then closest to hydrostatic at the end, late rel. RMS): {}.",
+            ranked
+                .iter()
+                .take(3)
+                .map(|r| format!(
+                    "{} ({}{})",
+                    r.link_html(),
+                    short(r.hydro_late()),
+                    if r.summary.kicked() { ", kicked" } else { "" }
+                ))
+                .collect::<Vec<_>>()
+                .join(", ")
         ));
     }
-    if let Some(r) = rows
-        .iter()
-        .filter(|r| r.summary.status == Status::BlewUp)
-        .min_by(|a, b| a.t_end().total_cmp(&b.t_end()))
-    {
-        page.p(&format!(
-            "Earliest blow-up: {} at t = {:.3} s.",
-            r.link_html(),
-            r.t_end()
-        ));
-    }
+    page.end_section();
 }
 
 /// Heatmap layout: x = K (or the first axis), one panel per viscosity, y = the other axes.

@@ -1,0 +1,439 @@
+//! What a report page says first: how a case ended, its kicks by cause with
+//! their times and places, and the metrics that apply to its scene with
+//! their units (a metric that is undefined for the scene, or a count that
+//! stayed zero, is not shown).
+
+use crate::plot_common::short;
+use crate::report_html::escape;
+use crate::summary::{Metrics, Status, Summary};
+use monitor::{Cause, Event, Region};
+use solver::Scene;
+
+/// "Completed: reached t = 1.0000 s in 1234 steps." / "Blew up at t =
+/// 0.4980 s, step 5678: reason." / "Failed: reason." (HTML).
+pub fn status_sentence(s: &Summary) -> String {
+    match s.status {
+        Status::Completed => format!(
+            "<b class=\"status completed\">Completed</b>: reached t = {:.4} s in {} steps.",
+            s.t_end, s.steps
+        ),
+        Status::BlewUp => {
+            // The reason usually opens with the step the status names already.
+            let step = format!("step {}: ", s.steps);
+            let reason = s.reason.strip_prefix(&step).unwrap_or(&s.reason);
+            format!(
+                "<b class=\"status blew_up\">Blew up</b> at t = {:.4} s, step {}: {}.",
+                s.t_end,
+                s.steps,
+                escape(reason.trim_end_matches('.'))
+            )
+        }
+        Status::Failed => format!(
+            "<b class=\"status failed\">Failed</b>: {}.",
+            escape(s.reason.trim_end_matches('.'))
+        ),
+    }
+}
+
+/// Where a region lies in the scene's box, in words: "at the foot of the
+/// right wall", "on the floor", "at the left wall", "at the top", "inside
+/// the fluid". A side counts when the region comes within two cells of it.
+pub fn place_words(r: &Region, scene: &Scene) -> &'static str {
+    let near = 2.0 * scene.cell;
+    let [x0, y0] = scene.origin;
+    let (x1, y1) = (x0 + scene.size[0], y0 + scene.size[1]);
+    let left = r.x_min - x0 <= near;
+    let right = x1 - r.x_max <= near;
+    let floor = r.y_min - y0 <= near;
+    let top = y1 - r.y_max <= near;
+    match (left, right, floor, top) {
+        (true, true, _, _) => "across the box",
+        (_, _, true, true) => "from floor to top",
+        (true, false, true, false) => "at the foot of the left wall",
+        (false, true, true, false) => "at the foot of the right wall",
+        (true, false, false, true) => "at the top of the left wall",
+        (false, true, false, true) => "at the top of the right wall",
+        (true, false, false, false) => "at the left wall",
+        (false, true, false, false) => "at the right wall",
+        (false, false, true, false) => "on the floor",
+        (false, false, false, true) => "at the top",
+        (false, false, false, false) => "away from the walls",
+    }
+}
+
+/// "x 0.580–0.600 m, y 0.000–0.020 m (at the foot of the right wall)".
+pub fn place(r: &Region, scene: &Scene) -> String {
+    format!(
+        "x {:.3}–{:.3} m, y {:.3}–{:.3} m ({})",
+        r.x_min,
+        r.x_max,
+        r.y_min,
+        r.y_max,
+        place_words(r, scene)
+    )
+}
+
+/// Causes in the order a reader wants them: the kicks, then the rest.
+pub const CAUSE_ORDER: [Cause; 4] = [
+    Cause::Injection,
+    Cause::Inversion,
+    Cause::Cfl,
+    Cause::Impact,
+];
+
+/// The kicks (injection, inversion), earliest first.
+pub fn kicks(events: &[Event]) -> Vec<&Event> {
+    let mut k: Vec<&Event> = events.iter().filter(|e| e.is_kick()).collect();
+    k.sort_by(|a, b| a.t.total_cmp(&b.t).then(a.id.cmp(&b.id)));
+    k
+}
+
+/// One sentence on the kicks: "No kick." or "2 kicks (2 injection); the
+/// first, an injection, at t = 0.2440 s (step 1234), x ... (place)." (HTML).
+pub fn kicks_sentence(events: &[Event], scene: &Scene) -> String {
+    let k = kicks(events);
+    let Some(first) = k.first() else {
+        return "<b>No kick.</b>".into();
+    };
+    let by_cause: Vec<String> = CAUSE_ORDER
+        .iter()
+        .filter_map(|&c| {
+            let n = k.iter().filter(|e| e.cause == c).count();
+            (n > 0).then(|| format!("{n} {}", c.name()))
+        })
+        .collect();
+    format!(
+        "<b>{} kick{}</b> ({}); the first, an {}, at <b>t = {:.4} s</b> (step {}), <b>{}</b>{}.",
+        k.len(),
+        if k.len() == 1 { "" } else { "s" },
+        by_cause.join(", "),
+        first.cause.name(),
+        first.t,
+        first.first_step,
+        escape(&place(&first.region, scene)),
+        if first.hallmark() {
+            ", with the hallmark (quiet before, sheared earlier)"
+        } else {
+            ""
+        }
+    )
+}
+
+/// One metric row of the case page.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MetricRow {
+    pub label: &'static str,
+    pub value: String,
+    pub unit: &'static str,
+}
+
+/// The metrics the verdict already states (not repeated in the table).
+pub const IN_VERDICT: [&str; 3] = ["causes", "n_kicks", "t_first_kick"];
+
+/// Each metric of summary.json: key, label, unit, in the order shown.
+/// Counts and fractions that are zero are left out, like undefined values.
+pub const METRICS: &[(&str, &str, &str)] = &[
+    ("t_first_anomaly", "first kick with the hallmark", "s"),
+    ("n_anomalies", "kicks with the hallmark", "count"),
+    ("n_energy_injections", "energy-budget events", "count"),
+    (
+        "events_dropped",
+        "events dropped past monitor.max_events",
+        "count",
+    ),
+    ("energy_injected_max", "largest energy injected", "J/m"),
+    ("max_accel_g", "largest acceleration", "g"),
+    ("courant_max", "largest Courant number", "(v + c) dt / h"),
+    (
+        "node_advection_max",
+        "largest nodal advection",
+        "|v| dt / h",
+    ),
+    (
+        "hydro_rel_rms_late",
+        "late hydrostatic departure, RMS",
+        "of rho g depth",
+    ),
+    (
+        "hydro_max_late",
+        "late hydrostatic departure, largest",
+        "of rho g depth",
+    ),
+    (
+        "hydro_unexplained_rel_rms_late",
+        "of it not explained by the accelerations",
+        "of rho g depth",
+    ),
+    ("checkerboard_late", "late checkerboard index", "index"),
+    (
+        "hydro_rel_rms_pre_failure",
+        "hydrostatic departure in the second before the blow-up, RMS",
+        "of rho g depth",
+    ),
+    (
+        "hydro_max_pre_failure",
+        "hydrostatic departure in the second before the blow-up, largest",
+        "of rho g depth",
+    ),
+    (
+        "checkerboard_pre_failure",
+        "checkerboard index in the second before the blow-up",
+        "index",
+    ),
+    ("checkerboard_peak", "largest checkerboard index", "index"),
+    (
+        "front_rms_error",
+        "surge front against Martin & Moyce, RMS error",
+        "Z = x / a",
+    ),
+    (
+        "front_rms_error_early",
+        "surge front, early (T ≤ 3.5) RMS error",
+        "Z = x / a",
+    ),
+    (
+        "front_rms_error_early_shifted",
+        "surge front, early RMS error after the best time shift",
+        "Z = x / a",
+    ),
+    (
+        "front_time_shift",
+        "surge front, best time shift",
+        "T = t √(2g/a)",
+    ),
+    (
+        "front_speed_late",
+        "surge front, late speed dZ/dT",
+        "Z per T",
+    ),
+    (
+        "front_rms_error_late",
+        "surge front, late (T > 3.5) RMS error",
+        "Z = x / a",
+    ),
+    ("particles_escaped", "particles deleted: escaped", "count"),
+    ("particles_inverted", "particles deleted: inverted", "count"),
+    (
+        "mass_lost_fraction",
+        "mass lost with them",
+        "of the initial mass",
+    ),
+    ("t_first_loss", "first deletion", "s"),
+    ("particles_drained", "particles drained", "count"),
+    (
+        "mass_drained_fraction",
+        "mass drained",
+        "of the initial mass",
+    ),
+    (
+        "particles_injected",
+        "particles injected by inflow",
+        "count",
+    ),
+    (
+        "mass_injected_fraction",
+        "mass injected",
+        "of the initial mass",
+    ),
+    ("surface_spread_late", "late free-surface spread", "m"),
+    ("penetration_spread_late", "late penetration spread", "m"),
+    (
+        "saturation_max",
+        "largest cell saturation",
+        "volume fraction",
+    ),
+    (
+        "drag_decay_rel_error",
+        "drag decay against exp(-t/tau), largest error",
+        "of |dv0|",
+    ),
+    (
+        "drag_decay_discrete_rel_error",
+        "drag decay against the update's own law, largest error",
+        "of |dv0|",
+    ),
+    ("drag_dt_over_tau", "dt / tau at the first step", "ratio"),
+    (
+        "darcy_dp_rel_error",
+        "Darcy pressure drop, error",
+        "of mu q L / k",
+    ),
+    (
+        "darcy_linearity",
+        "Darcy layer pressure, largest departure from its line",
+        "of the drop",
+    ),
+    ("darcy_flux", "Darcy flux q", "m/s"),
+    (
+        "darcy_flux_rel_error",
+        "Darcy flux against rho g H n² / (B L), error",
+        "relative",
+    ),
+    (
+        "drag_layer_error",
+        "drag layer velocity, largest error",
+        "of |u0| L / H",
+    ),
+    (
+        "terzaghi_max_error_over_p0",
+        "Terzaghi pore pressure, largest error",
+        "of p0",
+    ),
+    (
+        "terzaghi_u_error",
+        "Terzaghi degree of consolidation, largest error",
+        "of U",
+    ),
+    (
+        "drag_dissipated",
+        "kinetic energy dissipated by the drag",
+        "J/m",
+    ),
+    (
+        "mixture_energy_growth",
+        "largest rise of the mixture's total energy",
+        "J/m",
+    ),
+    (
+        "momentum_drift_rel",
+        "largest momentum drift",
+        "of Σ m |v| at t = 0",
+    ),
+];
+
+/// The rows of the metrics that apply: defined (not null) and, for counts
+/// and fractions, not zero.
+pub fn metric_rows(m: &Metrics) -> Vec<MetricRow> {
+    let Ok(serde_json::Value::Object(values)) = serde_json::to_value(m) else {
+        return vec![];
+    };
+    METRICS
+        .iter()
+        .filter_map(|&(key, label, unit)| {
+            let v = values.get(key)?.as_f64()?;
+            if !v.is_finite() || (v == 0.0 && counts_or_fraction(unit)) {
+                return None;
+            }
+            let value = if unit == "count" {
+                format!("{v:.0}")
+            } else {
+                short(v)
+            };
+            Some(MetricRow { label, value, unit })
+        })
+        .collect()
+}
+
+fn counts_or_fraction(unit: &str) -> bool {
+    unit == "count" || unit == "of the initial mass"
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene() -> Scene {
+        Scene {
+            origin: [0.0, 0.0],
+            size: [0.6, 0.6],
+            cell: 0.01,
+            ..Scene::default()
+        }
+    }
+
+    fn region(x_min: f64, y_min: f64, x_max: f64, y_max: f64) -> Region {
+        Region {
+            x_min,
+            y_min,
+            x_max,
+            y_max,
+        }
+    }
+
+    #[test]
+    fn places_name_the_walls_within_two_cells() {
+        let s = scene();
+        assert_eq!(
+            place_words(&region(0.57, 0.0, 0.6, 0.02), &s),
+            "at the foot of the right wall"
+        );
+        assert_eq!(
+            place_words(&region(0.2, 0.01, 0.3, 0.05), &s),
+            "on the floor"
+        );
+        assert_eq!(
+            place_words(&region(0.01, 0.3, 0.05, 0.35), &s),
+            "at the left wall"
+        );
+        assert_eq!(
+            place_words(&region(0.2, 0.2, 0.3, 0.3), &s),
+            "away from the walls"
+        );
+        assert_eq!(
+            place(&region(0.57, 0.0, 0.6, 0.02), &s),
+            "x 0.570–0.600 m, y 0.000–0.020 m (at the foot of the right wall)"
+        );
+    }
+
+    /// Every metric of summary.json is either in the table (with a label
+    /// and a unit) or stated by the verdict: no raw key reaches the page.
+    #[test]
+    fn every_metric_has_a_label_and_a_unit_or_is_in_the_verdict() {
+        let Ok(serde_json::Value::Object(all)) = serde_json::to_value(Metrics::default()) else {
+            panic!("metrics serialise as an object");
+        };
+        for key in all.keys() {
+            let listed = METRICS.iter().filter(|(k, _, _)| k == key).count();
+            assert!(
+                listed == 1 || (listed == 0 && IN_VERDICT.contains(&key.as_str())),
+                "{key}"
+            );
+        }
+        for (key, label, unit) in METRICS {
+            assert!(all.contains_key(*key), "{key} is a metric");
+            assert!(!label.is_empty() && !unit.is_empty(), "{key}");
+        }
+    }
+
+    /// A dam break's page shows its own figures and no Darcy, drag or
+    /// Terzaghi row, no zero count, and no empty value.
+    #[test]
+    fn only_the_metrics_that_apply_are_rows() {
+        let m = Metrics {
+            hydro_rel_rms_pre_failure: Some(0.12),
+            checkerboard_peak: Some(0.3),
+            energy_injected_max: Some(2.5),
+            max_accel_g: Some(40.0),
+            front_rms_error: Some(0.2),
+            n_kicks: 2,
+            t_first_kick: Some(0.244),
+            ..Metrics::default()
+        };
+        let rows = metric_rows(&m);
+        let labels: Vec<&str> = rows.iter().map(|r| r.label).collect();
+        assert_eq!(
+            labels,
+            [
+                "largest energy injected",
+                "largest acceleration",
+                "hydrostatic departure in the second before the blow-up, RMS",
+                "largest checkerboard index",
+                "surge front against Martin & Moyce, RMS error",
+            ]
+        );
+        assert!(rows
+            .iter()
+            .all(|r| !r.value.is_empty() && !r.unit.is_empty()));
+        assert!(!labels
+            .iter()
+            .any(|l| l.contains("Darcy") || l.contains("Terzaghi")));
+        let with_losses = Metrics {
+            particles_escaped: 3,
+            mass_lost_fraction: 0.001,
+            ..Metrics::default()
+        };
+        let rows = metric_rows(&with_losses);
+        assert_eq!(rows[0].value, "3");
+        assert_eq!(rows[1].unit, "of the initial mass");
+    }
+}
