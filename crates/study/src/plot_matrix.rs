@@ -54,70 +54,8 @@ impl Figure for HeatmapFigure {
         let (w, _) = root.dim_in_pixel();
         let (plots, key) = root.split_horizontally(w.saturating_sub(170));
         let areas = plots.split_evenly((1, self.panels.len().max(1)));
-        let (nx, ny) = (self.x_cats.len() as i32, self.y_cats.len() as i32);
-        let longest = self.y_cats.iter().map(|c| c.len()).max().unwrap_or(4) as u32;
         for (panel, area) in self.panels.iter().zip(areas.iter()) {
-            let mut chart = ChartBuilder::on(area)
-                .caption(&panel.title, (SANS, 16))
-                .margin(8)
-                .x_label_area_size(50)
-                .y_label_area_size(30 + 7 * longest)
-                .build_cartesian_2d(
-                    (0..(nx - 1).max(0)).into_segmented(),
-                    (0..(ny - 1).max(0)).into_segmented(),
-                )
-                .map_err(err)?;
-            let xc = |v: &SegmentValue<i32>| match v {
-                SegmentValue::CenterOf(k) => {
-                    self.x_cats.get(*k as usize).cloned().unwrap_or_default()
-                }
-                _ => String::new(),
-            };
-            let yc = |v: &SegmentValue<i32>| match v {
-                SegmentValue::CenterOf(k) => {
-                    self.y_cats.get(*k as usize).cloned().unwrap_or_default()
-                }
-                _ => String::new(),
-            };
-            chart
-                .configure_mesh()
-                .disable_mesh()
-                .x_desc(&self.x_label)
-                .y_desc(&self.y_label)
-                .x_labels(nx as usize)
-                .y_labels(ny as usize)
-                .x_label_formatter(&xc)
-                .y_label_formatter(&yc)
-                .label_style((SANS, 13))
-                .axis_desc_style((SANS, 14))
-                .draw()
-                .map_err(err)?;
-            for c in &panel.cells {
-                let (x, y) = (c.x as i32, c.y as i32);
-                chart
-                    .draw_series([Rectangle::new(
-                        [
-                            (SegmentValue::Exact(x), SegmentValue::Exact(y)),
-                            (SegmentValue::Exact(x + 1), SegmentValue::Exact(y + 1)),
-                        ],
-                        c.colour.filled(),
-                    )])
-                    .map_err(err)?;
-                let light = (c.colour.0 as u32 + c.colour.1 as u32 + c.colour.2 as u32) > 400;
-                let ink = if light { BLACK } else { WHITE };
-                chart
-                    .draw_series([Text::new(
-                        c.text.clone(),
-                        (SegmentValue::CenterOf(x), SegmentValue::CenterOf(y)),
-                        (SANS, 13).into_font().color(&ink).pos(
-                            plotters::style::text_anchor::Pos::new(
-                                plotters::style::text_anchor::HPos::Center,
-                                plotters::style::text_anchor::VPos::Center,
-                            ),
-                        ),
-                    )])
-                    .map_err(err)?;
-            }
+            self.draw_panel(panel, area)?;
         }
         match &self.key {
             HeatKey::Bar(scale, label) => colour_bar(&key, scale, label)?,
@@ -130,6 +68,77 @@ impl Figure for HeatmapFigure {
                         .map_err(err)?;
                 }
             }
+        }
+        Ok(())
+    }
+}
+
+impl HeatmapFigure {
+    /// One panel: the categories on both axes and a labelled square per cell.
+    fn draw_panel<DB: DrawingBackend>(
+        &self,
+        panel: &HeatPanel,
+        area: &DrawingArea<DB, Shift>,
+    ) -> Res {
+        let (nx, ny) = (self.x_cats.len() as i32, self.y_cats.len() as i32);
+        let longest = self.y_cats.iter().map(|c| c.len()).max().unwrap_or(4) as u32;
+        let mut chart = ChartBuilder::on(area)
+            .caption(&panel.title, (SANS, 16))
+            .margin(8)
+            .x_label_area_size(50)
+            .y_label_area_size(30 + 7 * longest)
+            .build_cartesian_2d(
+                (0..(nx - 1).max(0)).into_segmented(),
+                (0..(ny - 1).max(0)).into_segmented(),
+            )
+            .map_err(err)?;
+        let xc = |v: &SegmentValue<i32>| match v {
+            SegmentValue::CenterOf(k) => self.x_cats.get(*k as usize).cloned().unwrap_or_default(),
+            _ => String::new(),
+        };
+        let yc = |v: &SegmentValue<i32>| match v {
+            SegmentValue::CenterOf(k) => self.y_cats.get(*k as usize).cloned().unwrap_or_default(),
+            _ => String::new(),
+        };
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_desc(&self.x_label)
+            .y_desc(&self.y_label)
+            .x_labels(nx as usize)
+            .y_labels(ny as usize)
+            .x_label_formatter(&xc)
+            .y_label_formatter(&yc)
+            .label_style((SANS, 13))
+            .axis_desc_style((SANS, 14))
+            .draw()
+            .map_err(err)?;
+        for c in &panel.cells {
+            let (x, y) = (c.x as i32, c.y as i32);
+            chart
+                .draw_series([Rectangle::new(
+                    [
+                        (SegmentValue::Exact(x), SegmentValue::Exact(y)),
+                        (SegmentValue::Exact(x + 1), SegmentValue::Exact(y + 1)),
+                    ],
+                    c.colour.filled(),
+                )])
+                .map_err(err)?;
+            let light = (c.colour.0 as u32 + c.colour.1 as u32 + c.colour.2 as u32) > 400;
+            let ink = if light { BLACK } else { WHITE };
+            chart
+                .draw_series([Text::new(
+                    c.text.clone(),
+                    (SegmentValue::CenterOf(x), SegmentValue::CenterOf(y)),
+                    (SANS, 13)
+                        .into_font()
+                        .color(&ink)
+                        .pos(plotters::style::text_anchor::Pos::new(
+                            plotters::style::text_anchor::HPos::Center,
+                            plotters::style::text_anchor::VPos::Center,
+                        )),
+                )])
+                .map_err(err)?;
         }
         Ok(())
     }

@@ -3,10 +3,13 @@
 //! baseline), with the fraction of runs that kicked (by cause, and with the
 //! hallmark), that blew up, and the survival time as median [min, max].
 
+use crate::plot_common::Res;
+use crate::report_data::{median, spread_text, Matrix, Row};
 use crate::report_html::{Cell, Page};
-use crate::report_matrix::{median, spread_text, Matrix, Row};
 use crate::summary::Status;
+use monitor::Cause;
 use std::collections::BTreeMap;
+use std::path::Path;
 
 /// For each varying `method.*` axis: its index and most common value.
 fn baseline(m: &Matrix) -> Vec<(usize, String)> {
@@ -107,10 +110,10 @@ fn method_cells(label: &str, runs: &[&Row]) -> Vec<Cell> {
         Cell::Text(label.to_string()),
         Cell::Num(n.to_string()),
         percent(with(&|e| e.is_kick()), n),
-        percent(with(&|e| e.cause == monitor::Cause::Injection), n),
-        percent(with(&|e| e.cause == monitor::Cause::Inversion), n),
+        percent(with(&|e| e.cause == Cause::Injection), n),
+        percent(with(&|e| e.cause == Cause::Inversion), n),
         percent(with(&|e| e.is_anomaly()), n),
-        percent(with(&|e| e.cause == monitor::Cause::Cfl), n),
+        percent(with(&|e| e.cause == Cause::Cfl), n),
         percent(blew, n),
         Cell::Num(spread_text(runs.iter().map(|r| r.summary.t_end), n, 2)),
         Cell::Num(completed.len().to_string()),
@@ -182,14 +185,16 @@ pub fn best_methods(m: &Matrix, k: usize) -> Vec<MethodStanding> {
     v
 }
 
-pub fn ablation_table(m: &Matrix, page: &mut Page) {
+/// The ablation table (a matrix section: `report_matrix::MATRIX_SECTIONS`);
+/// nothing unless a method key varies.
+pub fn ablation_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
     let base = baseline(m);
     if base.is_empty() {
-        return;
+        return Ok(());
     }
     let groups = method_groups(m, &base);
     if groups.len() < 2 {
-        return;
+        return Ok(());
     }
     page.h2("Methods: which change removes the kick");
     page.p("One row per method, named by what it changes from the most common value of each varying method key. Over all its runs (every case and ensemble member): the share with at least one kick, with a kick of each cause, with a kick that has the hallmark (the anomaly proper), with a time-step (cfl) event, and that blew up; the time survived (a completed run counts its t_end) as median [min, max]. Over its completed runs only: the late hydrostatic departure and checkerboard index (each the mean over the last simulated second) as median [min, max]. The median particle-steps per second, and the wall seconds summed over the runs.");
@@ -199,6 +204,7 @@ pub fn ablation_table(m: &Matrix, page: &mut Page) {
         .map(|(l, runs)| (String::new(), method_cells(l, runs)))
         .collect();
     page.table("ablation", &headers, &rows);
+    Ok(())
 }
 
 #[cfg(test)]
@@ -206,7 +212,7 @@ mod tests {
     use super::*;
     use crate::summary::{sample_event, Metrics, Summary, SCHEMA_VERSION};
 
-    fn event(cause: monitor::Cause) -> monitor::Event {
+    fn event(cause: Cause) -> monitor::Event {
         let mut e = sample_event();
         e.cause = cause;
         e
@@ -250,7 +256,6 @@ mod tests {
 
     #[test]
     fn a_method_row_counts_kicks_over_all_runs_and_late_figures_over_completed_runs() {
-        use monitor::Cause;
         let m = Matrix {
             axes: vec!["method.transfer".into()],
             rows: vec![

@@ -2,12 +2,12 @@
 //! (docs/physics.md section 3), each stated with the numbers of this matrix
 //! that show or refute it. Survival counts a completed run as t_end.
 
-use crate::plot_common::short;
-use crate::report::{f64_column, read_parquet};
+use crate::plot_common::{short, Res};
+use crate::report_data::{f64_column, median, read_parquet, Matrix, Row};
 use crate::report_html::Page;
-use crate::report_matrix::{median, Matrix, Row};
 use crate::summary::Status;
 use std::collections::BTreeMap;
+use std::path::Path;
 
 /// The window in which the bug report saw the checkerboard appear (s).
 pub const CHECKERBOARD_WINDOW: (f64, f64) = (0.01, 0.1);
@@ -55,30 +55,58 @@ fn median_of(values: impl Iterator<Item = f64>) -> String {
     median(&v).map_or("-".into(), short)
 }
 
-pub fn behaviours(m: &Matrix, page: &mut Page) {
-    let ks: Vec<f64> = {
+/// The rows at the smallest K and at the large ones (K >= 1.5 MPa, or the
+/// largest K when none is that large).
+struct ByK<'a> {
+    k_min: f64,
+    small: Vec<&'a Row>,
+    large: Vec<&'a Row>,
+}
+
+impl<'a> ByK<'a> {
+    /// None unless the matrix has at least two values of K.
+    fn of(m: &'a Matrix) -> Option<Self> {
         let mut ks: Vec<f64> = m.rows.iter().filter_map(|r| param(r, ".K")).collect();
         ks.sort_by(f64::total_cmp);
         ks.dedup();
-        ks
-    };
-    let (Some(&k_min), Some(&k_max)) = (ks.first(), ks.last()) else {
-        return;
-    };
-    if ks.len() < 2 {
-        return;
+        let (&k_min, &k_max) = (ks.first()?, ks.last()?);
+        if ks.len() < 2 {
+            return None;
+        }
+        let at = |keep: &dyn Fn(f64) -> bool| -> Vec<&Row> {
+            m.rows
+                .iter()
+                .filter(|r| param(r, ".K").is_some_and(keep))
+                .collect()
+        };
+        Some(ByK {
+            k_min,
+            small: at(&|k| k == k_min),
+            large: at(&|k| k >= 1.5e6 || k == k_max),
+        })
     }
-    page.h2("The four behaviours of the bug report");
-    let at = |keep: &dyn Fn(f64) -> bool| -> Vec<&Row> {
-        m.rows
-            .iter()
-            .filter(|r| param(r, ".K").is_some_and(keep))
-            .collect()
-    };
-    let small = at(&|k| k == k_min);
-    let large = at(&|k| k >= 1.5e6 || k == k_max);
+}
 
-    // 1. Small K: a kick that blows most particles out within a few steps.
+/// The four behaviours, each with its numbers and whether this matrix
+/// reproduces it (a matrix section: `report_matrix::MATRIX_SECTIONS`);
+/// nothing unless K takes at least two values.
+pub fn behaviours(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
+    let Some(by_k) = ByK::of(m) else {
+        return Ok(());
+    };
+    page.h2("The four behaviours of the bug report");
+    page.p(&small_k_blows_up(&by_k));
+    page.p(&large_k_far_from_hydrostatic(&by_k));
+    page.p(&large_k_checkerboards(&by_k));
+    if let Some(text) = less_viscosity_less_stable(m) {
+        page.p(&text);
+    }
+    Ok(())
+}
+
+/// Behaviour 1, small K: a kick that blows most particles out within a few steps.
+fn small_k_blows_up(by_k: &ByK) -> String {
+    let ByK { k_min, small, .. } = by_k;
     let blown: Vec<&Row> = small
         .iter()
         .copied()
@@ -87,12 +115,12 @@ pub fn behaviours(m: &Matrix, page: &mut Page) {
     let kick_to_end =
         |r: &Row| r.summary.t_end - r.summary.metrics.t_first_kick.unwrap_or(f64::NAN);
     let quick = count(&blown, |r| kick_to_end(r) <= 0.05);
-    page.p(&format!(
+    format!(
         "1. Small K ({} Pa): a clean run ends in a kick that blows most particles out within a few steps. \
          {} of {} runs blew up (median at {} s), {} of them within 0.05 s of their first kick \
          (median from first kick to blow-up {} s); mass lost when they stopped: median {}, \
          particles escaped: median {}, inverted: median {}. {}",
-        short(k_min),
+        short(*k_min),
         blown.len(),
         small.len(),
         median_of(blown.iter().map(|r| r.summary.t_end)),
@@ -105,9 +133,12 @@ pub fn behaviours(m: &Matrix, page: &mut Page) {
             2 * quick > small.len(),
             !blown.is_empty()
         )
-    ));
+    )
+}
 
-    // 2. Larger K survives but is far from hydrostatic.
+/// Behaviour 2: larger K survives but is far from hydrostatic.
+fn large_k_far_from_hydrostatic(by_k: &ByK) -> String {
+    let large = &by_k.large;
     let completed: Vec<&Row> = large
         .iter()
         .copied()
@@ -115,7 +146,7 @@ pub fn behaviours(m: &Matrix, page: &mut Page) {
         .collect();
     let late: Vec<f64> = completed.iter().map(|r| r.hydro_late()).collect();
     let far = count(&completed, |r| r.hydro_late() >= 10.0);
-    page.p(&format!(
+    format!(
         "2. Larger K (K &ge; {} Pa) survives to t_end with a pressure orders of magnitude off hydrostatic. \
          {} of {} runs completed; their late hydrostatic departure (relative RMS over the last second): \
          median {}, {} of them &ge; 10. {}",
@@ -128,15 +159,17 @@ pub fn behaviours(m: &Matrix, page: &mut Page) {
             !completed.is_empty() && 2 * far > completed.len(),
             !completed.is_empty() && median(&late).is_some_and(|h| h >= 1.0)
         )
-    ));
+    )
+}
 
-    // 3. Larger K checkerboards immediately; the smallest K does not.
+/// Behaviour 3: larger K checkerboards immediately; the smallest K does not.
+fn large_k_checkerboards(by_k: &ByK) -> String {
     let early =
         |rows: &[&Row]| -> Vec<f64> { rows.iter().filter_map(|r| early_checkerboard(r)).collect() };
-    let (cb_large, cb_small) = (early(&large), early(&small));
+    let (cb_large, cb_small) = (early(&by_k.large), early(&by_k.small));
     let high = cb_large.iter().filter(|c| **c > CHECKERBOARD_HIGH).count();
     let low = cb_small.iter().filter(|c| **c < CHECKERBOARD_LOW).count();
-    page.p(&format!(
+    format!(
         "3. Larger K: the pressure checkerboards at once (t in {}-{} s). Largest checkerboard index \
          over that window: above {CHECKERBOARD_HIGH} in {high} of {} runs at K &ge; 1.5 MPa (median {}); \
          below {CHECKERBOARD_LOW} in {low} of {} runs at {} Pa (median {}). {}",
@@ -145,18 +178,19 @@ pub fn behaviours(m: &Matrix, page: &mut Page) {
         cb_large.len(),
         median_of(cb_large.iter().copied()),
         cb_small.len(),
-        short(k_min),
+        short(by_k.k_min),
         median_of(cb_small.iter().copied()),
         verdict(
             2 * high > cb_large.len() && 2 * low > cb_small.len(),
             2 * high > cb_large.len() || 2 * low > cb_small.len()
         )
-    ));
+    )
+}
 
-    // 4. Less viscosity, less stable: pair every case with its viscous twin.
-    let Some(mu_axis) = m.axis(".viscosity") else {
-        return;
-    };
+/// Behaviour 4: less viscosity, less stable; every case paired with its
+/// viscous twin (None without a viscosity axis).
+fn less_viscosity_less_stable(m: &Matrix) -> Option<String> {
+    let mu_axis = m.axis(".viscosity")?;
     let mut pairs: BTreeMap<Vec<String>, [Vec<f64>; 2]> = BTreeMap::new();
     for r in &m.rows {
         let Some(mu) = param(r, ".viscosity") else {
@@ -180,10 +214,10 @@ pub fn behaviours(m: &Matrix, page: &mut Page) {
         }
     }
     let total = shorter + longer + same;
-    page.p(&format!(
+    Some(format!(
         "4. Less viscosity, less stable. Of {total} cases paired by everything but the viscosity, the \
          inviscid one survived a shorter time (median over its runs, 1 % margin) in {shorter}, longer in \
          {longer}, as long in {same}. {}",
         verdict(2 * shorter > total, shorter > longer)
-    ));
+    ))
 }

@@ -10,7 +10,7 @@ use crate::plot_case::{
     TimeseriesFigure,
 };
 use crate::plot_common::{err, render, short, Res};
-use crate::report::{f64_column, read_parquet};
+use crate::report_data::{f64_column, read_parquet};
 use crate::report_html::{escape, Cell, Page};
 use crate::report_verdict;
 use crate::run_case::front_wall_z;

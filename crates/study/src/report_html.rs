@@ -10,6 +10,14 @@ pub fn escape(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
+/// `text` (escaped) linked to `href` when there is one.
+pub fn link(href: Option<&str>, text: &str) -> String {
+    match href {
+        Some(l) => format!("<a href=\"{l}\">{}</a>", escape(text)),
+        None => escape(text),
+    }
+}
+
 const STYLE: &str = "body{font-family:sans-serif;max-width:1400px;margin:1em auto;padding:0 1em;color:#222}\
 img{max-width:100%;border:1px solid #ddd;margin:.3em 0}table{border-collapse:collapse;font-size:13px}\
 td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}th{background:#eee}td.l{text-align:left}\

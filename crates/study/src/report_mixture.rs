@@ -5,11 +5,13 @@
 
 use crate::plot_common::{render, short, Res};
 use crate::plot_matrix::LinesFigure;
+use crate::report_data::{Matrix, Row};
 use crate::report_html::{escape, Cell, Page};
-use crate::report_matrix::Matrix;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+/// The multiphase section (a matrix section: `report_matrix::MATRIX_SECTIONS`):
+/// nothing unless some case is a mixture.
 pub fn mixture_section(m: &Matrix, out: &Path, page: &mut Page) -> Res {
     let rows: Vec<_> = m
         .rows
@@ -36,17 +38,26 @@ pub fn mixture_section(m: &Matrix, out: &Path, page: &mut Page) -> Res {
          cell saturation at the end (above 1: water crowding into the grains' room) and the \
          fluid's late hydrostatic departure; and each phase's events.",
     );
+    mixture_table(&rows, page);
+    convergence_figure(&rows, out, page)?;
+    decay_figure(&rows, out, page)
+}
+
+/// A param of the case as text ("-" when it lacks it).
+fn param(r: &Row, key: &str) -> String {
+    r.summary
+        .params
+        .get(key)
+        .map(|v| match v {
+            serde_json::Value::String(s) => s.clone(),
+            other => other.to_string(),
+        })
+        .unwrap_or_else(|| "-".into())
+}
+
+/// One row per mixture case: its drag figures and each phase's events.
+fn mixture_table(rows: &[&Row], page: &mut Page) {
     let opt = |v: Option<f64>| Cell::Num(v.map_or("-".into(), short));
-    let param = |r: &crate::report_matrix::Row, key: &str| {
-        r.summary
-            .params
-            .get(key)
-            .map(|v| match v {
-                serde_json::Value::String(s) => s.clone(),
-                other => other.to_string(),
-            })
-            .unwrap_or_else(|| "-".into())
-    };
     let headers: Vec<String> = [
         "case",
         "status",
@@ -106,10 +117,12 @@ pub fn mixture_section(m: &Matrix, out: &Path, page: &mut Page) -> Res {
         })
         .collect();
     page.table("mixture", &headers, &table);
-    convergence_figure(&rows, out, page)?;
-    // Decay error against dt/tau, a line per update.
+}
+
+/// Decay error against dt/tau, a line per update (drawn from two points on).
+fn decay_figure(rows: &[&Row], out: &Path, page: &mut Page) -> Res {
     let mut lines: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
-    for r in &rows {
+    for r in rows {
         let mx = &r.summary.metrics;
         if let (Some(x), Some(y)) = (mx.drag_dt_over_tau, mx.drag_decay_rel_error) {
             lines
@@ -149,7 +162,7 @@ pub fn mixture_section(m: &Matrix, out: &Path, page: &mut Page) -> Res {
 
 /// The fixed layer's error against h, a line per interaction model, with
 /// each model's observed order in its legend.
-fn convergence_figure(rows: &[&crate::report_matrix::Row], out: &Path, page: &mut Page) -> Res {
+fn convergence_figure(rows: &[&Row], out: &Path, page: &mut Page) -> Res {
     let mut lines: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
     for r in rows {
         let s = &r.summary;

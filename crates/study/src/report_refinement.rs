@@ -7,14 +7,16 @@
 use crate::metrics::observed_order;
 use crate::plot_common::{render, short, Res};
 use crate::plot_matrix::RefinementFigure;
+use crate::report_data::{median, Matrix, Row};
 use crate::report_html::{Cell, Page};
-use crate::report_matrix::{median, Matrix, Row};
 use std::collections::BTreeMap;
 use std::path::Path;
 
 type Figure = fn(&Row) -> Option<f64>;
 /// A case's figure at each h.
 type Line = (String, Vec<(f64, f64)>);
+/// A row of the table: its class and cells.
+type TableRow = (String, Vec<Cell>);
 
 const FIGURES: [(&str, Figure); 6] = [
     ("surge front, early shifted RMS (Z)", |r| {
@@ -50,77 +52,29 @@ fn without_cell_size(case: &str) -> String {
     kept.join("_")
 }
 
+/// Each case's runs by cell size: grouped by every axis but `scene.cell`,
+/// then by h (as its bits, ascending for positive h).
+type Groups<'a> = BTreeMap<Vec<String>, BTreeMap<u64, Vec<&'a Row>>>;
+
+/// The refinement table and figures (a matrix section:
+/// `report_matrix::MATRIX_SECTIONS`); nothing without a `scene.cell` axis
+/// or a case run at two cell sizes.
 pub fn refinement_table(m: &Matrix, out: &Path, page: &mut Page) -> Res {
     let Some(h_axis) = m.axis("scene.cell") else {
         return Ok(());
     };
-    let h_of = |r: &Row| {
-        r.summary
-            .params
-            .get("scene.cell")
-            .and_then(|v| v.as_f64())
-            .unwrap_or(f64::NAN)
-    };
-    // Group by every other axis; within a group, by h.
-    let mut groups: BTreeMap<Vec<String>, BTreeMap<u64, Vec<&Row>>> = BTreeMap::new();
-    for r in &m.rows {
-        let mut key = r.params.clone();
-        key.remove(h_axis);
-        groups
-            .entry(key)
-            .or_default()
-            .entry(h_of(r).to_bits())
-            .or_default()
-            .push(r);
-    }
-    let mut rows: Vec<(String, Vec<Cell>)> = vec![];
+    let mut rows: Vec<TableRow> = vec![];
     // Per figure, one (case, [(h, value)]) line per group.
     let mut plots: Vec<Vec<Line>> = vec![vec![]; FIGURES.len()];
-    for (key, by_h) in &groups {
+    for (key, by_h) in &by_cell_size(m, h_axis) {
         if by_h.len() < 2 {
             continue;
         }
-        let hs: Vec<f64> = by_h.keys().map(|b| f64::from_bits(*b)).collect();
-        for (f, (name, figure)) in FIGURES.iter().enumerate() {
-            let values: Vec<f64> = by_h
-                .values()
-                .map(|runs| {
-                    let v: Vec<f64> = runs.iter().filter_map(|r| figure(r)).collect();
-                    median(&v).unwrap_or(f64::NAN)
-                })
-                .collect();
-            if values.iter().all(|v| !v.is_finite()) {
-                continue;
+        for (f, figure) in FIGURES.iter().enumerate() {
+            if let Some((row, line)) = figure_row(key, by_h, figure) {
+                rows.push(row);
+                plots[f].extend(line);
             }
-            let label = by_h
-                .values()
-                .next()
-                .and_then(|runs| runs.first())
-                .map_or_else(|| key.join(" "), |r| without_cell_size(&r.summary.case));
-            let text: Vec<String> = hs
-                .iter()
-                .zip(&values)
-                .map(|(h, v)| format!("{}: {}", short(*h), short(*v)))
-                .collect();
-            // The front speed converges to a value, not to zero: no order for it.
-            let order = if name.contains("speed") {
-                "-".into()
-            } else {
-                plots[f].push((
-                    label.clone(),
-                    hs.iter().copied().zip(values.iter().copied()).collect(),
-                ));
-                observed_order(&hs, &values).map_or("-".into(), |p| format!("{p:.2}"))
-            };
-            rows.push((
-                format!("{label} {name}"),
-                vec![
-                    Cell::Text(label),
-                    Cell::Text((*name).into()),
-                    Cell::Text(text.join(", ")),
-                    Cell::Num(order),
-                ],
-            ));
         }
     }
     if rows.is_empty() {
@@ -132,6 +86,83 @@ pub fn refinement_table(m: &Matrix, out: &Path, page: &mut Page) -> Res {
         .map(String::from)
         .to_vec();
     page.table("refinement", &headers, &rows);
+    refinement_figures(plots, out, page)
+}
+
+fn by_cell_size(m: &Matrix, h_axis: usize) -> Groups<'_> {
+    let h_of = |r: &Row| {
+        r.summary
+            .params
+            .get("scene.cell")
+            .and_then(|v| v.as_f64())
+            .unwrap_or(f64::NAN)
+    };
+    let mut groups: Groups = BTreeMap::new();
+    for r in &m.rows {
+        let mut key = r.params.clone();
+        key.remove(h_axis);
+        groups
+            .entry(key)
+            .or_default()
+            .entry(h_of(r).to_bits())
+            .or_default()
+            .push(r);
+    }
+    groups
+}
+
+/// One case's table row for one figure (None when the figure is undefined
+/// at every h), and its line for the figure's plot (None for the front
+/// speed, which converges to a value, not to zero: no order for it).
+fn figure_row(
+    key: &[String],
+    by_h: &BTreeMap<u64, Vec<&Row>>,
+    (name, figure): &(&str, Figure),
+) -> Option<(TableRow, Option<Line>)> {
+    let hs: Vec<f64> = by_h.keys().map(|b| f64::from_bits(*b)).collect();
+    let values: Vec<f64> = by_h
+        .values()
+        .map(|runs| {
+            let v: Vec<f64> = runs.iter().filter_map(|r| figure(r)).collect();
+            median(&v).unwrap_or(f64::NAN)
+        })
+        .collect();
+    if values.iter().all(|v| !v.is_finite()) {
+        return None;
+    }
+    let label = by_h
+        .values()
+        .next()
+        .and_then(|runs| runs.first())
+        .map_or_else(|| key.join(" "), |r| without_cell_size(&r.summary.case));
+    let text: Vec<String> = hs
+        .iter()
+        .zip(&values)
+        .map(|(h, v)| format!("{}: {}", short(*h), short(*v)))
+        .collect();
+    let (order, line) = if name.contains("speed") {
+        ("-".into(), None)
+    } else {
+        (
+            observed_order(&hs, &values).map_or("-".into(), |p| format!("{p:.2}")),
+            Some((label.clone(), hs.iter().copied().zip(values).collect())),
+        )
+    };
+    let row = (
+        format!("{label} {name}"),
+        vec![
+            Cell::Text(label),
+            Cell::Text((*name).into()),
+            Cell::Text(text.join(", ")),
+            Cell::Num(order),
+        ],
+    );
+    Some((row, line))
+}
+
+/// Per figure, its lines against h on log-log axes (a figure needs a line
+/// with two positive values).
+fn refinement_figures(plots: Vec<Vec<Line>>, out: &Path, page: &mut Page) -> Res {
     for (f, lines) in plots.into_iter().enumerate() {
         let drawn = |pts: &Vec<(f64, f64)>| pts.iter().filter(|(_, e)| *e > 0.0).count() >= 2;
         if !lines.iter().any(|(_, pts)| drawn(pts)) {

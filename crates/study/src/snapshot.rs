@@ -300,14 +300,37 @@ impl Snapshot {
     /// and time are inline field data (`Step`, `TimeValue`), which
     /// `write_collections` reads for the `.pvd`.
     pub fn vtu(&self) -> Vec<u8> {
-        use std::fmt::Write;
+        let arrays = self.vtu_arrays();
+        let blocks: Vec<Vec<u8>> = arrays.iter().map(|a| zlib_blocks(&a.3)).collect();
+        let mut offset = 0usize;
+        let mut tags = BTreeMap::new();
+        for ((name, ty, comps, _), bytes) in arrays.iter().zip(&blocks) {
+            tags.insert(
+                *name,
+                format!(
+                    "<DataArray type=\"{ty}\" Name=\"{name}\" NumberOfComponents=\"{comps}\" format=\"appended\" offset=\"{offset}\"/>"
+                ),
+            );
+            offset += bytes.len();
+        }
+        let mut out = self.vtu_header(&tags).into_bytes();
+        out.reserve(offset + 64);
+        for bytes in &blocks {
+            out.extend_from_slice(bytes);
+        }
+        out.extend_from_slice(b"\n</AppendedData>\n</VTKFile>\n");
+        out
+    }
+
+    /// The arrays of the appended block, in its order: (name, VTK type,
+    /// components, little-endian bytes before compression).
+    fn vtu_arrays(&self) -> Vec<(&'static str, &'static str, usize, Vec<u8>)> {
         let n = self.x.len();
         let f32s = |v: &mut Vec<u8>, it: &mut dyn Iterator<Item = f64>| {
             for x in it {
                 v.extend_from_slice(&(x as f32).to_le_bytes());
             }
         };
-        // (name, VTK type, components, bytes), in the order of the appended block.
         let mut arrays: Vec<(&str, &str, usize, Vec<u8>)> = vec![];
         let mut points = Vec::with_capacity(12 * n);
         f32s(
@@ -347,19 +370,14 @@ impl Snapshot {
             &mut self.v.iter().flat_map(|u| [u.x, u.y, 0.0]),
         );
         arrays.push(("velocity", "Float32", 3, velocity));
+        arrays
+    }
 
-        let blocks: Vec<Vec<u8>> = arrays.iter().map(|a| zlib_blocks(&a.3)).collect();
-        let mut offset = 0usize;
-        let mut tags = BTreeMap::new();
-        for ((name, ty, comps, _), bytes) in arrays.iter().zip(&blocks) {
-            tags.insert(
-                *name,
-                format!(
-                    "<DataArray type=\"{ty}\" Name=\"{name}\" NumberOfComponents=\"{comps}\" format=\"appended\" offset=\"{offset}\"/>"
-                ),
-            );
-            offset += bytes.len();
-        }
+    /// The XML up to the appended data's `_`, with each array's tag (`tags`,
+    /// by name) where it belongs.
+    fn vtu_header(&self, tags: &BTreeMap<&str, String>) -> String {
+        use std::fmt::Write;
+        let n = self.x.len();
         let mut h = String::with_capacity(2048);
         let _ = write!(
             h,
@@ -384,13 +402,7 @@ impl Snapshot {
             "</PointData>\n<Points>\n{}\n</Points>\n<Cells>\n{}\n{}\n{}\n</Cells>\n</Piece>\n</UnstructuredGrid>\n<AppendedData encoding=\"raw\">\n_",
             tags["Points"], tags["connectivity"], tags["offsets"], tags["types"]
         );
-        let mut out = h.into_bytes();
-        out.reserve(offset + 64);
-        for bytes in &blocks {
-            out.extend_from_slice(bytes);
-        }
-        out.extend_from_slice(b"\n</AppendedData>\n</VTKFile>\n");
-        out
+        h
     }
 
     /// Reads what `vtu` wrote (Float32 fields come back as their f64 value).

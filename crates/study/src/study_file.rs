@@ -438,6 +438,32 @@ fn case(name: String, table: Table) -> Result<Case, KeyError> {
 
 /// Checks a mixture's bodies and resolves its `[drag]` table.
 fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, KeyError> {
+    mixture_bodies(solver)?;
+    let coefficient = drag_coefficient(t, solver)?;
+    check_drag_options(t, solver)?;
+    Ok(MixtureSpec {
+        drag: Drag {
+            coefficient,
+            kozeny_carman: t.kozeny_carman,
+            model: t.model,
+            update: t.update,
+        },
+        fixed_solid: t.fixed_solid,
+        pore_pressure: t.pore_pressure,
+        pore_node_average: t.pore_node_average,
+        volume_constraint: t.volume_constraint,
+        top_traction: t.top_traction,
+        traction_ramp: t.traction_ramp,
+        drained: t.drained.clone(),
+        drained_pressure: t.drained_pressure,
+        inflow: t.inflow.clone(),
+        inflow_velocity: t.inflow_velocity,
+    })
+}
+
+/// A body of each phase, every body with one, no perturbation, and no
+/// overlap but of the two phases with n_s + n_f <= 1.
+fn mixture_bodies(solver: &SolverConfig) -> Result<(), KeyError> {
     let bodies = &solver.scene.bodies;
     if let Some(i) = bodies.iter().position(|b| b.phase.is_none()) {
         return Err((
@@ -462,7 +488,12 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
             "is not available in a mixture yet (allowed: single-phase scenes)".into(),
         ));
     }
-    // Overlapping bodies of the two phases share the volume: n_s + n_f <= 1.
+    overlaps(bodies)
+}
+
+/// Overlapping bodies of the two phases share the volume: n_s + n_f <= 1;
+/// two bodies of one phase may not overlap.
+fn overlaps(bodies: &[solver::Body]) -> Result<(), KeyError> {
     for (i, a) in bodies.iter().enumerate() {
         for (j, b) in bodies.iter().enumerate().skip(i + 1) {
             let overlap = a.rect[0] < b.rect[2]
@@ -487,6 +518,13 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
             }
         }
     }
+    Ok(())
+}
+
+/// The drag coefficient B (kg m^-3 s^-1): `drag.coefficient`, or from
+/// `drag.permeability` and the fluid's viscosity and fraction.
+fn drag_coefficient(t: &DragTable, solver: &SolverConfig) -> Result<f64, KeyError> {
+    let bodies = &solver.scene.bodies;
     let positive = |key: &str, v: f64| {
         if v > 0.0 && v.is_finite() {
             Ok(v)
@@ -497,15 +535,15 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
             ))
         }
     };
-    let coefficient = match (t.coefficient, t.permeability) {
+    match (t.coefficient, t.permeability) {
         (Some(b), None) => {
             if b >= 0.0 && b.is_finite() {
-                b
+                Ok(b)
             } else {
-                return Err((
+                Err((
                     "drag.coefficient".into(),
                     format!("{b} is out of range (allowed: finite >= 0 kg m^-3 s^-1)"),
-                ));
+                ))
             }
         }
         (None, Some(k)) => {
@@ -522,15 +560,19 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
                     format!("{mu}: drag.permeability needs the fluid's viscosity > 0 (or give drag.coefficient)"),
                 ));
             }
-            Drag::from_permeability(mu, k, fluid.fraction)
+            Ok(Drag::from_permeability(mu, k, fluid.fraction))
         }
-        _ => {
-            return Err((
-                "drag".into(),
-                "give exactly one of `coefficient` (kg m^-3 s^-1) and `permeability` (m^2)".into(),
-            ))
-        }
-    };
+        _ => Err((
+            "drag".into(),
+            "give exactly one of `coefficient` (kg m^-3 s^-1) and `permeability` (m^2)".into(),
+        )),
+    }
+}
+
+/// The drag table's options agree with one another and with the scene's
+/// walls: the update, volume constraint, pore pressure, drained and inflow
+/// walls, Kozeny-Carman porosity and the top traction.
+fn check_drag_options(t: &DragTable, solver: &SolverConfig) -> Result<(), KeyError> {
     if t.model.is_particle_based() && t.update != DragUpdate::Explicit {
         return Err((
             "drag.update".into(),
@@ -583,24 +625,7 @@ fn mixture_spec(t: &DragTable, solver: &SolverConfig) -> Result<MixtureSpec, Key
             ));
         }
     }
-    Ok(MixtureSpec {
-        drag: Drag {
-            coefficient,
-            kozeny_carman: t.kozeny_carman,
-            model: t.model,
-            update: t.update,
-        },
-        fixed_solid: t.fixed_solid,
-        pore_pressure: t.pore_pressure,
-        pore_node_average: t.pore_node_average,
-        volume_constraint: t.volume_constraint,
-        top_traction: t.top_traction,
-        traction_ramp: t.traction_ramp,
-        drained: t.drained.clone(),
-        drained_pressure: t.drained_pressure,
-        inflow: t.inflow.clone(),
-        inflow_velocity: t.inflow_velocity,
-    })
+    Ok(())
 }
 
 /// A serde error as (dotted key, message in the study file's words).
