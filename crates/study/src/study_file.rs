@@ -1012,6 +1012,27 @@ mod tests {
         assert!((b / (0.16 * 1e-3 / 1e-10) - 1.0).abs() < 1e-12, "{b}");
     }
 
+    /// With several faults, the bodies are reported first, then the drag
+    /// coefficient, then the drag table's options.
+    #[test]
+    fn a_mixture_with_several_faults_reports_the_bodies_then_the_coefficient() {
+        let bad = |text: &str| mixture_case(text).expect_err("refused").0;
+        let fraction_and_coefficient = MIXTURE
+            .replace("fraction = 0.4", "fraction = 0.5")
+            .replace("coefficient = 1e5", "coefficient = -1.0");
+        assert_eq!(bad(&fraction_and_coefficient), "scene.body[1].fraction");
+        let coefficient_and_option = MIXTURE.replace(
+            "coefficient = 1e5",
+            "coefficient = -1.0\npore_node_average = true",
+        );
+        assert_eq!(bad(&coefficient_and_option), "drag.coefficient");
+        let perturb = "[[perturb]]\nstep = 10\nregion = [0.0, 0.0, 0.05, 0.05]\ndv = [0.0, 1.0]\n";
+        let phase_and_perturb = MIXTURE.replace("phase = \"fluid\"", "phase = \"solid\"") + perturb;
+        assert_eq!(bad(&phase_and_perturb), "scene.body");
+        let perturb_and_fraction = MIXTURE.replace("fraction = 0.4", "fraction = 0.5") + perturb;
+        assert_eq!(bad(&perturb_and_fraction), "perturb");
+    }
+
     #[test]
     fn bad_mixtures_name_the_key_and_what_is_allowed() {
         let bad = |text: &str| mixture_case(text).expect_err("refused");
