@@ -395,6 +395,78 @@ mod tests {
         assert_eq!(text(&linear, "materials.water.K"), "1.5e4");
     }
 
+    fn run(status: Status, first_kick: Option<Cause>) -> Row {
+        use crate::summary::{sample_event, Metrics, SCHEMA_VERSION};
+        let events: Vec<monitor::Event> = first_kick
+            .into_iter()
+            .map(|cause| {
+                let mut e = sample_event();
+                e.cause = cause;
+                e
+            })
+            .collect();
+        let kick = events.iter().find(|e| e.is_kick()).map(|e| e.t);
+        let summary = Summary {
+            schema_version: SCHEMA_VERSION,
+            case: "c".into(),
+            params: Default::default(),
+            status,
+            reason: String::new(),
+            steps: 10,
+            t_end: 1.0,
+            wall_s: 1.0,
+            particles: 10,
+            particle_steps_per_s: 1.0,
+            final_state_hash: "0".into(),
+            events,
+            metrics: Metrics {
+                t_first_kick: kick,
+                ..Metrics::default()
+            },
+            phases: vec![],
+        };
+        Row::for_test(summary, vec![])
+    }
+
+    /// The case table's row class is the status as summary.json spells
+    /// it, or `kicked`; the heatmap's class is how a run ended or what
+    /// kicked it first.
+    #[test]
+    fn a_row_is_classed_by_its_status_and_first_kick() {
+        let cases = [
+            (Status::Completed, None, "completed", Class::NoKickSurvived),
+            (
+                Status::Completed,
+                Some(Cause::Injection),
+                "kicked",
+                Class::InjectionFirst,
+            ),
+            // An impact is no kick.
+            (
+                Status::Completed,
+                Some(Cause::Impact),
+                "completed",
+                Class::NoKickSurvived,
+            ),
+            (Status::BlewUp, None, "blew_up", Class::NoKickBlewUp),
+            (
+                Status::BlewUp,
+                Some(Cause::Inversion),
+                "blew_up",
+                Class::InversionFirst,
+            ),
+            (Status::Failed, None, "failed", Class::Failed),
+        ];
+        for (status, cause, css, class) in cases {
+            let r = run(status, cause);
+            assert_eq!(
+                (r.css_class(), r.class()),
+                (css, class),
+                "{status:?} {cause:?}"
+            );
+        }
+    }
+
     #[test]
     fn the_spread_is_the_median_and_range_of_the_finite_values() {
         let v = [3.0, f64::NAN, 1.0, 2.0, 10.0];
