@@ -11,8 +11,10 @@ Usage:
       --out RESULT.json [--jobs N]
   scripts/same_bits.py compare A.json B.json
 
-`record` runs the cases into WORKDIR/<study>__t<t_end>/<case>/ and writes
-RESULT.json. A case that fails to run is recorded with its exit code and
+`record` runs the cases into WORKDIR/<study>__t<t_end>/<case>/ (with
+--csv) and writes RESULT.json, with a digest of every column of each CSV
+table the case wrote (timeseries per phase, mixture, terzaghi) and the
+summary's metrics flattened to dotted keys. A case that fails to run is recorded with its exit code and
 stderr instead of aborting the script. `compare` prints one row per case and
 a unified diff of the `list` output of each study, and exits 1 on any
 difference (including a case that failed or is missing on either side).
@@ -20,6 +22,8 @@ Standard library only (Python >= 3.11 for tomllib).
 """
 import argparse
 import concurrent.futures
+import csv
+import hashlib
 import datetime
 import difflib
 import json
@@ -31,7 +35,7 @@ import time
 import tomllib
 from pathlib import Path
 
-SCHEMA = 1
+SCHEMA = 2
 
 # Bug-report cases run to 0.6 s (names are checked against `kick list`).
 BUG_REPORT_CASES = [
@@ -172,7 +176,7 @@ def run_case(kick, studies, work, c):
         shutil.rmtree(case_dir)  # never read a stale summary.json
     out.mkdir(parents=True, exist_ok=True)
     cmd = [kick, "run", str(Path(studies) / c["study"]), "--case", c["case"],
-           "--out", str(out), "--threads", "1"]
+           "--out", str(out), "--threads", "1", "--csv"]
     if c["set_t_end"]:
         cmd += ["--set", f"scene.t_end={fmt_t(c['t_end'])}"]
     t0 = time.monotonic()
@@ -198,10 +202,40 @@ def run_case(kick, studies, work, c):
             "t_end": s.get("t_end"),
             "n_events": len(s["events"]),
             "events": [[e["first_step"], e["t"], e["cause"]] for e in s["events"]],
+            "metrics": flatten(s.get("metrics", {})),
+            "tables": {f.name: column_digests(f) for f in sorted(case_dir.glob("*.csv"))},
         })
     except (ValueError, KeyError, TypeError) as e:
         rec["error"] = f"unreadable {summary}: {e!r}\n{stderr[-5000:]}"
     return rec
+
+
+def flatten(obj, prefix=""):
+    """Nested JSON objects as one dict of dotted keys (leaves as they are)."""
+    out = {}
+    for k, v in obj.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict):
+            out.update(flatten(v, key + "."))
+        else:
+            out[key] = v
+    return out
+
+
+def column_digests(path):
+    """sha256 of each CSV column's cells (by header name) and the row count."""
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    if not rows:
+        return {}
+    header, body = rows[0], rows[1:]
+    digests = {"#rows": len(body)}
+    for k, name in enumerate(header):
+        h = hashlib.sha256()
+        for r in body:
+            h.update((r[k] if k < len(r) else "").encode() + b"\n")
+        digests[name] = h.hexdigest()[:16]
+    return digests
 
 
 def kick_version(kick):
@@ -255,6 +289,31 @@ FIELDS = [("hash", "final_state_hash"), ("steps", "steps"),
           ("status", ("status", "reason")), ("events", "events")]
 
 
+def table_differences(ra, rb):
+    """Columns (table:column) whose cells differ, and those on one side only."""
+    ta, tb = ra.get("tables", {}), rb.get("tables", {})
+    differ, one_side = [], []
+    for table in sorted(set(ta) | set(tb)):
+        ca, cb = ta.get(table), tb.get(table)
+        if ca is None or cb is None:
+            one_side.append(f"{table} (only in {'B' if ca is None else 'A'})")
+            continue
+        for col in sorted(set(ca) | set(cb)):
+            if col not in ca or col not in cb:
+                one_side.append(f"{table}:{col} (only in {'B' if col not in ca else 'A'})")
+            elif ca[col] != cb[col]:
+                differ.append(f"{table}:{col}")
+    return differ, one_side
+
+
+def metric_differences(ra, rb):
+    """Metrics (dotted keys) whose values differ, and those on one side only."""
+    ma, mb = ra.get("metrics", {}), rb.get("metrics", {})
+    differ = [k for k in sorted(set(ma) & set(mb)) if ma[k] != mb[k]]
+    one_side = sorted(set(ma) ^ set(mb))
+    return differ, one_side
+
+
 def field(rec, key):
     if isinstance(key, tuple):
         return tuple(rec.get(k) for k in key)
@@ -268,7 +327,8 @@ def compare(args):
     print(f"A: {args.a} ({a.get('kick')}, {a.get('kick_version')})")
     print(f"B: {args.b} ({b.get('kick')}, {b.get('kick_version')})")
     print()
-    print(f"{'case':<{width}}  " + "  ".join(f"{name:<9}" for name, _ in FIELDS))
+    print(f"{'case':<{width}}  " + "  ".join(f"{name:<9}" for name, _ in FIELDS)
+          + "  tables     metrics")
     n_diff = 0
     for cid in ids:
         ra, rb = a["cases"].get(cid), b["cases"].get(cid)
@@ -279,9 +339,25 @@ def compare(args):
             cells = [f"failed {who}"] * len(FIELDS)
         else:
             cells = ["same" if field(ra, k) == field(rb, k) else "DIFFERENT" for _, k in FIELDS]
-        if any(c != "same" for c in cells):
+        details = []
+        if ra is not None and rb is not None and "error" not in ra and "error" not in rb:
+            t_diff, t_one = table_differences(ra, rb)
+            m_diff, m_one = metric_differences(ra, rb)
+            if "tables" in ra and "tables" in rb:
+                n_cols = sum(len(c) - 1 for c in ra["tables"].values())
+                cells.append("DIFFERENT" if t_diff else f"same({n_cols})")
+                details += [f"    column differs: {c}" for c in t_diff]
+                details += [f"    column on one side: {c}" for c in t_one]
+            if "metrics" in ra and "metrics" in rb:
+                cells.append("DIFFERENT" if m_diff else "same")
+                details += [f"    metric differs: {k}: {ra['metrics'][k]!r} vs {rb['metrics'][k]!r}"
+                            for k in m_diff]
+                details += [f"    metric on one side: {k}" for k in m_one]
+        if any(not c.startswith("same") for c in cells):
             n_diff += 1
         print(f"{cid:<{width}}  " + "  ".join(f"{c:<9}" for c in cells))
+        for d in details:
+            print(d)
     print()
     n_list_diff = 0
     studies = sorted(set(a.get("lists", {})) | set(b.get("lists", {})))

@@ -6,6 +6,7 @@ use common::{kick, stderr};
 use monitor::EventKind;
 use std::path::PathBuf;
 use std::process::Command;
+use study::probes::surge_front::SurgeFrontFigures;
 use study::summary::{Status, Summary};
 
 fn scratch(name: &str) -> common::Scratch {
@@ -94,18 +95,21 @@ fn run_completes_and_writes_the_case_folder() {
         "checkerboard_late",
         "checkerboard_peak",
         "energy_injected_max",
-        "t_first_kick",
-        "front_rms_error",
     ] {
         assert!(
-            raw["metrics"].get(k).is_some(),
-            "metric {k}: {}",
+            raw["metrics"]["figures"].get(k).is_some(),
+            "figure {k}: {}",
             raw["metrics"]
         );
     }
-    assert!(s.metrics.hydro_rel_rms_late.is_some());
+    assert!(raw["metrics"].get("t_first_kick").is_some());
+    assert!(raw["metrics"]["checks"]["surge_front"]
+        .get("rms_error")
+        .is_some());
+    assert!(s.metrics.figure("hydro_rel_rms_late").is_some());
     // 0.05 s is T = 0.5, before the first Martin & Moyce point (T = 0.83).
-    assert_eq!(s.metrics.front_rms_error, None);
+    let front = s.metrics.check::<SurgeFrontFigures>().unwrap();
+    assert_eq!(front.rms_error, None);
 }
 
 #[test]
@@ -137,7 +141,12 @@ fn blow_up_is_a_result_with_step_and_reason() {
     let last = s.events.last().unwrap();
     assert_eq!(last.kind, EventKind::BlowOut, "{last:?}");
     assert_eq!(last.first_step, steps);
-    let front = s.metrics.front_rms_error.unwrap();
+    let front = s
+        .metrics
+        .check::<SurgeFrontFigures>()
+        .unwrap()
+        .rms_error
+        .unwrap();
     assert!(front > 0.0 && front < 1.0, "{front}");
 }
 

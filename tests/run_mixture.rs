@@ -5,7 +5,29 @@
 mod common;
 
 use common::{kick, stderr};
-use study::summary::{Status, Summary};
+use study::probes::darcy::DarcyFigures;
+use study::probes::drag_decay::DragDecayFigures;
+use study::probes::drag_layer::DragLayerFigures;
+use study::probes::mixture_conservation::MixtureFigures;
+use study::probes::surface::SurfaceFigures;
+use study::probes::terzaghi::TerzaghiFigures;
+use study::summary::{Metrics, Status, Summary};
+
+fn decay(m: &Metrics) -> DragDecayFigures {
+    m.check().expect("drag-decay figures")
+}
+
+fn mixture(m: &Metrics) -> MixtureFigures {
+    m.check().expect("mixture figures")
+}
+
+fn darcy(m: &Metrics) -> DarcyFigures {
+    m.check().expect("Darcy figures")
+}
+
+fn surface(m: &Metrics) -> SurfaceFigures {
+    m.check().expect("surface figures")
+}
 
 fn scratch(name: &str) -> common::Scratch {
     common::scratch("mixture", name)
@@ -44,9 +66,9 @@ fn drag_decay_study_meets_the_exact_and_discrete_decay() {
             assert_eq!(s.phases[0].phase, "solid");
             assert_eq!(s.phases[1].particles, 400, "{name}");
             assert!(s.events.is_empty(), "{name}: {:?}", s.events);
-            let ratio = m.drag_dt_over_tau.unwrap();
-            let exact = m.drag_decay_rel_error.unwrap();
-            let own = m.drag_decay_discrete_rel_error.unwrap();
+            let ratio = decay(m).dt_over_tau.unwrap();
+            let exact = decay(m).rel_error;
+            let own = decay(m).discrete_rel_error;
             // Each update follows its own law to round-off at any dt.
             assert!(own < 1e-12, "{name}: {own}");
             match update {
@@ -61,13 +83,13 @@ fn drag_decay_study_meets_the_exact_and_discrete_decay() {
                 assert!(exact < 0.01, "{name}: {exact} at dt/tau {ratio}");
             }
             // The drag conserves momentum and never adds energy.
-            assert!(m.momentum_drift_rel.unwrap() < 1e-12, "{name}");
-            let dissipated = m.drag_dissipated.unwrap();
+            assert!(mixture(m).momentum_drift_rel.unwrap() < 1e-12, "{name}");
+            let dissipated = mixture(m).drag_dissipated;
             assert!(dissipated > 0.0, "{name}");
             assert!(
-                m.mixture_energy_growth.unwrap() <= 1e-12 * dissipated,
+                mixture(m).energy_growth.unwrap() <= 1e-12 * dissipated,
                 "{name}: {:?}",
-                m.mixture_energy_growth
+                mixture(m).energy_growth
             );
             for f in [
                 "timeseries.parquet",
@@ -97,8 +119,9 @@ fn drag_decay_study_meets_the_exact_and_discrete_decay() {
         Summary::read(&out.join(format!("{update}_B3.2e6")))
             .unwrap()
             .metrics
-            .drag_decay_rel_error
+            .check::<DragDecayFigures>()
             .unwrap()
+            .rel_error
     };
     assert!(worst("explicit") > 0.05 && worst("implicit") > 0.05);
     let o = kick(&["report", out.to_str().unwrap()]);
@@ -195,8 +218,8 @@ fn a_dropped_mixture_logs_each_phase_impact_with_its_phase() {
     );
     // Gravity and walls: no decay figure, no momentum figure; the budget still closes.
     let m = &s.metrics;
-    assert!(m.drag_decay_rel_error.is_none() && m.momentum_drift_rel.is_none());
-    assert!(m.drag_dissipated.unwrap() > 0.0);
+    assert!(m.check::<DragDecayFigures>().is_none() && mixture(m).momentum_drift_rel.is_none());
+    assert!(mixture(m).drag_dissipated > 0.0);
     let case = dir.join("drop");
     let case = case.to_str().unwrap();
     for (phase, threads) in [("solid", "1"), ("fluid", "2")] {
@@ -250,18 +273,22 @@ fn darcy_column_meets_the_pressure_drop_and_converges_in_flux() {
             assert_eq!(s.status, Status::Completed, "{name}");
             // No energy events: periodic along gravity, the budget rule is off.
             assert!(s.events.is_empty(), "{name}: {:?}", s.events);
-            assert!(m.mixture_energy_growth.is_none());
-            assert_eq!(m.energy_injected_max.unwrap_or(0.0), 0.0, "{name}");
-            let dp = m.darcy_dp_rel_error.unwrap();
+            assert!(mixture(m).energy_growth.is_none());
+            assert_eq!(
+                m.figure("energy_injected_max").unwrap_or(0.0),
+                0.0,
+                "{name}"
+            );
+            let dp = darcy(m).dp_rel_error;
             assert!(dp < 0.02, "{name}: pressure drop off by {dp}");
             // At h = 1 cm only two rows lie inside the layer: no linearity figure.
             if h != "1cm" {
-                let lin = m.darcy_linearity.unwrap();
+                let lin = darcy(m).linearity.unwrap();
                 assert!(lin < 0.02, "{name}: p departs from a line by {lin}");
             } else {
-                assert!(m.darcy_linearity.is_none());
+                assert!(darcy(m).linearity.is_none());
             }
-            flux_errors.push(m.darcy_flux_rel_error.unwrap());
+            flux_errors.push(darcy(m).flux_rel_error);
         }
         assert!(
             flux_errors.windows(2).all(|w| w[1] < w[0]),
@@ -286,7 +313,7 @@ fn drag_convergence_writes_each_models_observed_order() {
             .map(|h| {
                 let s = Summary::read(&out.join(format!("{model}_h{h}"))).unwrap();
                 assert_eq!(s.status, Status::Completed, "{}", s.case);
-                s.metrics.drag_layer_error.unwrap()
+                s.metrics.check::<DragLayerFigures>().unwrap().error
             })
             .collect()
     };
@@ -339,8 +366,12 @@ fn terzaghi_column_consolidates_like_the_series_solution() {
     let s = Summary::read(&out.join("terzaghi")).unwrap();
     assert_eq!(s.status, Status::Completed, "{}", s.reason);
     let m = &s.metrics;
-    let p = m.terzaghi_max_error_over_p0.unwrap();
-    let u = m.terzaghi_u_error.unwrap();
+    let p = m
+        .check::<TerzaghiFigures>()
+        .unwrap()
+        .max_error_over_p0
+        .unwrap();
+    let u = m.check::<TerzaghiFigures>().unwrap().u_error.unwrap();
     assert!(u < 0.02, "U off by {u}");
     assert!(out.join("terzaghi").join("terzaghi.parquet").exists());
     // The series (t, T, max_error_over_p0, U, U_exact): the summary's figure
@@ -397,7 +428,8 @@ fn filter_stone_locks_without_anti_locking_and_not_with_it() {
     for s in [&locked, &anti] {
         assert_eq!(s.status, Status::Completed, "{}", s.case);
         assert!(
-            s.metrics.surface_spread_late.is_some() && s.metrics.penetration_spread_late.is_some()
+            surface(&s.metrics).surface_spread_late.is_some()
+                && surface(&s.metrics).penetration_spread_late.is_some()
         );
         assert!(
             s.events.iter().all(|e| e.phase.as_deref() == Some("fluid")),
@@ -408,11 +440,11 @@ fn filter_stone_locks_without_anti_locking_and_not_with_it() {
     let fluid = |s: &Summary| s.phases[1].metrics.clone();
     assert_eq!(locked.metrics.n_kicks, 0, "{:?}", locked.events);
     assert_eq!(anti.metrics.n_kicks, 0, "{:?}", anti.events);
-    assert!(fluid(&locked).checkerboard_late.unwrap() > 0.2);
-    assert!(fluid(&anti).checkerboard_late.unwrap() < 0.05);
+    assert!(fluid(&locked).figure("checkerboard_late").unwrap() > 0.2);
+    assert!(fluid(&anti).figure("checkerboard_late").unwrap() < 0.05);
     let (h_locked, h_anti) = (
-        fluid(&locked).hydro_rel_rms_late.unwrap(),
-        fluid(&anti).hydro_rel_rms_late.unwrap(),
+        fluid(&locked).figure("hydro_rel_rms_late").unwrap(),
+        fluid(&anti).figure("hydro_rel_rms_late").unwrap(),
     );
     assert!(h_anti < 0.2 * h_locked, "{h_anti} against {h_locked}");
 }

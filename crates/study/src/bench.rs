@@ -1,14 +1,15 @@
 //! `kick bench`: particle-steps per second on the default dam break or on the
 //! scene of the well-known 88-line MLS-MPM fluid.
 
-use monitor::{Monitor, MonitorConfig};
+use crate::runner::{Probe, Rows, Run, RunOptions, Runner, Simulated, Watch};
+use crate::summary::Status;
+use monitor::MonitorConfig;
 use serde_json::json;
 use solver::particles::Particles;
 use solver::{
     DtMode, EosKind, ForceKind, InitialState, JUpdate, Material, Method, Scene, SchemeKind,
     ShapeKind, Solver, SolverConfig, TransferKind, Vec2,
 };
-use std::time::Instant;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum BenchScene {
@@ -147,67 +148,89 @@ pub fn validate(opts: &BenchOptions) -> Result<(), String> {
     cfg.validate().map_err(|e| e.to_string())
 }
 
+/// Steps before the timing starts.
+const WARM_UP_STEPS: u64 = 10;
+
+/// The most particles outside the grid after any step.
+struct OutsideMax<'a>(&'a mut usize);
+
+impl Probe<Solver> for OutsideMax<'_> {
+    fn after_step(&mut self, run: &Run<Solver>, _: &[u32]) -> std::io::Result<()> {
+        *self.0 = (*self.0).max(run.stepper.view().n_outside);
+        Ok(())
+    }
+}
+
+/// A benchmark stops only at a solver error.
+fn check(outcome: Simulated) -> Result<Simulated, String> {
+    match outcome.status {
+        Status::Completed => Ok(outcome),
+        _ => Err(outcome.reason),
+    }
+}
+
+/// The benchmark's solver: its scene, method (with `--set`), and names.
+fn bench_solver(
+    opts: &BenchOptions,
+) -> Result<(Solver, &'static str, ShapeKind, TransferKind), String> {
+    Ok(match opts.scene {
+        BenchScene::Mpm88 => {
+            let (mut cfg, ps) = mpm88();
+            apply_method_sets(&mut cfg.method, &opts.method_sets)?;
+            cfg.validate().map_err(|e| e.to_string())?;
+            let (shape, transfer) = (cfg.method.shape, cfg.method.transfer);
+            (Solver::with_particles(cfg, ps), "mpm88", shape, transfer)
+        }
+        BenchScene::DamBreak => {
+            let mut cfg = SolverConfig::benchmark_dam_break(opts.shape, opts.transfer, opts.cell);
+            apply_method_sets(&mut cfg.method, &opts.method_sets)?;
+            let (shape, transfer) = (cfg.method.shape, cfg.method.transfer);
+            (
+                Solver::new(cfg).map_err(|e| e.to_string())?,
+                "dam_break",
+                shape,
+                transfer,
+            )
+        }
+    })
+}
+
 pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads)
         .build()
         .map_err(|e| e.to_string())?;
     pool.install(|| {
-        let (mut solver, name, shape, transfer) = match opts.scene {
-            BenchScene::Mpm88 => {
-                let (mut cfg, ps) = mpm88();
-                apply_method_sets(&mut cfg.method, &opts.method_sets)?;
-                cfg.validate().map_err(|e| e.to_string())?;
-                let (shape, transfer) = (cfg.method.shape, cfg.method.transfer);
-                (Solver::with_particles(cfg, ps), "mpm88", shape, transfer)
-            }
-            BenchScene::DamBreak => {
-                let mut cfg =
-                    SolverConfig::benchmark_dam_break(opts.shape, opts.transfer, opts.cell);
-                apply_method_sets(&mut cfg.method, &opts.method_sets)?;
-                let (shape, transfer) = (cfg.method.shape, cfg.method.transfer);
-                (
-                    Solver::new(cfg).map_err(|e| e.to_string())?,
-                    "dam_break",
-                    shape,
-                    transfer,
-                )
-            }
-        };
+        let (solver, name, shape, transfer) = bench_solver(opts)?;
         // Warm-up outside the timing (caches, rayon workers).
-        for _ in 0..10 {
-            solver.step().map_err(|e| e.to_string())?;
-        }
-        // The solver and the monitor timed apart, step by step; field metrics
-        // every FIELD_EVERY steps as a run with ~1000 timeseries rows does.
+        let mut warm_up = RunOptions::new(None, Rows::spread(1, 1.0, 1.0));
+        warm_up.until_step = Some(WARM_UP_STEPS);
+        let mut runner = Runner::new(solver, vec![], warm_up);
+        check(runner.run().map_err(|e| e.to_string())?)?;
+        let (mut solver, _) = runner.into_parts();
+        // The solver and the monitor timed apart, step by step; a row (field
+        // metrics) every FIELD_EVERY steps as a run with ~1000 timeseries
+        // rows does. The monitor's verdict is reported, not acted on: the
+        // bench times a fixed number of steps.
         const FIELD_EVERY: u64 = 25;
-        let mut monitor = Monitor::new(MonitorConfig::default(), &solver.view());
+        let watch = Watch::new(MonitorConfig::default(), &solver.view());
         solver.reset_stage_times();
-        let (mut solver_s, mut monitor_s, mut field_s) = (0.0, 0.0, 0.0);
-        // The monitor's verdict is reported, not acted on: the bench times a
-        // fixed number of steps (a particle leaving the grid stops it).
-        let (mut blow_out, mut outside_max) = (None, 0usize);
-        for k in 0..opts.steps {
-            let t0 = Instant::now();
-            solver.step().map_err(|e| e.to_string())?;
-            let t1 = Instant::now();
-            let v = solver.view();
-            // The monitor is serial: keep the other worker awake for the next step.
-            solver::par::keep_warm(|| {
-                monitor.observe(&v);
-            });
-            outside_max = outside_max.max(v.n_outside);
-            if blow_out.is_none() {
-                blow_out = monitor.report().blow_out.clone();
-            }
-            if k % FIELD_EVERY == 0 {
-                let t2 = Instant::now();
-                monitor.field_metrics(&v);
-                field_s += t2.elapsed().as_secs_f64();
-            }
-            monitor_s += t1.elapsed().as_secs_f64();
-            solver_s += (t1 - t0).as_secs_f64();
-        }
+        let rows = Rows {
+            every: FIELD_EVERY,
+            mark_event_rows: false,
+        };
+        let mut timed = RunOptions::new(None, rows);
+        timed.until_step = Some(WARM_UP_STEPS + opts.steps);
+        timed.stop_on_blow_out = false;
+        let mut outside_max = 0usize;
+        let mut runner = Runner::new(solver, vec![watch], timed);
+        runner.attach(OutsideMax(&mut outside_max));
+        let outcome = check(runner.run().map_err(|e| e.to_string())?)?;
+        let clock = runner.clock;
+        let (solver, _) = runner.into_parts();
+        let (solver_s, field_s) = (clock.solver_s, clock.rows_s);
+        let monitor_s = clock.monitor_s + clock.rows_s;
+        let blow_out = outcome.first_blow_out;
         let n = solver.particle_count();
         let ps = n as f64 * opts.steps as f64;
         let st = solver.stage_times();

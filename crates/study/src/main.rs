@@ -2,7 +2,7 @@
 
 use study::{bench, matrix, report, reproduce, run_case, study_file};
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
 use solver::{ShapeKind, TransferKind};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -17,109 +17,127 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run one case of a study (the first, or --case NAME).
-    Run {
-        /// Study file (TOML).
-        study: PathBuf,
-        /// Case name (see `kick list`).
-        #[arg(long)]
-        case: Option<String>,
-        /// Output folder; the case is written to OUT/CASE.
-        #[arg(long, default_value = "reports")]
-        out: PathBuf,
-        /// Solver threads (default: all cores).
-        #[arg(long)]
-        threads: Option<usize>,
-        /// Override any study key, e.g. --set materials.water.K=1.5e6
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
-        /// Also write the timeseries as CSV.
-        #[arg(long)]
-        csv: bool,
-    },
+    Run(RunArgs),
     /// Run every case of a study, cases in parallel (or join shards with --merge).
-    Matrix {
-        /// Study file (TOML); not needed with --merge.
-        #[arg(required_unless_present = "merge")]
-        study: Option<PathBuf>,
-        /// Output folder: one sub-folder per case, summary.parquet/csv, manifest.json.
-        #[arg(long, default_value = "reports/matrix")]
-        out: PathBuf,
-        /// Cases run at once (default: number of cores).
-        #[arg(long)]
-        jobs: Option<usize>,
-        /// Solver threads per case (default: cores / jobs).
-        #[arg(long)]
-        threads: Option<usize>,
-        /// Run only the cases at positions I, I+N, I+2N, ... (0 <= I < N).
-        #[arg(long, value_name = "I/N", value_parser = matrix::parse_shard)]
-        shard: Option<(usize, usize)>,
-        /// Skip cases whose summary.json is already in OUT.
-        #[arg(long)]
-        resume: bool,
-        /// Join the case folders of these matrix outputs into OUT's tables.
-        #[arg(long, num_args = 1.., value_name = "DIR", conflicts_with_all = ["study", "shard", "resume"])]
-        merge: Vec<PathBuf>,
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
-        /// Also write each case's timeseries as CSV.
-        #[arg(long)]
-        csv: bool,
-    },
+    Matrix(MatrixArgs),
     /// Replay a logged event from the checkpoint before it and check it happens again.
-    Reproduce {
-        /// A case folder written by `kick run` or `kick matrix`.
-        case_dir: PathBuf,
-        /// Event id (see summary.json).
-        #[arg(long)]
-        event: u32,
-        /// In a mixture, the event's phase (solid or fluid): each phase's
-        /// monitor numbers its events from 1.
-        #[arg(long)]
-        phase: Option<String>,
-        #[arg(long)]
-        threads: Option<usize>,
-        /// Output folder (default CASE_DIR/reproduce/event_K).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// VTK every step from this many steps before the event ...
-        #[arg(long, default_value_t = 20)]
-        before: u64,
-        /// ... to this many after its last step.
-        #[arg(long, default_value_t = 20)]
-        after: u64,
-    },
+    Reproduce(ReproduceArgs),
     /// Write OUT/report/index.html (figures as PNG and SVG) for a case or matrix folder.
-    Report {
-        /// A case folder (summary.json) or a matrix folder (summary.parquet).
-        dir: PathBuf,
-    },
+    Report(ReportArgs),
     /// List the expanded cases of a study and their parameters.
-    List {
-        study: PathBuf,
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
-    },
+    List(ListArgs),
     /// Measure particle-steps per second.
-    Bench {
-        #[arg(long, value_enum, default_value = "dam-break")]
-        scene: bench::BenchScene,
-        #[arg(long, default_value_t = 2000)]
-        steps: u64,
-        #[arg(long, default_value_t = 1)]
-        threads: usize,
-        /// Shape function (dam_break only).
-        #[arg(long, value_parser = parse_choice::<ShapeKind>, default_value = "linear")]
-        shape: ShapeKind,
-        /// Transfer (dam_break only).
-        #[arg(long, value_parser = parse_choice::<TransferKind>, default_value = "flip")]
-        transfer: TransferKind,
-        /// Cell size in metres (dam_break only; 0.0025 gives 51 200 particles).
-        #[arg(long, default_value_t = 0.01)]
-        cell: f64,
-        /// Any `method.*` study key, e.g. --set method.f_reset=true (a remedy's cost).
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
-    },
+    Bench(BenchArgs),
+}
+
+#[derive(Args)]
+struct RunArgs {
+    /// Study file (TOML).
+    study: PathBuf,
+    /// Case name (see `kick list`).
+    #[arg(long)]
+    case: Option<String>,
+    /// Output folder; the case is written to OUT/CASE.
+    #[arg(long, default_value = "reports")]
+    out: PathBuf,
+    /// Solver threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Override any study key, e.g. --set materials.water.K=1.5e6
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// Also write the timeseries as CSV.
+    #[arg(long)]
+    csv: bool,
+}
+
+#[derive(Args)]
+struct MatrixArgs {
+    /// Study file (TOML); not needed with --merge.
+    #[arg(required_unless_present = "merge")]
+    study: Option<PathBuf>,
+    /// Output folder: one sub-folder per case, summary.parquet/csv, manifest.json.
+    #[arg(long, default_value = "reports/matrix")]
+    out: PathBuf,
+    /// Cases run at once (default: number of cores).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Solver threads per case (default: cores / jobs).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Run only the cases at positions I, I+N, I+2N, ... (0 <= I < N).
+    #[arg(long, value_name = "I/N", value_parser = matrix::parse_shard)]
+    shard: Option<(usize, usize)>,
+    /// Skip cases whose summary.json is already in OUT.
+    #[arg(long)]
+    resume: bool,
+    /// Join the case folders of these matrix outputs into OUT's tables.
+    #[arg(long, num_args = 1.., value_name = "DIR", conflicts_with_all = ["study", "shard", "resume"])]
+    merge: Vec<PathBuf>,
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// Also write each case's timeseries as CSV.
+    #[arg(long)]
+    csv: bool,
+}
+
+#[derive(Args)]
+struct ReproduceArgs {
+    /// A case folder written by `kick run` or `kick matrix`.
+    case_dir: PathBuf,
+    /// Event id (see summary.json).
+    #[arg(long)]
+    event: u32,
+    /// In a mixture, the event's phase (solid or fluid): each phase's
+    /// monitor numbers its events from 1.
+    #[arg(long)]
+    phase: Option<String>,
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Output folder (default CASE_DIR/reproduce/event_K).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// VTK every step from this many steps before the event ...
+    #[arg(long, default_value_t = 20)]
+    before: u64,
+    /// ... to this many after its last step.
+    #[arg(long, default_value_t = 20)]
+    after: u64,
+}
+
+#[derive(Args)]
+struct ReportArgs {
+    /// A case folder (summary.json) or a matrix folder (summary.parquet).
+    dir: PathBuf,
+}
+
+#[derive(Args)]
+struct ListArgs {
+    study: PathBuf,
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    #[arg(long, value_enum, default_value = "dam-break")]
+    scene: bench::BenchScene,
+    #[arg(long, default_value_t = 2000)]
+    steps: u64,
+    #[arg(long, default_value_t = 1)]
+    threads: usize,
+    /// Shape function (dam_break only).
+    #[arg(long, value_parser = parse_choice::<ShapeKind>, default_value = "linear")]
+    shape: ShapeKind,
+    /// Transfer (dam_break only).
+    #[arg(long, value_parser = parse_choice::<TransferKind>, default_value = "flip")]
+    transfer: TransferKind,
+    /// Cell size in metres (dam_break only; 0.0025 gives 51 200 particles).
+    #[arg(long, default_value_t = 0.01)]
+    cell: f64,
+    /// Any `method.*` study key, e.g. --set method.f_reset=true (a remedy's cost).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
 }
 
 /// A method choice by its study-file name (the serde spelling is the only one).
@@ -139,246 +157,262 @@ fn parse_choice<T: serde::de::DeserializeOwned>(s: &str) -> Result<T, String> {
 const BAD_INPUT: u8 = 2;
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
-    match cli.command {
-        Command::Run {
-            study,
-            case,
-            out,
-            threads,
-            set,
-            csv,
-        } => {
-            let study = match study_file::load(&study, &set) {
-                Ok(s) => s,
-                Err(e) => return bad_input(&e.to_string()),
-            };
-            let chosen = match &case {
-                None => &study.cases[0],
-                Some(name) => match study.cases.iter().find(|c| &c.name == name) {
-                    Some(c) => c,
-                    None => {
-                        let names: Vec<&str> =
-                            study.cases.iter().map(|c| c.name.as_str()).collect();
-                        return bad_input(&format!(
-                            "{}: unknown case \"{name}\" (cases: {})",
-                            study.file.display(),
-                            names.join(", ")
-                        ));
-                    }
-                },
-            };
-            if threads == Some(0) {
-                return bad_input("--threads: 0 is out of range (allowed >= 1)");
+    match Cli::parse().command {
+        Command::Run(a) => run_command(a),
+        Command::Matrix(a) => matrix_command(a),
+        Command::Reproduce(a) => reproduce_command(a),
+        Command::Report(a) => report_command(a),
+        Command::List(a) => list_command(a),
+        Command::Bench(a) => bench_command(a),
+    }
+}
+
+fn run_command(args: RunArgs) -> ExitCode {
+    let RunArgs {
+        study,
+        case,
+        out,
+        threads,
+        set,
+        csv,
+    } = args;
+    let study = match study_file::load(&study, &set) {
+        Ok(s) => s,
+        Err(e) => return bad_input(&e.to_string()),
+    };
+    let chosen = match &case {
+        None => &study.cases[0],
+        Some(name) => match study.cases.iter().find(|c| &c.name == name) {
+            Some(c) => c,
+            None => {
+                let names: Vec<&str> = study.cases.iter().map(|c| c.name.as_str()).collect();
+                return bad_input(&format!(
+                    "{}: unknown case \"{name}\" (cases: {})",
+                    study.file.display(),
+                    names.join(", ")
+                ));
             }
-            let dir = out.join(&chosen.name);
-            let opts = run_case::RunOptions {
-                threads,
-                bar: Some(indicatif::ProgressBar::new(1000).with_style(run_case::progress_style())),
-                csv,
-            };
-            match run_case::run_case(chosen, &dir, &opts) {
-                Ok(s) => {
-                    println!(
-                        "case {}: {} after {} steps, t = {:.4} s ({}), wall {:.1} s, {:.2} M particle-steps/s",
-                        chosen.name,
-                        s.status.as_str(),
-                        s.steps,
-                        s.t_end,
-                        if s.reason.is_empty() { "no fault" } else { &s.reason },
-                        s.wall_s,
-                        s.particle_steps_per_s / 1e6
-                    );
-                    println!("results in {}", dir.display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("kick: writing {} failed: {e}", dir.display());
-                    ExitCode::FAILURE
-                }
-            }
-        }
-        Command::Matrix {
-            study,
-            out,
-            jobs,
-            threads,
-            shard,
-            resume,
-            merge,
-            set,
-            csv,
-        } => {
-            if !merge.is_empty() {
-                return match matrix::merge(&merge, &out) {
-                    Ok(rows) => {
-                        println!("{}", matrix::describe(&rows));
-                        println!("merged tables in {}", out.display());
-                        ExitCode::SUCCESS
-                    }
-                    Err(e) => {
-                        eprintln!("kick matrix --merge: {e}");
-                        ExitCode::FAILURE
-                    }
-                };
-            }
-            let Some(study) = study else {
-                return bad_input("matrix: a study file is required (or --merge DIR...)");
-            };
-            let study = match study_file::load(&study, &set) {
-                Ok(s) => s,
-                Err(e) => return bad_input(&e.to_string()),
-            };
-            let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-            let jobs = jobs.unwrap_or(cores);
-            if jobs == 0 || threads == Some(0) {
-                return bad_input("--jobs and --threads: 0 is out of range (allowed >= 1)");
-            }
-            let opts = matrix::MatrixOptions {
-                out: out.clone(),
-                jobs,
-                shard,
-                resume,
-                csv,
-                threads_per_case: threads.unwrap_or((cores / jobs).max(1)),
-                progress: true,
-            };
-            match matrix::run_matrix(&study, &opts) {
-                Ok(r) => {
-                    println!("{}", matrix::describe(&r.rows));
-                    println!(
-                        "ran {} cases ({} already done), wall {:.1} s; tables in {}",
-                        r.ran,
-                        r.skipped,
-                        r.wall_s,
-                        out.display()
-                    );
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("kick matrix: {e}");
-                    ExitCode::FAILURE
-                }
-            }
-        }
-        Command::Reproduce {
-            case_dir,
-            event,
-            phase,
-            threads,
-            out,
-            before,
-            after,
-        } => {
-            if threads == Some(0) {
-                return bad_input("--threads: 0 is out of range (allowed >= 1)");
-            }
-            let opts = reproduce::ReproduceOptions {
-                phase,
-                threads,
-                out,
-                before,
-                after,
-            };
-            match reproduce::reproduce(&case_dir, event, &opts) {
-                Ok(o) => {
-                    println!("{}", o.message);
-                    println!("dense output in {}", o.out.display());
-                    if o.matched {
-                        ExitCode::SUCCESS
-                    } else {
-                        ExitCode::FAILURE
-                    }
-                }
-                Err(e) => bad_input(&e.0),
-            }
-        }
-        Command::Report { dir } => {
-            if !dir.is_dir() {
-                return bad_input(&format!("{}: no such folder", dir.display()));
-            }
-            match report::report(&dir) {
-                Ok(index) => {
-                    println!("report: {}", index.display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("kick report: {e}");
-                    ExitCode::FAILURE
-                }
-            }
-        }
-        Command::List { study, set } => {
-            let study = match study_file::load(&study, &set) {
-                Ok(s) => s,
-                Err(e) => return bad_input(&e.to_string()),
-            };
-            use std::io::Write;
-            let mut out = std::io::stdout().lock();
-            for case in &study.cases {
-                let m = &case.solver.method;
-                let mats: Vec<String> = case
-                    .solver
-                    .scene
-                    .materials
-                    .iter()
-                    .map(study::labels::named_material_label)
-                    .collect();
-                let line = writeln!(
-                    out,
-                    "{}\t{:?} {:?} {:?} cfl={} dt={:?}\t{}",
-                    case.name,
-                    m.shape,
-                    m.transfer,
-                    m.scheme,
-                    m.cfl,
-                    m.dt,
-                    mats.join("; ")
-                );
-                // A closed pipe (`kick list | head`) ends the listing quietly.
-                if line.is_err() {
-                    break;
-                }
-            }
+        },
+    };
+    if threads == Some(0) {
+        return bad_input("--threads: 0 is out of range (allowed >= 1)");
+    }
+    let dir = out.join(&chosen.name);
+    let opts = run_case::CaseOptions {
+        threads,
+        bar: Some(indicatif::ProgressBar::new(1000).with_style(run_case::progress_style())),
+        csv,
+    };
+    match run_case::run_case(chosen, &dir, &opts) {
+        Ok(s) => {
+            println!(
+                "case {}: {} after {} steps, t = {:.4} s ({}), wall {:.1} s, {:.2} M particle-steps/s",
+                chosen.name,
+                s.status.as_str(),
+                s.steps,
+                s.t_end,
+                if s.reason.is_empty() { "no fault" } else { &s.reason },
+                s.wall_s,
+                s.particle_steps_per_s / 1e6
+            );
+            println!("results in {}", dir.display());
             ExitCode::SUCCESS
         }
-        Command::Bench {
-            scene,
-            steps,
-            threads,
-            shape,
-            transfer,
-            cell,
-            set,
-        } => {
-            if threads == 0 || steps == 0 {
-                return bad_input("--threads and --steps must be >= 1");
+        Err(e) => {
+            eprintln!("kick: writing {} failed: {e}", dir.display());
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn matrix_command(args: MatrixArgs) -> ExitCode {
+    let MatrixArgs {
+        study,
+        out,
+        jobs,
+        threads,
+        shard,
+        resume,
+        merge,
+        set,
+        csv,
+    } = args;
+    if !merge.is_empty() {
+        return match matrix::merge(&merge, &out) {
+            Ok(rows) => {
+                println!("{}", matrix::describe(&rows));
+                println!("merged tables in {}", out.display());
+                ExitCode::SUCCESS
             }
-            if !(cell.is_finite() && (1e-4..=0.1).contains(&cell)) {
-                return bad_input("--cell must lie in [0.0001, 0.1] metres");
+            Err(e) => {
+                eprintln!("kick matrix --merge: {e}");
+                ExitCode::FAILURE
             }
-            let opts = bench::BenchOptions {
-                scene,
-                steps,
-                threads,
-                shape,
-                transfer,
-                cell,
-                method_sets: set,
-            };
-            if let Err(e) = bench::validate(&opts) {
-                return bad_input(&e);
+        };
+    }
+    let Some(study) = study else {
+        return bad_input("matrix: a study file is required (or --merge DIR...)");
+    };
+    let study = match study_file::load(&study, &set) {
+        Ok(s) => s,
+        Err(e) => return bad_input(&e.to_string()),
+    };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let jobs = jobs.unwrap_or(cores);
+    if jobs == 0 || threads == Some(0) {
+        return bad_input("--jobs and --threads: 0 is out of range (allowed >= 1)");
+    }
+    let opts = matrix::MatrixOptions {
+        out: out.clone(),
+        jobs,
+        shard,
+        resume,
+        csv,
+        threads_per_case: threads.unwrap_or((cores / jobs).max(1)),
+        progress: true,
+    };
+    match matrix::run_matrix(&study, &opts) {
+        Ok(r) => {
+            println!("{}", matrix::describe(&r.rows));
+            println!(
+                "ran {} cases ({} already done), wall {:.1} s; tables in {}",
+                r.ran,
+                r.skipped,
+                r.wall_s,
+                out.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("kick matrix: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn reproduce_command(args: ReproduceArgs) -> ExitCode {
+    let ReproduceArgs {
+        case_dir,
+        event,
+        phase,
+        threads,
+        out,
+        before,
+        after,
+    } = args;
+    if threads == Some(0) {
+        return bad_input("--threads: 0 is out of range (allowed >= 1)");
+    }
+    let opts = reproduce::ReproduceOptions {
+        phase,
+        threads,
+        out,
+        before,
+        after,
+    };
+    match reproduce::reproduce(&case_dir, event, &opts) {
+        Ok(o) => {
+            println!("{}", o.message);
+            println!("dense output in {}", o.out.display());
+            if o.matched {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::FAILURE
             }
-            match bench::run(&opts) {
-                Ok(line) => {
-                    println!("{line}");
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("kick bench: {e}");
-                    ExitCode::FAILURE
-                }
-            }
+        }
+        Err(e) => bad_input(&e.0),
+    }
+}
+
+fn report_command(args: ReportArgs) -> ExitCode {
+    let ReportArgs { dir } = args;
+    if !dir.is_dir() {
+        return bad_input(&format!("{}: no such folder", dir.display()));
+    }
+    match report::report(&dir) {
+        Ok(index) => {
+            println!("report: {}", index.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("kick report: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn list_command(args: ListArgs) -> ExitCode {
+    let ListArgs { study, set } = args;
+    let study = match study_file::load(&study, &set) {
+        Ok(s) => s,
+        Err(e) => return bad_input(&e.to_string()),
+    };
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    for case in &study.cases {
+        let m = &case.solver.method;
+        let mats: Vec<String> = case
+            .solver
+            .scene
+            .materials
+            .iter()
+            .map(study::labels::named_material_label)
+            .collect();
+        let line = writeln!(
+            out,
+            "{}\t{:?} {:?} {:?} cfl={} dt={:?}\t{}",
+            case.name,
+            m.shape,
+            m.transfer,
+            m.scheme,
+            m.cfl,
+            m.dt,
+            mats.join("; ")
+        );
+        // A closed pipe (`kick list | head`) ends the listing quietly.
+        if line.is_err() {
+            break;
+        }
+    }
+    ExitCode::SUCCESS
+}
+
+fn bench_command(args: BenchArgs) -> ExitCode {
+    let BenchArgs {
+        scene,
+        steps,
+        threads,
+        shape,
+        transfer,
+        cell,
+        set,
+    } = args;
+    if threads == 0 || steps == 0 {
+        return bad_input("--threads and --steps must be >= 1");
+    }
+    if !(cell.is_finite() && (1e-4..=0.1).contains(&cell)) {
+        return bad_input("--cell must lie in [0.0001, 0.1] metres");
+    }
+    let opts = bench::BenchOptions {
+        scene,
+        steps,
+        threads,
+        shape,
+        transfer,
+        cell,
+        method_sets: set,
+    };
+    if let Err(e) = bench::validate(&opts) {
+        return bad_input(&e);
+    }
+    match bench::run(&opts) {
+        Ok(line) => {
+            println!("{line}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("kick bench: {e}");
+            ExitCode::FAILURE
         }
     }
 }

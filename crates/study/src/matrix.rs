@@ -3,7 +3,9 @@
 //! across a cluster, and joined into OUT/summary.{parquet,csv} + manifest.json.
 
 use crate::output_files::{relative_path, write_atomic};
-use crate::run_case::{progress_style, run_case, RunOptions};
+use crate::probes::darcy::DarcyFigures;
+use crate::probes::drag_layer::DragLayerFigures;
+use crate::run_case::{progress_style, run_case, CaseOptions};
 use crate::study_file::{Case, Study, ENSEMBLE_KEYS};
 use crate::summary::{Status, Summary};
 use crate::tables::{self, SummaryRow};
@@ -89,24 +91,57 @@ pub fn run_matrix(study: &Study, opts: &MatrixOptions) -> std::io::Result<Matrix
         .collect();
     let skipped = selected.len() - todo.len();
     todo.sort_by(|a, b| estimated_cost(b).total_cmp(&estimated_cost(a)));
-    let manifest = |state: &str, wall: f64| -> std::io::Result<()> {
-        let m = json!({
-            "study": study.file.display().to_string(),
-            "state": state,
-            "shard": opts.shard.map(|(i, n)| format!("{i}/{n}")),
-            "jobs": opts.jobs,
-            "threads_per_case": opts.threads_per_case,
-            "cases": selected.iter().map(|c| c.name.clone()).collect::<Vec<_>>(),
-            "wall_s": wall,
-            "kick_version": env!("CARGO_PKG_VERSION"),
-        });
-        write_atomic(
-            &opts.out.join("manifest.json"),
-            serde_json::to_string_pretty(&m)?.as_bytes(),
-        )
-    };
-    manifest("running", 0.0)?;
+    write_manifest(study, opts, &selected, "running", 0.0)?;
+    run_cases(&todo, opts)?;
+    let rows: Vec<SummaryRow> = selected
+        .iter()
+        .filter_map(|c| {
+            finished_summary(&opts.out.join(&c.name)).map(|summary| SummaryRow {
+                case_dir: c.name.clone(),
+                summary,
+            })
+        })
+        .collect();
+    tables::write_summary(&rows, &opts.out)?;
+    write_observed_orders(&rows, &opts.out)?;
+    let wall_s = started.elapsed().as_secs_f64();
+    write_manifest(study, opts, &selected, "finished", wall_s)?;
+    Ok(MatrixResult {
+        ran: todo.len(),
+        skipped,
+        rows,
+        wall_s,
+    })
+}
 
+/// OUT/manifest.json: the study, the state of the matrix and its cases.
+fn write_manifest(
+    study: &Study,
+    opts: &MatrixOptions,
+    selected: &[&Case],
+    state: &str,
+    wall_s: f64,
+) -> std::io::Result<()> {
+    let m = json!({
+        "study": study.file.display().to_string(),
+        "state": state,
+        "shard": opts.shard.map(|(i, n)| format!("{i}/{n}")),
+        "jobs": opts.jobs,
+        "threads_per_case": opts.threads_per_case,
+        "cases": selected.iter().map(|c| c.name.clone()).collect::<Vec<_>>(),
+        "wall_s": wall_s,
+        "kick_version": env!("CARGO_PKG_VERSION"),
+    });
+    write_atomic(
+        &opts.out.join("manifest.json"),
+        serde_json::to_string_pretty(&m)?.as_bytes(),
+    )
+}
+
+/// Runs `todo` on `opts.jobs` workers, taking cases in order, a progress
+/// bar per running case and one overall. Err: the cases whose folders
+/// could not be written (a case that blew up or failed is a result).
+fn run_cases(todo: &[&Case], opts: &MatrixOptions) -> std::io::Result<()> {
     let multi = if opts.progress {
         MultiProgress::new()
     } else {
@@ -129,7 +164,7 @@ pub fn run_matrix(study: &Study, opts: &MatrixOptions) -> std::io::Result<Matrix
                 let Some(case) = todo.get(k) else { break };
                 let bar = multi.insert_before(&overall, ProgressBar::new(1000));
                 bar.set_style(progress_style());
-                let ro = RunOptions {
+                let ro = CaseOptions {
                     threads: Some(opts.threads_per_case),
                     bar: Some(bar.clone()),
                     csv: opts.csv,
@@ -152,28 +187,11 @@ pub fn run_matrix(study: &Study, opts: &MatrixOptions) -> std::io::Result<Matrix
     });
     overall.finish_and_clear();
     let failures = failures.into_inner().expect("not poisoned");
-    if !failures.is_empty() {
-        return Err(std::io::Error::other(failures.join("; ")));
+    if failures.is_empty() {
+        Ok(())
+    } else {
+        Err(std::io::Error::other(failures.join("; ")))
     }
-    let rows: Vec<SummaryRow> = selected
-        .iter()
-        .filter_map(|c| {
-            finished_summary(&opts.out.join(&c.name)).map(|summary| SummaryRow {
-                case_dir: c.name.clone(),
-                summary,
-            })
-        })
-        .collect();
-    tables::write_summary(&rows, &opts.out)?;
-    write_observed_orders(&rows, &opts.out)?;
-    let wall_s = started.elapsed().as_secs_f64();
-    manifest("finished", wall_s)?;
-    Ok(MatrixResult {
-        ran: todo.len(),
-        skipped,
-        rows,
-        wall_s,
-    })
 }
 
 /// Joins the case folders of several matrix outputs (e.g. shards) into OUT's
@@ -222,9 +240,15 @@ type Figure = fn(&Summary) -> Option<f64>;
 /// Figures whose observed order of convergence under `scene.cell` a
 /// matrix reports (those that go to zero with h).
 const CONVERGING: [(&str, Figure); 3] = [
-    ("drag_layer_error", |s| s.metrics.drag_layer_error),
-    ("darcy_flux_rel_error", |s| s.metrics.darcy_flux_rel_error),
-    ("darcy_dp_rel_error", |s| s.metrics.darcy_dp_rel_error),
+    ("drag_layer_error", |s| {
+        s.metrics.check::<DragLayerFigures>().map(|f| f.error)
+    }),
+    ("darcy_flux_rel_error", |s| {
+        s.metrics.check::<DarcyFigures>().map(|f| f.flux_rel_error)
+    }),
+    ("darcy_dp_rel_error", |s| {
+        s.metrics.check::<DarcyFigures>().map(|f| f.dp_rel_error)
+    }),
 ];
 
 /// For a matrix with a `scene.cell` axis: per case (every other parameter
@@ -310,7 +334,7 @@ pub fn describe(rows: &[SummaryRow]) -> String {
                 .t_first_kick
                 .map_or("-".into(), |t| format!("{t:.3} s")),
             s.metrics
-                .hydro_rel_rms_late
+                .figure("hydro_rel_rms_late")
                 .map_or("-".into(), |h| format!("{h:.3e}")),
             s.wall_s,
         ));

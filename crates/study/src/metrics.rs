@@ -3,8 +3,9 @@
 //! that reached t_end, without event rows).
 
 use crate::summary::{CauseCount, Metrics};
-use crate::timeseries::Timeseries;
+use crate::timeseries::{Rule, Timeseries};
 use monitor::{Event, EventKind};
+use std::collections::BTreeMap;
 
 /// Martin & Moyce (1952), a = 2.25 in, n^2 = 2: (T, Z) pairs (source in the file).
 const MARTIN_MOYCE: &str = include_str!("../../../data/martin_moyce_1952_a2.25in.csv");
@@ -30,7 +31,7 @@ fn mean(v: impl Iterator<Item = f64>) -> Option<f64> {
 }
 
 /// The simulated front as (T, Z) rows of the timeseries (finite ones).
-fn front_track(ts: &Timeseries) -> Vec<(f64, f64)> {
+pub fn front_track(ts: &Timeseries) -> Vec<(f64, f64)> {
     ts.column("front_t")
         .iter()
         .zip(ts.column("front_z"))
@@ -171,14 +172,14 @@ pub fn observed_order(h: &[f64], error: &[f64]) -> Option<f64> {
     )
 }
 
-/// Mean of column `name` over the rows of the simulated second before
-/// `end` (up to and including it when `inclusive`), without event rows and
-/// the t = 0 row.
-fn second_before_mean(ts: &Timeseries, name: &str, end: f64, inclusive: bool) -> Option<f64> {
+/// Mean of a column's `values` over the rows of the simulated second
+/// before `end` (up to and including it when `inclusive`), without event
+/// rows and the t = 0 row.
+fn second_before_mean(ts: &Timeseries, values: &[f64], end: f64, inclusive: bool) -> Option<f64> {
     mean(
         ts.column("t")
             .iter()
-            .zip(ts.column(name))
+            .zip(values)
             .zip(&ts.event_row)
             .filter(|((ti, _), event)| {
                 let before = if inclusive { **ti <= end } else { **ti < end };
@@ -198,96 +199,76 @@ fn failure_onset(ts: &Timeseries) -> f64 {
         .map_or(t.last().copied().unwrap_or(0.0), |row| t[row])
 }
 
-/// The summary.json metrics block (`events_dropped` is the monitor's to
-/// fill). "Late" figures (the last simulated second) only for a run that
-/// reached t_end. A run that stopped gets the same figures as
-/// `*_pre_failure`, over the second before its state stopped being whole:
-/// before the first particle was deleted, or before the failing row when
-/// none was, so that neither the collapse nor the blow-up row is averaged in.
-pub fn summarise(
-    ts: &Timeseries,
-    events: &[Event],
-    z_wall: Option<f64>,
-    completed: bool,
-) -> Metrics {
-    let t_last = ts.column("t").last().copied().unwrap_or(0.0);
-    let onset = failure_onset(ts);
-    // (late, pre-failure), named by how the run ended.
-    let split = |name: &str| {
-        if completed {
-            (second_before_mean(ts, name, t_last, true), None)
-        } else {
-            (None, second_before_mean(ts, name, onset, false))
-        }
-    };
-    let peak = |name: &str| {
-        ts.column(name)
-            .iter()
-            .copied()
-            .filter(|v| v.is_finite())
-            .fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v))))
-    };
-    let first = |keep: &dyn Fn(&Event) -> bool| {
-        events
-            .iter()
-            .filter(|e| keep(e))
-            .map(|e| e.t)
-            .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.min(t))))
-    };
-    let causes = monitor::Cause::ALL
-        .iter()
-        .map(|&c| {
-            let of = |e: &Event| e.cause == c;
-            let count = events.iter().filter(|e| of(e)).count();
-            (
-                c.name().to_string(),
-                CauseCount {
-                    count,
-                    t_first: first(&of),
-                },
-            )
-        })
-        .collect();
-    let count = |k: EventKind| events.iter().filter(|e| e.kind == k).count();
-    let (hydro_rel_rms_late, hydro_rel_rms_pre_failure) = split("hydro_rel_rms");
-    let (hydro_max_late, hydro_max_pre_failure) = split("hydro_max");
-    let (hydro_unexplained_rel_rms_late, _) = split("hydro_unexplained_rel_rms");
-    let (checkerboard_late, checkerboard_pre_failure) = split("checkerboard");
-    let front = z_wall.map_or(FrontErrors::default(), |z| {
-        front_errors(&front_track(ts), &martin_moyce(), z)
-    });
+/// The summary.json metrics block from one phase's timeseries and events:
+/// each declared column's figures, and the event counts (losses and
+/// checks are filled by the run loop and the probes). "Late" figures (the
+/// last simulated second) only for a run that reached t_end. A run that
+/// stopped gets its `PreFailure` figures instead, over the second before
+/// its state stopped being whole: before the first particle was deleted,
+/// or before the failing row when none was, so that neither the collapse
+/// nor the blow-up row is averaged in.
+pub fn summarise(ts: &Timeseries, events: &[Event], completed: bool) -> Metrics {
     Metrics {
-        hydro_rel_rms_late,
-        hydro_max_late,
-        hydro_unexplained_rel_rms_late,
-        checkerboard_late,
-        hydro_rel_rms_pre_failure,
-        hydro_max_pre_failure,
-        checkerboard_pre_failure,
-        checkerboard_peak: peak("checkerboard"),
-        energy_injected_max: peak("energy_injected"),
-        t_first_kick: first(&|e| e.is_kick()),
+        figures: column_figures(ts, completed),
+        t_first_kick: first_time(events, |e| e.is_kick()),
         n_kicks: events.iter().filter(|e| e.is_kick()).count(),
         n_anomalies: events.iter().filter(|e| e.is_anomaly()).count(),
-        t_first_anomaly: first(&|e| e.is_anomaly()),
-        causes,
-        n_energy_injections: count(EventKind::EnergyInjection),
-        courant_max: peak("courant"),
-        node_advection_max: peak("node_advection"),
-        max_accel_g: peak("max_accel_g"),
-        front_rms_error: z_wall.and_then(|z| front_rms_error(ts, z)),
-        front_rms_error_early: front.early_rms,
-        front_rms_error_early_shifted: front.early_shifted_rms,
-        front_time_shift: front.time_shift,
-        front_speed_late: front.late_speed,
-        front_rms_error_late: front.late_rms,
-        events_dropped: 0,
-        particles_escaped: 0,
-        particles_inverted: 0,
-        mass_lost_fraction: 0.0,
-        t_first_loss: None,
+        t_first_anomaly: first_time(events, |e| e.is_anomaly()),
+        causes: monitor::Cause::ALL
+            .iter()
+            .map(|&c| {
+                let of = |e: &Event| e.cause == c;
+                let count = events.iter().filter(|e| of(e)).count();
+                let t_first = first_time(events, of);
+                (c, CauseCount { count, t_first })
+            })
+            .collect(),
+        n_energy_injections: events
+            .iter()
+            .filter(|e| e.kind == EventKind::EnergyInjection)
+            .count(),
         ..Metrics::default()
     }
+}
+
+/// The earliest time of the events that `keep` selects.
+fn first_time(events: &[Event], keep: impl Fn(&Event) -> bool) -> Option<f64> {
+    events
+        .iter()
+        .filter(|e| keep(e))
+        .map(|e| e.t)
+        .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.min(t))))
+}
+
+/// Every figure the columns declare, by name (null where undefined).
+fn column_figures(ts: &Timeseries, completed: bool) -> BTreeMap<String, Option<f64>> {
+    let t_last = ts.column("t").last().copied().unwrap_or(0.0);
+    let onset = failure_onset(ts);
+    let mut figures = BTreeMap::new();
+    for (c, values) in ts.defs.iter().zip(&ts.columns) {
+        for figure in c.figures {
+            let value = match figure.rule {
+                Rule::Peak => peak(values),
+                Rule::Late => completed
+                    .then(|| second_before_mean(ts, values, t_last, true))
+                    .flatten(),
+                Rule::PreFailure => (!completed)
+                    .then(|| second_before_mean(ts, values, onset, false))
+                    .flatten(),
+            };
+            figures.insert(figure.name.to_string(), value);
+        }
+    }
+    figures
+}
+
+/// The largest finite value.
+fn peak(values: &[f64]) -> Option<f64> {
+    values
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v))))
 }
 
 #[cfg(test)]
@@ -418,15 +399,19 @@ mod tests {
                 row(1.6, 50.0, true);
             }
         }
-        let done = summarise(&ts, &[], None, true);
-        assert_eq!(done.hydro_rel_rms_late, Some(1.0));
-        assert_eq!(done.checkerboard_late, Some(1.0));
-        assert_eq!(done.hydro_rel_rms_pre_failure, None);
-        assert_eq!(done.checkerboard_peak, Some(100.0), "peaks see every row");
-        let failed = summarise(&ts, &[], None, false);
-        assert_eq!(failed.hydro_rel_rms_late, None);
-        assert_eq!(failed.hydro_rel_rms_pre_failure, Some(1.0));
-        assert_eq!(failed.checkerboard_pre_failure, Some(1.0));
+        let done = summarise(&ts, &[], true);
+        assert_eq!(done.figure("hydro_rel_rms_late"), Some(1.0));
+        assert_eq!(done.figure("checkerboard_late"), Some(1.0));
+        assert_eq!(done.figure("hydro_rel_rms_pre_failure"), None);
+        assert_eq!(
+            done.figure("checkerboard_peak"),
+            Some(100.0),
+            "peaks see every row"
+        );
+        let failed = summarise(&ts, &[], false);
+        assert_eq!(failed.figure("hydro_rel_rms_late"), None);
+        assert_eq!(failed.figure("hydro_rel_rms_pre_failure"), Some(1.0));
+        assert_eq!(failed.figure("checkerboard_pre_failure"), Some(1.0));
         // A failing run: rows of 1.0 until a particle is lost at 1.5 s, then
         // the collapse (1e6). Its pre-failure window ends before the loss.
         let mut failing = Timeseries::new();
@@ -446,9 +431,9 @@ mod tests {
             };
             failing.push(&report, &Peaks::default(), &fields, false);
         }
-        let failed = summarise(&failing, &[], None, false);
-        assert_eq!(failed.hydro_rel_rms_pre_failure, Some(1.0));
-        assert_eq!(failed.checkerboard_pre_failure, Some(1.0));
+        let failed = summarise(&failing, &[], false);
+        assert_eq!(failed.figure("hydro_rel_rms_pre_failure"), Some(1.0));
+        assert_eq!(failed.figure("checkerboard_pre_failure"), Some(1.0));
         // Without a loss, the failing (last) row itself is left out.
         let mut blown = Timeseries::new();
         for (t, value) in [(0.5, 2.0), (1.0, 2.0), (1.25, 1e9)] {
@@ -462,8 +447,8 @@ mod tests {
             };
             blown.push(&report, &Peaks::default(), &fields, false);
         }
-        let blown = summarise(&blown, &[], None, false);
-        assert_eq!(blown.hydro_rel_rms_pre_failure, Some(2.0));
+        let blown = summarise(&blown, &[], false);
+        assert_eq!(blown.figure("hydro_rel_rms_pre_failure"), Some(2.0));
         // A run shorter than a second: the t = 0 row still never counts.
         let mut short = Timeseries::new();
         for (t, v) in [(0.0, 100.0), (0.1, 2.0), (0.2, 4.0)] {
@@ -478,7 +463,7 @@ mod tests {
             short.push(&report, &Peaks::default(), &fields, false);
         }
         assert_eq!(
-            summarise(&short, &[], None, true).hydro_rel_rms_late,
+            summarise(&short, &[], true).figure("hydro_rel_rms_late"),
             Some(3.0)
         );
     }

@@ -126,9 +126,9 @@ fn small_k_blows_up(by_k: &ByK) -> String {
         median_of(blown.iter().map(|r| r.summary.t_end)),
         quick,
         median_of(blown.iter().map(|r| kick_to_end(r))),
-        median_of(blown.iter().map(|r| r.summary.metrics.mass_lost_fraction)),
-        median_of(blown.iter().map(|r| r.summary.metrics.particles_escaped as f64)),
-        median_of(blown.iter().map(|r| r.summary.metrics.particles_inverted as f64)),
+        median_of(blown.iter().map(|r| r.summary.metrics.losses.mass_lost_fraction)),
+        median_of(blown.iter().map(|r| r.summary.metrics.losses.particles_escaped as f64)),
+        median_of(blown.iter().map(|r| r.summary.metrics.losses.particles_inverted as f64)),
         verdict(
             2 * quick > small.len(),
             !blown.is_empty()

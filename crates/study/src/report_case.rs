@@ -10,10 +10,10 @@ use crate::plot_case::{
     TimeseriesFigure,
 };
 use crate::plot_common::{err, render, short, Res};
+use crate::probes::surge_front::front_wall_z;
 use crate::report_data::{f64_column, read_parquet};
 use crate::report_html::{escape, Cell, Page};
 use crate::report_verdict;
-use crate::run_case::front_wall_z;
 use crate::snapshot::particle_files;
 use crate::snapshot::Snapshot;
 use crate::study_file;
@@ -402,12 +402,12 @@ fn particles_section(c: &CaseInputs, page: &mut Page) -> Res {
             last.t,
             c.summary
                 .metrics
-                .hydro_rel_rms_late
+                .figure("hydro_rel_rms_late")
                 .map(short)
                 .unwrap_or("-".into()),
             c.summary
                 .metrics
-                .hydro_unexplained_rel_rms_late
+                .figure("hydro_unexplained_rel_rms_late")
                 .map(short)
                 .unwrap_or("-".into())
         ),

@@ -3,6 +3,7 @@
 //! its parameters, status and figures.
 
 use crate::plot_common::{short, Res};
+use crate::probes::surge_front::SurgeFrontFigures;
 use crate::report_data::{spread, with_spread, Matrix, Row};
 use crate::report_html::{escape, link, Cell, Page};
 use crate::summary::Status;
@@ -96,10 +97,14 @@ pub fn case_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
                 Cell::Text(s.status.as_str().into()),
                 Cell::Num(format!("{:.3}", s.t_end)),
                 cell(s.metrics.t_first_kick),
-                cell(s.metrics.hydro_rel_rms_late),
-                cell(s.metrics.hydro_unexplained_rel_rms_late),
-                cell(s.metrics.checkerboard_late),
-                cell(s.metrics.front_rms_error),
+                cell(s.metrics.figure("hydro_rel_rms_late")),
+                cell(s.metrics.figure("hydro_unexplained_rel_rms_late")),
+                cell(s.metrics.figure("checkerboard_late")),
+                cell(
+                    s.metrics
+                        .check::<SurgeFrontFigures>()
+                        .and_then(|c| c.rms_error),
+                ),
                 Cell::Num(format!("{:.1}", s.wall_s)),
             ]);
             (format!("case-row {}", r.css_class()), cells)

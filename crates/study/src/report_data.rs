@@ -104,13 +104,16 @@ impl Row {
     }
 
     pub fn hydro_late(&self) -> f64 {
-        Row::nan(self.summary.metrics.hydro_rel_rms_late)
+        Row::nan(self.summary.metrics.figure("hydro_rel_rms_late"))
     }
 
     /// Late departure of a completed run, or over the second before a blow-up.
     pub fn hydro_late_or_pre_failure(&self) -> f64 {
         let m = &self.summary.metrics;
-        Row::nan(m.hydro_rel_rms_late.or(m.hydro_rel_rms_pre_failure))
+        Row::nan(
+            m.figure("hydro_rel_rms_late")
+                .or(m.figure("hydro_rel_rms_pre_failure")),
+        )
     }
 
     /// Completed after at least one kick.

@@ -5,6 +5,11 @@
 
 use crate::plot_common::{render, short, Res};
 use crate::plot_matrix::LinesFigure;
+use crate::probes::darcy::DarcyFigures;
+use crate::probes::drag_decay::DragDecayFigures;
+use crate::probes::drag_layer::DragLayerFigures;
+use crate::probes::mixture_conservation::MixtureFigures;
+use crate::probes::surface::SurfaceFigures;
 use crate::report_data::{Matrix, Row};
 use crate::report_html::{escape, Cell, Page};
 use std::collections::BTreeMap;
@@ -97,20 +102,29 @@ fn mixture_table(rows: &[&Row], page: &mut Page) {
                     Cell::Text(escape(&s.case)),
                     Cell::Text(s.status.as_str().into()),
                     Cell::Text(escape(&param(r, "drag.update"))),
-                    opt(mx.drag_dt_over_tau),
-                    opt(mx.drag_decay_rel_error),
-                    opt(mx.drag_decay_discrete_rel_error),
-                    opt(mx.drag_dissipated),
-                    opt(mx.mixture_energy_growth),
-                    opt(mx.momentum_drift_rel),
-                    opt(mx.darcy_dp_rel_error),
-                    opt(mx.darcy_linearity),
-                    opt(mx.darcy_flux),
-                    opt(mx.darcy_flux_rel_error),
-                    opt(mx.surface_spread_late),
-                    opt(mx.penetration_spread_late),
-                    opt(mx.saturation_max),
-                    opt(s.phases.get(1).and_then(|p| p.metrics.hydro_rel_rms_late)),
+                    opt(mx.check::<DragDecayFigures>().and_then(|c| c.dt_over_tau)),
+                    opt(mx.check::<DragDecayFigures>().map(|c| c.rel_error)),
+                    opt(mx.check::<DragDecayFigures>().map(|c| c.discrete_rel_error)),
+                    opt(mx.check::<MixtureFigures>().map(|c| c.drag_dissipated)),
+                    opt(mx.check::<MixtureFigures>().and_then(|c| c.energy_growth)),
+                    opt(mx
+                        .check::<MixtureFigures>()
+                        .and_then(|c| c.momentum_drift_rel)),
+                    opt(mx.check::<DarcyFigures>().map(|c| c.dp_rel_error)),
+                    opt(mx.check::<DarcyFigures>().and_then(|c| c.linearity)),
+                    opt(mx.check::<DarcyFigures>().map(|c| c.flux)),
+                    opt(mx.check::<DarcyFigures>().map(|c| c.flux_rel_error)),
+                    opt(mx
+                        .check::<SurfaceFigures>()
+                        .and_then(|c| c.surface_spread_late)),
+                    opt(mx
+                        .check::<SurfaceFigures>()
+                        .and_then(|c| c.penetration_spread_late)),
+                    opt(mx.check::<MixtureFigures>().map(|c| c.saturation_max)),
+                    opt(s
+                        .phases
+                        .get(1)
+                        .and_then(|p| p.metrics.figure("hydro_rel_rms_late"))),
                     Cell::Num(events),
                 ],
             )
@@ -124,7 +138,10 @@ fn decay_figure(rows: &[&Row], out: &Path, page: &mut Page) -> Res {
     let mut lines: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
     for r in rows {
         let mx = &r.summary.metrics;
-        if let (Some(x), Some(y)) = (mx.drag_dt_over_tau, mx.drag_decay_rel_error) {
+        if let (Some(x), Some(y)) = (
+            mx.check::<DragDecayFigures>().and_then(|c| c.dt_over_tau),
+            mx.check::<DragDecayFigures>().map(|c| c.rel_error),
+        ) {
             lines
                 .entry(param(r, "drag.update"))
                 .or_default()
@@ -167,7 +184,7 @@ fn convergence_figure(rows: &[&Row], out: &Path, page: &mut Page) -> Res {
     for r in rows {
         let s = &r.summary;
         let h = s.params.get("scene.cell").and_then(|v| v.as_f64());
-        if let (Some(h), Some(e)) = (h, s.metrics.drag_layer_error) {
+        if let (Some(h), Some(e)) = (h, s.metrics.check::<DragLayerFigures>().map(|c| c.error)) {
             let model = s
                 .params
                 .get("drag.model")

@@ -7,6 +7,9 @@
 use crate::metrics::observed_order;
 use crate::plot_common::{render, short, Res};
 use crate::plot_matrix::RefinementFigure;
+use crate::probes::darcy::DarcyFigures;
+use crate::probes::drag_layer::DragLayerFigures;
+use crate::probes::surge_front::SurgeFrontFigures;
 use crate::report_data::{median, Matrix, Row};
 use crate::report_html::{Cell, Page};
 use std::collections::BTreeMap;
@@ -20,23 +23,40 @@ type TableRow = (String, Vec<Cell>);
 
 const FIGURES: [(&str, Figure); 6] = [
     ("surge front, early shifted RMS (Z)", |r| {
-        r.summary.metrics.front_rms_error_early_shifted
+        r.summary
+            .metrics
+            .check::<SurgeFrontFigures>()
+            .and_then(|c| c.rms_error_early_shifted)
     }),
     ("surge front speed late (dZ/dT)", |r| {
-        r.summary.metrics.front_speed_late
+        r.summary
+            .metrics
+            .check::<SurgeFrontFigures>()
+            .and_then(|c| c.speed_late)
     }),
     ("late hydrostatic departure (rel. RMS)", |r| {
-        r.summary.metrics.hydro_rel_rms_late
+        r.summary.metrics.figure("hydro_rel_rms_late")
     }),
     ("Darcy flux against rho g H n^2 / (B L) (rel.)", |r| {
-        r.summary.metrics.darcy_flux_rel_error
+        r.summary
+            .metrics
+            .check::<DarcyFigures>()
+            .map(|c| c.flux_rel_error)
     }),
     (
         "fixed layer: fluid velocity error against the update's law (rel.)",
-        |r| r.summary.metrics.drag_layer_error,
+        |r| {
+            r.summary
+                .metrics
+                .check::<DragLayerFigures>()
+                .map(|c| c.error)
+        },
     ),
     ("Darcy pressure drop against mu q L / k (rel.)", |r| {
-        r.summary.metrics.darcy_dp_rel_error
+        r.summary
+            .metrics
+            .check::<DarcyFigures>()
+            .map(|c| c.dp_rel_error)
     }),
 ];
 

@@ -5,6 +5,7 @@
 
 use crate::plot_common::{render, Res};
 use crate::plot_matrix::{pareto_front, ParetoFigure};
+use crate::probes::surge_front::SurgeFrontFigures;
 use crate::report_data::{Matrix, Row};
 use crate::report_html::{link, Cell, Page};
 use crate::summary::Status;
@@ -28,7 +29,14 @@ pub fn speed_accuracy(m: &Matrix, out: &Path, page: &mut Page) -> Res {
         ),
         Row::hydro_late_or_pre_failure,
     )?;
-    let front = |r: &Row| Row::nan(r.summary.metrics.front_rms_error_early_shifted);
+    let front = |r: &Row| {
+        Row::nan(
+            r.summary
+                .metrics
+                .check::<SurgeFrontFigures>()
+                .and_then(|c| c.rms_error_early_shifted),
+        )
+    };
     if rows.iter().any(|r| front(r).is_finite()) {
         pareto(
             m,

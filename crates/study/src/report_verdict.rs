@@ -6,6 +6,7 @@
 use crate::plot_common::short;
 use crate::report_html::escape;
 use crate::summary::{Metrics, Status, Summary};
+use crate::timeseries::COLUMNS;
 use monitor::{Cause, Event, Region};
 use solver::Scene;
 
@@ -127,10 +128,14 @@ pub struct MetricRow {
     pub unit: &'static str,
 }
 
-/// The metrics the verdict already states (not repeated in the table).
+/// The metrics the verdict already states (not repeated in the table);
+/// `causes.*` are all the counts by cause.
 pub const IN_VERDICT: [&str; 3] = ["causes", "n_kicks", "t_first_kick"];
 
-/// Each metric of summary.json: key, label, unit, in the order shown.
+/// Each metric of summary.json that is not a timeseries figure: its key in
+/// the metrics object (dotted for nested ones), label and unit, in the order
+/// shown. The figures drawn from timeseries columns come after the event
+/// counts, labelled and in the order their columns declare them.
 /// Counts and fractions that are zero are left out, like undefined values.
 pub const METRICS: &[(&str, &str, &str)] = &[
     ("t_first_anomaly", "first kick with the hallmark", "s"),
@@ -141,187 +146,210 @@ pub const METRICS: &[(&str, &str, &str)] = &[
         "events dropped past monitor.max_events",
         "count",
     ),
-    ("energy_injected_max", "largest energy injected", "J/m"),
-    ("max_accel_g", "largest acceleration", "g"),
-    ("courant_max", "largest Courant number", "(v + c) dt / h"),
     (
-        "node_advection_max",
-        "largest nodal advection",
-        "|v| dt / h",
-    ),
-    (
-        "hydro_rel_rms_late",
-        "late hydrostatic departure, RMS",
-        "of rho g depth",
-    ),
-    (
-        "hydro_max_late",
-        "late hydrostatic departure, largest",
-        "of rho g depth",
-    ),
-    (
-        "hydro_unexplained_rel_rms_late",
-        "of it not explained by the accelerations",
-        "of rho g depth",
-    ),
-    ("checkerboard_late", "late checkerboard index", "index"),
-    (
-        "hydro_rel_rms_pre_failure",
-        "hydrostatic departure in the second before the blow-up, RMS",
-        "of rho g depth",
-    ),
-    (
-        "hydro_max_pre_failure",
-        "hydrostatic departure in the second before the blow-up, largest",
-        "of rho g depth",
-    ),
-    (
-        "checkerboard_pre_failure",
-        "checkerboard index in the second before the blow-up",
-        "index",
-    ),
-    ("checkerboard_peak", "largest checkerboard index", "index"),
-    (
-        "front_rms_error",
+        "checks.surge_front.rms_error",
         "surge front against Martin & Moyce, RMS error",
         "Z = x / a",
     ),
     (
-        "front_rms_error_early",
+        "checks.surge_front.rms_error_early",
         "surge front, early (T ≤ 3.5) RMS error",
         "Z = x / a",
     ),
     (
-        "front_rms_error_early_shifted",
+        "checks.surge_front.rms_error_early_shifted",
         "surge front, early RMS error after the best time shift",
         "Z = x / a",
     ),
     (
-        "front_time_shift",
+        "checks.surge_front.time_shift",
         "surge front, best time shift",
         "T = t √(2g/a)",
     ),
     (
-        "front_speed_late",
+        "checks.surge_front.speed_late",
         "surge front, late speed dZ/dT",
         "Z per T",
     ),
     (
-        "front_rms_error_late",
+        "checks.surge_front.rms_error_late",
         "surge front, late (T > 3.5) RMS error",
         "Z = x / a",
     ),
-    ("particles_escaped", "particles deleted: escaped", "count"),
-    ("particles_inverted", "particles deleted: inverted", "count"),
     (
-        "mass_lost_fraction",
+        "losses.particles_escaped",
+        "particles deleted: escaped",
+        "count",
+    ),
+    (
+        "losses.particles_inverted",
+        "particles deleted: inverted",
+        "count",
+    ),
+    (
+        "losses.mass_lost_fraction",
         "mass lost with them",
         "of the initial mass",
     ),
-    ("t_first_loss", "first deletion", "s"),
-    ("particles_drained", "particles drained", "count"),
+    ("losses.t_first_loss", "first deletion", "s"),
+    ("losses.particles_drained", "particles drained", "count"),
     (
-        "mass_drained_fraction",
+        "losses.mass_drained_fraction",
         "mass drained",
         "of the initial mass",
     ),
     (
-        "particles_injected",
+        "losses.particles_injected",
         "particles injected by inflow",
         "count",
     ),
     (
-        "mass_injected_fraction",
+        "losses.mass_injected_fraction",
         "mass injected",
         "of the initial mass",
     ),
-    ("surface_spread_late", "late free-surface spread", "m"),
-    ("penetration_spread_late", "late penetration spread", "m"),
     (
-        "saturation_max",
+        "checks.surface.surface_spread_late",
+        "late free-surface spread",
+        "m",
+    ),
+    (
+        "checks.surface.penetration_spread_late",
+        "late penetration spread",
+        "m",
+    ),
+    (
+        "checks.mixture.saturation_max",
         "largest cell saturation",
         "volume fraction",
     ),
     (
-        "drag_decay_rel_error",
+        "checks.drag_decay.rel_error",
         "drag decay against exp(-t/tau), largest error",
         "of |dv0|",
     ),
     (
-        "drag_decay_discrete_rel_error",
+        "checks.drag_decay.discrete_rel_error",
         "drag decay against the update's own law, largest error",
         "of |dv0|",
     ),
-    ("drag_dt_over_tau", "dt / tau at the first step", "ratio"),
     (
-        "darcy_dp_rel_error",
+        "checks.drag_decay.dt_over_tau",
+        "dt / tau at the first step",
+        "ratio",
+    ),
+    (
+        "checks.darcy.dp_rel_error",
         "Darcy pressure drop, error",
         "of mu q L / k",
     ),
     (
-        "darcy_linearity",
+        "checks.darcy.linearity",
         "Darcy layer pressure, largest departure from its line",
         "of the drop",
     ),
-    ("darcy_flux", "Darcy flux q", "m/s"),
+    ("checks.darcy.flux", "Darcy flux q", "m/s"),
     (
-        "darcy_flux_rel_error",
+        "checks.darcy.flux_rel_error",
         "Darcy flux against rho g H n² / (B L), error",
         "relative",
     ),
     (
-        "drag_layer_error",
+        "checks.drag_layer.error",
         "drag layer velocity, largest error",
         "of |u0| L / H",
     ),
     (
-        "terzaghi_max_error_over_p0",
+        "checks.terzaghi.max_error_over_p0",
         "Terzaghi pore pressure, largest error",
         "of p0",
     ),
     (
-        "terzaghi_u_error",
+        "checks.terzaghi.u_error",
         "Terzaghi degree of consolidation, largest error",
         "of U",
     ),
     (
-        "drag_dissipated",
+        "checks.mixture.drag_dissipated",
         "kinetic energy dissipated by the drag",
         "J/m",
     ),
     (
-        "mixture_energy_growth",
+        "checks.mixture.energy_growth",
         "largest rise of the mixture's total energy",
         "J/m",
     ),
     (
-        "momentum_drift_rel",
+        "checks.mixture.momentum_drift_rel",
         "largest momentum drift",
         "of Σ m |v| at t = 0",
     ),
 ];
 
-/// The rows of the metrics that apply: defined (not null) and, for counts
-/// and fractions, not zero.
-pub fn metric_rows(m: &Metrics) -> Vec<MetricRow> {
-    let Ok(serde_json::Value::Object(values)) = serde_json::to_value(m) else {
-        return vec![];
-    };
-    METRICS
-        .iter()
-        .filter_map(|&(key, label, unit)| {
-            let v = values.get(key)?.as_f64()?;
-            if !v.is_finite() || (v == 0.0 && counts_or_fraction(unit)) {
-                return None;
+/// The metrics object with nested objects flattened to dotted keys.
+fn flat_metrics(m: &Metrics) -> serde_json::Map<String, serde_json::Value> {
+    fn flatten(
+        prefix: &str,
+        v: serde_json::Value,
+        out: &mut serde_json::Map<String, serde_json::Value>,
+    ) {
+        match v {
+            serde_json::Value::Object(map) => {
+                for (k, v) in map {
+                    let key = if prefix.is_empty() {
+                        k
+                    } else {
+                        format!("{prefix}.{k}")
+                    };
+                    flatten(&key, v, out);
+                }
             }
-            let value = if unit == "count" {
-                format!("{v:.0}")
-            } else {
-                short(v)
-            };
-            Some(MetricRow { label, value, unit })
-        })
-        .collect()
+            leaf => {
+                out.insert(prefix.to_string(), leaf);
+            }
+        }
+    }
+    let mut out = serde_json::Map::new();
+    if let Ok(v) = serde_json::to_value(m) {
+        flatten("", v, &mut out);
+    }
+    out
+}
+
+/// A row for a value that applies: defined, and for counts and fractions
+/// not zero.
+fn row(label: &'static str, v: f64, unit: &'static str) -> Option<MetricRow> {
+    if !v.is_finite() || (v == 0.0 && counts_or_fraction(unit)) {
+        return None;
+    }
+    let value = if unit == "count" {
+        format!("{v:.0}")
+    } else {
+        short(v)
+    };
+    Some(MetricRow { label, value, unit })
+}
+
+/// The rows of the metrics that apply: the event counts, the timeseries
+/// figures (from their column declarations), then losses and checks.
+pub fn metric_rows(m: &Metrics) -> Vec<MetricRow> {
+    let values = flat_metrics(m);
+    let listed = |key: &str, label, unit| row(label, values.get(key)?.as_f64()?, unit);
+    let nested = |key: &&(&str, &str, &str)| key.0.contains('.');
+    let events = METRICS
+        .iter()
+        .filter(|k| !nested(k))
+        .filter_map(|&(key, label, unit)| listed(key, label, unit));
+    let figures = COLUMNS.iter().flat_map(|c| {
+        c.figures
+            .iter()
+            .filter_map(move |f| row(f.label, m.figure(f.name)?, c.unit))
+    });
+    let rest = METRICS
+        .iter()
+        .filter(nested)
+        .filter_map(|&(key, label, unit)| listed(key, label, unit));
+    events.chain(figures).chain(rest).collect()
 }
 
 fn counts_or_fraction(unit: &str) -> bool {
@@ -375,23 +403,45 @@ mod tests {
         );
     }
 
-    /// Every metric of summary.json is either in the table (with a label
-    /// and a unit) or stated by the verdict: no raw key reaches the page.
+    /// Every metric of summary.json (every check run) is in the table with
+    /// a label and a unit, is a declared figure, or is stated by the
+    /// verdict: no raw key reaches the page.
     #[test]
     fn every_metric_has_a_label_and_a_unit_or_is_in_the_verdict() {
-        let Ok(serde_json::Value::Object(all)) = serde_json::to_value(Metrics::default()) else {
-            panic!("metrics serialise as an object");
-        };
+        use crate::probes::{darcy, drag_decay, drag_layer, mixture_conservation, surface};
+        use crate::probes::{surge_front, terzaghi};
+        let mut m = crate::metrics::summarise(&crate::timeseries::Timeseries::new(), &[], true);
+        m.set_check(&surge_front::SurgeFrontFigures::default());
+        m.set_check(&drag_decay::DragDecayFigures::default());
+        m.set_check(&drag_layer::DragLayerFigures::default());
+        m.set_check(&darcy::DarcyFigures::default());
+        m.set_check(&terzaghi::TerzaghiFigures::default());
+        m.set_check(&surface::SurfaceFigures::default());
+        m.set_check(&mixture_conservation::MixtureFigures::default());
+        let all = flat_metrics(&m);
         for key in all.keys() {
             let listed = METRICS.iter().filter(|(k, _, _)| k == key).count();
-            assert!(
-                listed == 1 || (listed == 0 && IN_VERDICT.contains(&key.as_str())),
-                "{key}"
-            );
+            let figure = key
+                .strip_prefix("figures.")
+                .is_some_and(crate::timeseries::figure_declared);
+            let stated = IN_VERDICT
+                .iter()
+                .any(|v| key == v || key.starts_with(&format!("{v}.")));
+            assert!(listed == 1 || (listed == 0 && (figure || stated)), "{key}");
         }
         for (key, label, unit) in METRICS {
             assert!(all.contains_key(*key), "{key} is a metric");
             assert!(!label.is_empty() && !unit.is_empty(), "{key}");
+        }
+        for c in COLUMNS {
+            for f in c.figures {
+                assert!(
+                    all.contains_key(&format!("figures.{}", f.name)),
+                    "{}",
+                    f.name
+                );
+                assert!(!f.label.is_empty() && !c.unit.is_empty() && c.unit != "1");
+            }
         }
     }
 
@@ -399,16 +449,24 @@ mod tests {
     /// Terzaghi row, no zero count, and no empty value.
     #[test]
     fn only_the_metrics_that_apply_are_rows() {
-        let m = Metrics {
-            hydro_rel_rms_pre_failure: Some(0.12),
-            checkerboard_peak: Some(0.3),
-            energy_injected_max: Some(2.5),
-            max_accel_g: Some(40.0),
-            front_rms_error: Some(0.2),
+        let mut m = Metrics {
             n_kicks: 2,
             t_first_kick: Some(0.244),
             ..Metrics::default()
         };
+        for (name, v) in [
+            ("hydro_rel_rms_pre_failure", 0.12),
+            ("checkerboard_peak", 0.3),
+            ("energy_injected_max", 2.5),
+            ("max_accel_g", 40.0),
+        ] {
+            m.figures.insert(name.into(), Some(v));
+        }
+        m.figures.insert("checkerboard_late".into(), None);
+        m.set_check(&crate::probes::surge_front::SurgeFrontFigures {
+            rms_error: Some(0.2),
+            ..Default::default()
+        });
         let rows = metric_rows(&m);
         let labels: Vec<&str> = rows.iter().map(|r| r.label).collect();
         assert_eq!(
@@ -416,8 +474,8 @@ mod tests {
             [
                 "largest energy injected",
                 "largest acceleration",
-                "hydrostatic departure in the second before the blow-up, RMS",
                 "largest checkerboard index",
+                "hydrostatic departure in the second before the blow-up, RMS",
                 "surge front against Martin & Moyce, RMS error",
             ]
         );
@@ -427,11 +485,9 @@ mod tests {
         assert!(!labels
             .iter()
             .any(|l| l.contains("Darcy") || l.contains("Terzaghi")));
-        let with_losses = Metrics {
-            particles_escaped: 3,
-            mass_lost_fraction: 0.001,
-            ..Metrics::default()
-        };
+        let mut with_losses = Metrics::default();
+        with_losses.losses.particles_escaped = 3;
+        with_losses.losses.mass_lost_fraction = 0.001;
         let rows = metric_rows(&with_losses);
         assert_eq!(rows[0].value, "3");
         assert_eq!(rows[1].unit, "of the initial mass");

@@ -4,15 +4,17 @@
 //! at the event's first step and the event the monitor detects again match
 //! the log.
 
-use crate::case_checkpoint;
 use crate::output_files::write_atomic;
-use crate::run_case::{with_threads, Driver, Stepped};
-use crate::snapshot::{self, Snapshot};
-use crate::study_file;
+use crate::probes::replay::{Found, Replay as ReplayChecks};
+use crate::run_case::{watches, with_threads};
+use crate::run_mixture;
+use crate::runner::{Rows, RunOptions, Runner, Stepper};
+use crate::snapshot;
+use crate::study_file::{self, Case};
 use crate::summary::Summary;
-use crate::tables;
 use monitor::Event;
 use serde_json::json;
+use solver::Solver;
 use std::path::{Path, PathBuf};
 
 pub struct ReproduceOptions {
@@ -81,73 +83,73 @@ pub fn reproduce(
         .out
         .clone()
         .unwrap_or_else(|| case_dir.join("reproduce").join(format!("event_{id}")));
-    if case.mixture.is_some() {
-        let run = || {
-            crate::run_mixture::replay(case, &bytes, &logged, opts, &out)
-                .map(|r| r.map_err(|e| ReproduceError(format!("{}: {e}", ckpt_path.display()))))
-        };
-        let replay = with_threads(opts.threads, run)
-            .map_err(|e| ReproduceError(format!("{}: {e}", out.display())))??;
-        return finish(case_dir, &out, id, &ckpt_name, &logged, replay)
-            .map_err(|e| ReproduceError(format!("{}: {e}", out.display())));
-    }
-    let run = || -> std::io::Result<Result<Outcome, ReproduceError>> {
-        let mut d = match Driver::new(case) {
-            Ok(d) => d,
-            Err(e) => return Ok(Err(ReproduceError(e))),
-        };
-        if let Err(e) = case_checkpoint::load(&bytes, &mut d.solver, &mut d.monitor) {
-            return Ok(Err(ReproduceError(format!("{}: {e}", ckpt_path.display()))));
-        }
-        let start = d.solver.step_count();
-        if start >= logged.first_step {
-            return Ok(Err(ReproduceError(format!(
-                "{}: taken at step {start}, not before event {id} (step {})",
-                ckpt_path.display(),
-                logged.first_step
-            ))));
-        }
-        let vtk_from = logged.first_step.saturating_sub(opts.before).max(start);
-        let end = logged.last_step + opts.after;
-        let mut hash_at_first = None;
-        let mut replayed: Option<Event> = None;
-        d.push_row(false);
-        while !d.solver.finished() && d.solver.step_count() < end {
-            let stepped = d.step();
-            let step = d.solver.step_count();
-            d.push_row(false);
-            if step >= vtk_from {
-                let v = d.solver.view();
-                snapshot::write_file(&out.join("particles"), "particles", &Snapshot::of(&v))?;
-            }
-            if step == logged.first_step {
-                hash_at_first = Some(format!("{:016x}", d.solver.state_hash()));
-            }
-            if step == logged.last_step {
-                replayed = d.monitor.events().iter().find(|e| e.id == id).cloned();
-            }
-            if let Stepped::Stop(_) = stepped {
-                break;
-            }
-        }
-        tables::write_timeseries(&d.series, &out, true)?;
-        let replay = Replay {
-            start,
-            hash_at_first,
-            replayed,
-        };
-        finish(case_dir, &out, id, &ckpt_name, &logged, replay).map(Ok)
+    let at_checkpoint = |e: String| ReproduceError(format!("{}: {e}", ckpt_path.display()));
+    let run = || match &case.mixture {
+        Some(spec) => match run_mixture::build(case, spec) {
+            Ok(mix) => replay(mix, case, &bytes, &logged, opts, &out),
+            Err(e) => Ok(Err(e)),
+        },
+        None => match Solver::new(case.solver.clone()) {
+            Ok(solver) => replay(solver, case, &bytes, &logged, opts, &out),
+            Err(e) => Ok(Err(format!("setup: {e}"))),
+        },
     };
-    with_threads(opts.threads, run)
+    let replay = with_threads(opts.threads, run)
         .map_err(|e| ReproduceError(format!("{}: {e}", out.display())))?
+        .map_err(at_checkpoint)?;
+    finish(case_dir, &out, id, &ckpt_name, &logged, replay)
+        .map_err(|e| ReproduceError(format!("{}: {e}", out.display())))
 }
 
 /// What a replay found: the checkpoint's step, the state hash at the
 /// event's first step, and the event as the monitor detected it again.
-pub(crate) struct Replay {
+pub(crate) struct Replayed {
     pub start: u64,
-    pub hash_at_first: Option<String>,
-    pub replayed: Option<Event>,
+    pub found: Found,
+}
+
+/// The stepper and its monitors restored from `checkpoint`, stepped by the
+/// run loop through the event's last step (and `opts.after` more), with a
+/// timeseries row every step and particle files every step from
+/// `opts.before` steps before the event. Err: the checkpoint does not
+/// restore, or is not before the event.
+fn replay<S: Stepper>(
+    mut stepper: S,
+    case: &Case,
+    checkpoint: &[u8],
+    logged: &Event,
+    opts: &ReproduceOptions,
+    out: &Path,
+) -> std::io::Result<Result<Replayed, String>> {
+    let mut watches = watches(&stepper, case);
+    if let Err(e) = stepper.load(checkpoint, &mut watches) {
+        return Ok(Err(e.to_string()));
+    }
+    let start = stepper.step_count();
+    if start >= logged.first_step {
+        return Ok(Err(format!(
+            "taken at step {start}, not before event {} (step {})",
+            logged.id, logged.first_step
+        )));
+    }
+    let phase = (0..stepper.phase_count())
+        .find(|&k| stepper.phase_name(k) == logged.phase.as_deref())
+        .unwrap_or(stepper.primary_phase());
+    let mut run_opts = RunOptions::new(Some(out.to_path_buf()), Rows::every_step());
+    run_opts.csv = true;
+    run_opts.until_step = Some(logged.last_step + opts.after);
+    let mut found = Found::default();
+    let mut runner = Runner::new(stepper, watches, run_opts);
+    runner.attach(ReplayChecks {
+        files_from: logged.first_step.saturating_sub(opts.before).max(start),
+        files: out.join("particles"),
+        event: logged,
+        phase,
+        found: &mut found,
+    });
+    runner.run()?;
+    drop(runner);
+    Ok(Ok(Replayed { start, found }))
 }
 
 /// Compares a replay with the logged event and writes reproduce.json.
@@ -157,47 +159,17 @@ fn finish(
     id: u32,
     ckpt_name: &str,
     logged: &Event,
-    replay: Replay,
+    replay: Replayed,
 ) -> std::io::Result<Outcome> {
-    let Replay {
+    let Replayed {
         start,
-        hash_at_first,
-        replayed,
+        found: Found {
+            hash_at_first,
+            replayed,
+        },
     } = replay;
     snapshot::write_collections(&out.join("particles"))?;
-    let mut diverged = vec![];
-    match (&hash_at_first, &logged.state_hash) {
-        (Some(h), Some(l)) if h == l => {}
-        (h, l) => diverged.push(format!(
-            "state hash at step {}: replayed {}, logged {}",
-            logged.first_step,
-            h.as_deref().unwrap_or("(step not reached)"),
-            l.as_deref().unwrap_or("(none)")
-        )),
-    }
-    match &replayed {
-        None => diverged.push(format!("the monitor did not detect event {id} again")),
-        Some(e) => {
-            if e.first_step != logged.first_step {
-                diverged.push(format!(
-                    "event {id} first step: replayed {}, logged {}",
-                    e.first_step, logged.first_step
-                ));
-            }
-            if e.kind != logged.kind || e.cells != logged.cells {
-                diverged.push(format!(
-                    "event {id} region: replayed {:?} {:?}, logged {:?} {:?}",
-                    e.kind, e.cells, logged.kind, logged.cells
-                ));
-            }
-            if e.particles != logged.particles || e.n_particles != logged.n_particles {
-                diverged.push(format!(
-                    "event {id} particles: replayed {} ids, logged {}",
-                    e.n_particles, logged.n_particles
-                ));
-            }
-        }
-    }
+    let diverged = divergences(logged, hash_at_first.as_deref(), replayed.as_ref());
     let matched = diverged.is_empty();
     let message = if matched {
         format!(
@@ -230,4 +202,47 @@ fn finish(
         message,
         out: out.to_path_buf(),
     })
+}
+
+/// How a replay differs from the logged event: the state hash at its first
+/// step, and the event's first step, region and particles.
+fn divergences(
+    logged: &Event,
+    hash_at_first: Option<&str>,
+    replayed: Option<&Event>,
+) -> Vec<String> {
+    let id = logged.id;
+    let mut diverged = vec![];
+    match (hash_at_first, &logged.state_hash) {
+        (Some(h), Some(l)) if h == l => {}
+        (h, l) => diverged.push(format!(
+            "state hash at step {}: replayed {}, logged {}",
+            logged.first_step,
+            h.unwrap_or("(step not reached)"),
+            l.as_deref().unwrap_or("(none)")
+        )),
+    }
+    let Some(e) = replayed else {
+        diverged.push(format!("the monitor did not detect event {id} again"));
+        return diverged;
+    };
+    if e.first_step != logged.first_step {
+        diverged.push(format!(
+            "event {id} first step: replayed {}, logged {}",
+            e.first_step, logged.first_step
+        ));
+    }
+    if e.kind != logged.kind || e.cells != logged.cells {
+        diverged.push(format!(
+            "event {id} region: replayed {:?} {:?}, logged {:?} {:?}",
+            e.kind, e.cells, logged.kind, logged.cells
+        ));
+    }
+    if e.particles != logged.particles || e.n_particles != logged.n_particles {
+        diverged.push(format!(
+            "event {id} particles: replayed {} ids, logged {}",
+            e.n_particles, logged.n_particles
+        ));
+    }
+    diverged
 }

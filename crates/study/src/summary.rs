@@ -2,13 +2,13 @@
 //! matrix, the report and `reproduce` through this one type.
 
 use crate::output_files::write_atomic;
-use monitor::Event;
+use monitor::{Cause, Event};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Bumped whenever a field of `Summary` or `Metrics` changes meaning or name.
-pub const SCHEMA_VERSION: u32 = 7;
+pub const SCHEMA_VERSION: u32 = 8;
 
 /// How a case ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -32,28 +32,15 @@ impl Status {
     }
 }
 
-/// The case's figures (docs/physics.md section 4); `None` where undefined
-/// (no rows in the window, no kick, not a dam-break scene).
+/// The case's figures (docs/physics.md section 4): those drawn from the
+/// timeseries (by its column declarations), from the events, the losses,
+/// and each verification check's own.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Metrics {
-    /// Mean relative RMS hydrostatic departure over the last simulated
-    /// second, for a run that reached t_end (event rows and the t = 0 row left out).
-    pub hydro_rel_rms_late: Option<f64>,
-    /// Mean largest hydrostatic departure over the same window.
-    pub hydro_max_late: Option<f64>,
-    /// Mean departure over the same window from the pressure that the weight
-    /// and the vertical accelerations above demand (relative to the
-    /// hydrostatic pressure): what the motion does not explain.
-    pub hydro_unexplained_rel_rms_late: Option<f64>,
-    /// Mean checkerboard index over the same window.
-    pub checkerboard_late: Option<f64>,
-    /// The three figures above over the second before a run stopped (blew up).
-    pub hydro_rel_rms_pre_failure: Option<f64>,
-    pub hydro_max_pre_failure: Option<f64>,
-    pub checkerboard_pre_failure: Option<f64>,
-    pub checkerboard_peak: Option<f64>,
-    /// Largest energy injected above the running minimum (J/m).
-    pub energy_injected_max: Option<f64>,
+    /// Peaks and late or pre-failure means of timeseries columns, by the
+    /// names their declarations give (`timeseries::COLUMNS`); null where
+    /// undefined (no rows in the window).
+    pub figures: BTreeMap<String, Option<f64>>,
     /// Time of the first kick (an event whose cause is `injection` or `inversion`), s.
     pub t_first_kick: Option<f64>,
     /// Events whose cause is `injection` or `inversion`.
@@ -64,118 +51,60 @@ pub struct Metrics {
     /// Time of the first anomaly (s).
     pub t_first_anomaly: Option<f64>,
     /// Every event counted by cause, with the time of the first.
-    pub causes: BTreeMap<String, CauseCount>,
+    pub causes: BTreeMap<Cause, CauseCount>,
     /// Events opened by the energy-budget rule (kind `energy_injection`).
     pub n_energy_injections: usize,
-    pub courant_max: Option<f64>,
-    /// Largest nodal advective number |v_i| dt / h.
-    pub node_advection_max: Option<f64>,
-    pub max_accel_g: Option<f64>,
-    /// RMS of Z against Martin & Moyce while the front is short of the far wall.
-    pub front_rms_error: Option<f64>,
-    /// The same in two regimes (`metrics::front_errors`): early (T <= 3.5)
-    /// raw and after the best time shift (in T, |shift| <= 0.3), late (T >
-    /// 3.5) the RMS and the simulated dZ/dT.
-    #[serde(default)]
-    pub front_rms_error_early: Option<f64>,
-    #[serde(default)]
-    pub front_rms_error_early_shifted: Option<f64>,
-    #[serde(default)]
-    pub front_time_shift: Option<f64>,
-    #[serde(default)]
-    pub front_speed_late: Option<f64>,
-    #[serde(default)]
-    pub front_rms_error_late: Option<f64>,
     /// Event openings past `monitor.max_events`, counted per step.
     pub events_dropped: u64,
-    /// Particles deleted (`scene.on_escape` / `on_inversion = "delete"`):
-    /// escaped, inverted, their share of the initial mass, and the time of
-    /// the first deletion.
+    pub losses: LossFigures,
+    /// Each verification check's figures under its name (`Check::NAME`),
+    /// for the checks the scene allows.
+    pub checks: BTreeMap<String, serde_json::Value>,
+}
+
+impl Metrics {
+    /// A figure drawn from a timeseries column, by its declared name.
+    pub fn figure(&self, name: &str) -> Option<f64> {
+        let value = self.figures.get(name).copied();
+        debug_assert!(
+            value.is_some() || crate::timeseries::figure_declared(name),
+            "no timeseries figure {name}"
+        );
+        value.flatten()
+    }
+
+    /// A verification check's figures, if the case ran it.
+    pub fn check<C: Check>(&self) -> Option<C> {
+        let value = self.checks.get(C::NAME)?;
+        serde_json::from_value(value.clone()).ok()
+    }
+
+    pub fn set_check<C: Check>(&mut self, figures: &C) {
+        if let Ok(value) = serde_json::to_value(figures) {
+            self.checks.insert(C::NAME.to_string(), value);
+        }
+    }
+}
+
+/// A verification check's figures, stored in `Metrics::checks` under its name.
+pub trait Check: Serialize + serde::de::DeserializeOwned {
+    const NAME: &'static str;
+}
+
+/// Particles deleted (`scene.on_escape` / `on_inversion = "delete"`):
+/// escaped, inverted, their share of the initial mass, and the time of the
+/// first deletion; outflow through drained walls and inflow through inflow
+/// walls (neither a loss), as counts and shares of the initial mass.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct LossFigures {
     pub particles_escaped: u64,
     pub particles_inverted: u64,
     pub mass_lost_fraction: f64,
     pub t_first_loss: Option<f64>,
-    /// Outflow through drained walls (not a loss): particles and their
-    /// share of the initial mass.
-    #[serde(default)]
     pub particles_drained: u64,
-    #[serde(default)]
     pub mass_drained_fraction: f64,
-    /// Inflow through inflow walls: particles that entered and their mass
-    /// as a share of the initial mass.
-    #[serde(default)]
     pub particles_injected: u64,
-    #[serde(default)]
     pub mass_injected_fraction: f64,
-    /// Mixtures (docs/physics.md section 6). In a uniform periodic mixture
-    /// without gravity (the drag-decay scene): the largest |dv(t) - dv0
-    /// exp(-t/tau)| over the run relative to |dv0|, dv the difference of the
-    /// phases' mean velocities; the same against the update's own discrete
-    /// law (explicit prod(1 - dt/tau), implicit prod 1/(1 + dt/tau),
-    /// exponential exp(-t/tau)); and the first step's dt/tau.
-    #[serde(default)]
-    pub drag_decay_rel_error: Option<f64>,
-    #[serde(default)]
-    pub drag_decay_discrete_rel_error: Option<f64>,
-    #[serde(default)]
-    pub drag_dt_over_tau: Option<f64>,
-    /// The Darcy column (a fixed layer in a periodic box under gravity), at
-    /// t_end: |drop - mu q L / k| / (mu q L / k) with the drop from the
-    /// pressure gradients fitted inside and outside the layer, the largest
-    /// departure of the layer's row-averaged pressure from its line over
-    /// that drop, and the measured Darcy flux q (m/s).
-    #[serde(default)]
-    pub darcy_dp_rel_error: Option<f64>,
-    #[serde(default)]
-    pub darcy_linearity: Option<f64>,
-    #[serde(default)]
-    pub darcy_flux: Option<f64>,
-    /// |q - q_ideal| / q_ideal with q_ideal = rho g H n^2 / (B L), the flux
-    /// at which the layer's drop carries the whole column's weight: the
-    /// node-based drag acts over a layer about a cell longer than L.
-    #[serde(default)]
-    pub darcy_flux_rel_error: Option<f64>,
-    /// The drag-convergence scene (a fixed layer without gravity in a fluid
-    /// moving along it): the largest error of the fluid's mean velocity
-    /// against the update's own law inside the layer and free flow outside,
-    /// relative to the part the layer takes (|u0| L / H).
-    #[serde(default)]
-    pub drag_layer_error: Option<f64>,
-    /// Terzaghi's column (pore pressure on, a top traction, no gravity): the
-    /// largest |p - p_exact| / p0 over rows of half a cell and the samples
-    /// with T >= 0.05 (the window), and the largest |U -
-    /// U_exact| there; both series are in terzaghi.parquet.
-    #[serde(default)]
-    pub terzaghi_max_error_over_p0: Option<f64>,
-    #[serde(default)]
-    pub terzaghi_u_error: Option<f64>,
-    /// Under gravity in a box closed along it, for a run that reached t_end:
-    /// the mean over the last second of the fluid's free-surface spread
-    /// (highest fluid particle per column of one cell, max - min over the
-    /// columns) and of its lowest particle's spread (evenness of
-    /// penetration), in metres.
-    #[serde(default)]
-    pub surface_spread_late: Option<f64>,
-    #[serde(default)]
-    pub penetration_spread_late: Option<f64>,
-    /// At the end: the largest saturation of a cell (grains' and fluid's
-    /// reference volumes over its area): above 1 where the water crowds
-    /// into the grains' room.
-    #[serde(default)]
-    pub saturation_max: Option<f64>,
-    /// Kinetic energy the drag dissipated over the run (J/m).
-    #[serde(default)]
-    pub drag_dissipated: Option<f64>,
-    /// Largest rise of the mixture's total energy (both phases, drag
-    /// dissipation included) above its value at t = 0 (J/m): must stay at
-    /// round-off. Undefined in a box periodic along gravity (a particle that
-    /// wraps jumps by m g H).
-    #[serde(default)]
-    pub mixture_energy_growth: Option<f64>,
-    /// Largest |P(t) - P(0)| of both phases' momentum over the run, relative
-    /// to sum m |v| at t = 0 (periodic scenes without gravity only).
-    #[serde(default)]
-    pub momentum_drift_rel: Option<f64>,
 }
 
 /// One phase of a mixture: its particles, events and figures alone.

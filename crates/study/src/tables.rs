@@ -4,7 +4,7 @@
 
 use crate::output_files::write_atomic;
 use crate::summary::Summary;
-use crate::timeseries::{Timeseries, COLUMNS};
+use crate::timeseries::Timeseries;
 use polars::prelude::*;
 use serde_json::Value;
 use std::collections::BTreeSet;
@@ -23,8 +23,8 @@ pub fn timeseries_frame(ts: &Timeseries) -> PolarsResult<DataFrame> {
         Column::new("step".into(), &ts.step),
         Column::new("event_row".into(), &ts.event_row),
     ];
-    for (name, values) in COLUMNS.iter().zip(&ts.columns) {
-        cols.push(Column::new((*name).into(), nullable(values)));
+    for (c, values) in ts.defs.iter().zip(&ts.columns) {
+        cols.push(Column::new(c.name.into(), nullable(values)));
     }
     DataFrame::new(cols)
 }
@@ -106,18 +106,39 @@ pub struct SummaryRow {
     pub summary: Summary,
 }
 
-/// Each row's metrics as a JSON object (one column per field of `Metrics`).
+/// Each row's metrics as one flat object: nested objects (figures,
+/// causes, losses, checks) by dotted keys, e.g. `checks.darcy.flux`.
 fn metrics_objects(rows: &[SummaryRow]) -> Vec<serde_json::Map<String, Value>> {
+    fn flatten(prefix: &str, v: Value, out: &mut serde_json::Map<String, Value>) {
+        match v {
+            Value::Object(m) => {
+                for (k, v) in m {
+                    let key = if prefix.is_empty() {
+                        k
+                    } else {
+                        format!("{prefix}.{k}")
+                    };
+                    flatten(&key, v, out);
+                }
+            }
+            leaf => {
+                out.insert(prefix.to_string(), leaf);
+            }
+        }
+    }
     rows.iter()
-        .map(|r| match serde_json::to_value(&r.summary.metrics) {
-            Ok(Value::Object(m)) => m,
-            _ => serde_json::Map::new(),
+        .map(|r| {
+            let mut flat = serde_json::Map::new();
+            if let Ok(v) = serde_json::to_value(&r.summary.metrics) {
+                flatten("", v, &mut flat);
+            }
+            flat
         })
         .collect()
 }
 
 /// One row per case: `case`, one column per parameter (dotted key), the run's
-/// figures, `n_events`, one column per metric, and `case_dir`.
+/// figures, `n_events`, one column per metric (dotted keys), and `case_dir`.
 pub fn summary_frame(rows: &[SummaryRow]) -> PolarsResult<DataFrame> {
     let param_keys: BTreeSet<&String> = rows.iter().flat_map(|r| r.summary.params.keys()).collect();
     let metrics = metrics_objects(rows);
@@ -145,10 +166,8 @@ pub fn summary_frame(rows: &[SummaryRow]) -> PolarsResult<DataFrame> {
         s(|x| x.particle_steps_per_s),
     ));
     cols.push(Column::new("n_events".into(), s(|x| x.events.len() as f64)));
-    let metric_keys: Vec<&String> = metrics
-        .first()
-        .map(|m| m.keys().collect())
-        .unwrap_or_default();
+    // Every row's keys: the checks differ between scenes.
+    let metric_keys: BTreeSet<&String> = metrics.iter().flat_map(|m| m.keys()).collect();
     for k in metric_keys {
         let v: Vec<Option<&Value>> = metrics
             .iter()

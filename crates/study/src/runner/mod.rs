@@ -1,0 +1,475 @@
+//! The one run loop. A `Stepper` (one solver, or a mixture of two phases)
+//! is stepped under one `Watch` per phase (its monitor and timeseries);
+//! `Probe`s attach to the loop: particle files, the checkpoint ring, event
+//! frames, a replay's checks and the verification checks. Each probe writes
+//! its own files and its own part of the summary. `kick run`, `matrix`,
+//! `reproduce` and `bench` all drive this loop.
+
+pub mod stepper;
+pub mod watch;
+
+pub use stepper::Stepper;
+pub use watch::Watch;
+
+use crate::summary::{Metrics, PhaseSummary, Status};
+use indicatif::ProgressBar;
+use monitor::Event;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// What a probe sees: the stepper and the phases' watches (read-only).
+pub struct Run<'a, S> {
+    pub stepper: &'a S,
+    pub watches: &'a [Watch],
+}
+
+impl<S: Stepper> Run<'_, S> {
+    pub fn step(&self) -> u64 {
+        self.stepper.step_count()
+    }
+}
+
+/// Something attached to the run loop. Every hook has a no-op default.
+pub trait Probe<S: Stepper> {
+    /// Once, after the first timeseries row (step 0, or the restored step).
+    fn begin(&mut self, _run: &Run<S>) -> std::io::Result<()> {
+        Ok(())
+    }
+
+    /// Events opened this step: the checkpoint that precedes them, kept
+    /// for good (the checkpoint ring answers; the first answer is used).
+    fn pin_checkpoint(&mut self) -> Option<String> {
+        None
+    }
+
+    /// After a step that ran (the monitors may still stop the run there);
+    /// `opened`: the ids of the events opened by it.
+    fn after_step(&mut self, _run: &Run<S>, _opened: &[u32]) -> std::io::Result<()> {
+        Ok(())
+    }
+
+    /// A timeseries row was written at this step.
+    fn row(&mut self, _run: &Run<S>) {}
+
+    /// The run goes on after this step.
+    fn between_steps(&mut self, _run: &Run<S>) -> std::io::Result<()> {
+        Ok(())
+    }
+
+    /// The run ended: the last files, and this probe's part of the outcome.
+    fn finish(&mut self, _run: &Run<S>, _outcome: &mut Simulated) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// When timeseries rows are written.
+#[derive(Clone, Copy, Debug)]
+pub struct Rows {
+    /// A regular row every this many steps (plus one at each step that
+    /// opens an event or stops the run).
+    pub every: u64,
+    /// Mark rows written only for an event or the stop (`event_row`).
+    pub mark_event_rows: bool,
+}
+
+impl Rows {
+    /// About `rows` rows over a run to `t_end` at the first step's dt.
+    pub fn spread(rows: u64, t_end: f64, first_dt: f64) -> Self {
+        let expected_steps = (t_end / first_dt).ceil().max(1.0) as u64;
+        Rows {
+            every: (expected_steps / rows).max(1),
+            mark_event_rows: true,
+        }
+    }
+
+    /// A row after every step (a replay's dense output).
+    pub fn every_step() -> Self {
+        Rows {
+            every: 1,
+            mark_event_rows: false,
+        }
+    }
+}
+
+pub struct RunOptions {
+    /// Where the timeseries tables go (none are written without it).
+    pub dir: Option<PathBuf>,
+    pub rows: Rows,
+    /// Also write the timeseries as CSV.
+    pub csv: bool,
+    /// Stop after this step even if t_end is not reached.
+    pub until_step: Option<u64>,
+    /// Stop when a monitor calls a blow-out (a benchmark only records it).
+    pub stop_on_blow_out: bool,
+    /// Progress bar to drive (its position in thousandths of t_end).
+    pub bar: Option<ProgressBar>,
+}
+
+impl RunOptions {
+    pub fn new(dir: Option<PathBuf>, rows: Rows) -> Self {
+        RunOptions {
+            dir,
+            rows,
+            csv: false,
+            until_step: None,
+            stop_on_blow_out: true,
+            bar: None,
+        }
+    }
+}
+
+/// Seconds spent in the solver's steps, the monitors' observation and
+/// the timeseries rows (field metrics), for `kick bench`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Clock {
+    pub solver_s: f64,
+    pub monitor_s: f64,
+    pub rows_s: f64,
+}
+
+/// What a run produced, for its summary.
+#[derive(Clone, Debug)]
+pub struct Simulated {
+    pub status: Status,
+    pub reason: String,
+    pub steps: u64,
+    pub t_end: f64,
+    pub particles: usize,
+    pub final_hash: u64,
+    pub events: Vec<Event>,
+    pub metrics: Metrics,
+    pub phases: Vec<PhaseSummary>,
+    /// The first blow-out a monitor called (also when it did not stop the run).
+    pub first_blow_out: Option<String>,
+}
+
+impl Simulated {
+    pub fn failed(reason: String) -> Self {
+        Simulated {
+            status: Status::Failed,
+            reason,
+            steps: 0,
+            t_end: 0.0,
+            particles: 0,
+            final_hash: 0,
+            events: vec![],
+            metrics: Metrics::default(),
+            phases: vec![],
+            first_blow_out: None,
+        }
+    }
+}
+
+/// The stepper, its watches and probes, stepped together.
+pub struct Runner<'p, S: Stepper> {
+    pub stepper: S,
+    pub watches: Vec<Watch>,
+    probes: Vec<Box<dyn Probe<S> + 'p>>,
+    opts: RunOptions,
+    pub clock: Clock,
+    last_row_step: Option<u64>,
+    first_blow_out: Option<String>,
+}
+
+/// How one step ended.
+struct Stepped {
+    /// The step itself ran (the monitors observed it).
+    ran: bool,
+    opened: Vec<u32>,
+    stop: Option<String>,
+}
+
+impl<'p, S: Stepper> Runner<'p, S> {
+    pub fn new(stepper: S, watches: Vec<Watch>, opts: RunOptions) -> Self {
+        Runner {
+            stepper,
+            watches,
+            probes: vec![],
+            opts,
+            clock: Clock::default(),
+            last_row_step: None,
+            first_blow_out: None,
+        }
+    }
+
+    pub fn options(&self) -> &RunOptions {
+        &self.opts
+    }
+
+    /// The stepper and its watches, once the run is over.
+    pub fn into_parts(self) -> (S, Vec<Watch>) {
+        (self.stepper, self.watches)
+    }
+
+    /// Attaches a probe; probes are called in the order they were attached.
+    pub fn attach(&mut self, probe: impl Probe<S> + 'p) -> &mut Self {
+        self.probes.push(Box::new(probe));
+        self
+    }
+
+    /// Steps to t_end (or `until_step`, or a stop), then finishes every probe.
+    pub fn run(&mut self) -> std::io::Result<Simulated> {
+        self.row(false);
+        self.each(|p, run| p.begin(run))?;
+        let (status, reason) = loop {
+            let limit = self.opts.until_step;
+            if self.stepper.finished() || limit.is_some_and(|n| self.stepper.step_count() >= n) {
+                break (Status::Completed, String::new());
+            }
+            let stepped = self.step()?;
+            if let Some(reason) = stepped.stop {
+                break (Status::BlewUp, reason);
+            }
+            self.each(|p, run| p.between_steps(run))?;
+        };
+        self.row(status != Status::Completed);
+        self.finish(status, reason)
+    }
+
+    fn each(
+        &mut self,
+        mut hook: impl FnMut(&mut dyn Probe<S>, &Run<S>) -> std::io::Result<()>,
+    ) -> std::io::Result<()> {
+        let run = Run {
+            stepper: &self.stepper,
+            watches: &self.watches,
+        };
+        for p in self.probes.iter_mut() {
+            hook(p.as_mut(), &run)?;
+        }
+        Ok(())
+    }
+
+    fn step(&mut self) -> std::io::Result<Stepped> {
+        let t0 = Instant::now();
+        let advanced = self.stepper.advance();
+        self.clock.solver_s += t0.elapsed().as_secs_f64();
+        let mut stepped = Stepped {
+            ran: advanced.is_ok(),
+            opened: vec![],
+            stop: advanced.err(),
+        };
+        if stepped.ran {
+            let t1 = Instant::now();
+            self.observe(&mut stepped);
+            self.clock.monitor_s += t1.elapsed().as_secs_f64();
+            let opened = std::mem::take(&mut stepped.opened);
+            self.each(|p, run| p.after_step(run, &opened))?;
+            stepped.opened = opened;
+        }
+        let step = self.stepper.step_count();
+        let regular = step.is_multiple_of(self.opts.rows.every);
+        let stopping = stepped.stop.is_some();
+        if regular || !stepped.opened.is_empty() || stopping {
+            self.row(self.opts.rows.mark_event_rows && (!regular || stopping));
+            self.show_progress();
+        }
+        Ok(stepped)
+    }
+
+    /// Each phase's monitor observes the step; events opened are stamped
+    /// with the phase, the state hash and the checkpoint before them.
+    fn observe(&mut self, stepped: &mut Stepped) {
+        let step = self.stepper.step_count();
+        let mut opened = [0usize; 2];
+        for (k, w) in self.watches.iter_mut().enumerate() {
+            let (n, blow_out) = w.observe(&self.stepper.phase(k).view());
+            opened[k] = n;
+            if let Some(r) = blow_out {
+                let reason = match self.stepper.phase_name(k) {
+                    Some(phase) => format!("{phase} phase, step {step}: {r}"),
+                    None => format!("step {step}: {r}"),
+                };
+                self.first_blow_out.get_or_insert(reason.clone());
+                if self.opts.stop_on_blow_out {
+                    stepped.stop.get_or_insert(reason);
+                }
+            }
+        }
+        if opened.iter().all(|&n| n == 0) {
+            return;
+        }
+        let hash = format!("{:016x}", self.stepper.state_hash());
+        let checkpoint = self.probes.iter_mut().find_map(|p| p.pin_checkpoint());
+        for (k, w) in self.watches.iter_mut().enumerate() {
+            let phase = self.stepper.phase_name(k);
+            let ids = w.stamp_latest(opened[k], phase, &hash, checkpoint.as_deref());
+            stepped.opened.extend(ids);
+        }
+    }
+
+    /// A row at the current step in every watch, once per step.
+    fn row(&mut self, event_row: bool) {
+        let step = self.stepper.step_count();
+        if self.last_row_step == Some(step) {
+            return;
+        }
+        self.last_row_step = Some(step);
+        let t0 = Instant::now();
+        for (k, w) in self.watches.iter_mut().enumerate() {
+            w.push_row(&self.stepper.phase(k).view(), event_row);
+        }
+        self.clock.rows_s += t0.elapsed().as_secs_f64();
+        let run = Run {
+            stepper: &self.stepper,
+            watches: &self.watches,
+        };
+        for p in self.probes.iter_mut() {
+            p.row(&run);
+        }
+    }
+
+    fn show_progress(&self) {
+        let Some(bar) = &self.opts.bar else { return };
+        let t = self.stepper.time();
+        let t_end = self.stepper.phase(0).view().scene.t_end;
+        bar.set_position((1000.0 * t / t_end) as u64);
+        let events: usize = self.watches.iter().map(|w| w.monitor.events().len()).sum();
+        bar.set_message(format!("t = {t:.3} s, {events} events"));
+    }
+
+    /// The watches' tables and figures, then each probe's part.
+    fn finish(&mut self, status: Status, reason: String) -> std::io::Result<Simulated> {
+        let completed = status == Status::Completed;
+        let mut outcome = Simulated {
+            status,
+            reason,
+            steps: self.stepper.step_count(),
+            t_end: self.stepper.time(),
+            particles: 0,
+            final_hash: self.stepper.state_hash(),
+            events: vec![],
+            metrics: Metrics::default(),
+            phases: vec![],
+            first_blow_out: self.first_blow_out.clone(),
+        };
+        watch::summarise(
+            &self.stepper,
+            &self.watches,
+            &self.opts,
+            completed,
+            &mut outcome,
+        )?;
+        let run = Run {
+            stepper: &self.stepper,
+            watches: &self.watches,
+        };
+        for p in self.probes.iter_mut() {
+            p.finish(&run, &mut outcome)?;
+        }
+        Ok(outcome)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::probes::checkpoint_ring::{ring_name, CheckpointRing};
+    use monitor::MonitorConfig;
+    use solver::{ShapeKind, Solver, SolverConfig, TransferKind};
+
+    fn solver() -> Solver {
+        let cfg = SolverConfig::benchmark_dam_break(ShapeKind::Linear, TransferKind::Flip, 0.02);
+        Solver::new(cfg).unwrap()
+    }
+
+    fn runner<'p>(until: u64, rows_every: u64) -> Runner<'p, Solver> {
+        let s = solver();
+        let watch = Watch::new(MonitorConfig::default(), &s.view());
+        let mut opts = RunOptions::new(
+            None,
+            Rows {
+                every: rows_every,
+                mark_event_rows: true,
+            },
+        );
+        opts.until_step = Some(until);
+        Runner::new(s, vec![watch], opts)
+    }
+
+    /// Counts each hook's calls.
+    #[derive(Default)]
+    struct Calls {
+        begin: usize,
+        after_step: usize,
+        rows: usize,
+        between: usize,
+        finish: usize,
+    }
+
+    impl Probe<Solver> for &mut Calls {
+        fn begin(&mut self, run: &Run<Solver>) -> std::io::Result<()> {
+            assert_eq!(run.watches[0].series.step.len(), 1, "after the first row");
+            self.begin += 1;
+            Ok(())
+        }
+        fn after_step(&mut self, _: &Run<Solver>, _: &[u32]) -> std::io::Result<()> {
+            self.after_step += 1;
+            Ok(())
+        }
+        fn row(&mut self, _: &Run<Solver>) {
+            self.rows += 1;
+        }
+        fn between_steps(&mut self, _: &Run<Solver>) -> std::io::Result<()> {
+            self.between += 1;
+            Ok(())
+        }
+        fn finish(&mut self, run: &Run<Solver>, outcome: &mut Simulated) -> std::io::Result<()> {
+            assert_eq!(outcome.steps, run.step());
+            self.finish += 1;
+            Ok(())
+        }
+    }
+
+    /// Every hook is called as documented: one row at the start, one per
+    /// `every` steps (the last one not repeated at the end), a step hook
+    /// per step, and the run ends at `until_step`.
+    #[test]
+    fn hooks_are_called_once_per_their_occasion() {
+        let mut calls = Calls::default();
+        let mut r = runner(30, 10);
+        r.attach(&mut calls);
+        let outcome = r.run().unwrap();
+        assert_eq!(outcome.status, Status::Completed);
+        assert_eq!(outcome.steps, 30);
+        assert_eq!(r.watches[0].series.step, [0, 10, 20, 30]);
+        drop(r);
+        assert_eq!(
+            (
+                calls.begin,
+                calls.after_step,
+                calls.rows,
+                calls.between,
+                calls.finish
+            ),
+            (1, 30, 4, 30, 1)
+        );
+    }
+
+    /// A run restarted from a ring checkpoint continues bit for bit: the
+    /// same state hash, events and timeseries rows as the run it came from.
+    #[test]
+    fn a_restart_from_the_ring_continues_bit_for_bit() {
+        let dir = std::env::temp_dir().join(format!("kick-runner-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut whole = runner(60, 10);
+        whole.attach(CheckpointRing::new(dir.clone(), 20));
+        let a = whole.run().unwrap();
+        let bytes = std::fs::read(dir.join(ring_name(40))).unwrap();
+        let mut resumed = runner(60, 10);
+        let (stepper, watches) = (&mut resumed.stepper, &mut resumed.watches);
+        stepper.load(&bytes, watches).unwrap();
+        assert_eq!(resumed.stepper.step_count(), 40);
+        let b = resumed.run().unwrap();
+        assert_eq!(a.final_hash, b.final_hash);
+        assert_eq!(a.events, b.events);
+        let (sa, sb) = (&whole.watches[0].series, &resumed.watches[0].series);
+        assert_eq!(sb.step, [40, 50, 60]);
+        for (ca, cb) in sa.columns.iter().zip(&sb.columns) {
+            let (ta, tb) = (&ca[ca.len() - 2..], &cb[1..]);
+            let same = ta.iter().zip(tb).all(|(x, y)| x.to_bits() == y.to_bits());
+            assert!(same, "{ta:?} vs {tb:?}");
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
