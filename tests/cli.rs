@@ -591,7 +591,8 @@ fn matrix_runs_cases_in_parallel_and_writes_the_tables() {
         "wall_s",
         "particle_steps_per_s",
         "t_first_kick",
-        "hydro_rel_rms_late",
+        "figures.hydro_rel_rms_late",
+        "causes.injection.count",
     ] {
         assert!(header.iter().any(|c| c == col), "{col} in {header:?}");
     }

@@ -156,12 +156,12 @@ fn case_plots_render_as_png_and_svg() {
         "timeseries",
         &[
             "time t (s)",
-            "energy change (J)",
-            "checkerboard CB",
+            "energy change (J/m)",
+            "checkerboard CB (index)",
             "#1*",
             "#2",
             "a/g, z (log)",
-            "departure (log)",
+            "departure (of rho g depth, log)",
         ],
     );
     // |sin| + 0.01 spans 0.01..1.01: the log panels run 10⁻²..10¹.

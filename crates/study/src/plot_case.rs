@@ -45,9 +45,21 @@ pub struct TimeseriesFigure<'a> {
 }
 
 struct Panel {
-    ylabel: &'static str,
+    ylabel: String,
     lines: Vec<(&'static str, Vec<f64>)>,
     log: bool,
+}
+
+/// A panel's axis label: its title and the unit its columns declare
+/// (`timeseries::COLUMNS`), and "log" on a log axis.
+fn axis_label(title: &str, column: &str, log: bool) -> String {
+    let unit = crate::timeseries::column(column).map_or("1", |c| c.unit);
+    match (unit, log) {
+        ("1", false) => title.to_string(),
+        ("1", true) => format!("{title} (log)"),
+        (unit, false) => format!("{title} ({unit})"),
+        (unit, true) => format!("{title} ({unit}, log)"),
+    }
 }
 
 fn finite_range(lines: &[(&str, Vec<f64>)], log: bool) -> (f64, f64) {
@@ -90,7 +102,7 @@ impl TimeseriesFigure<'_> {
         };
         vec![
             Panel {
-                ylabel: "energy change (J)",
+                ylabel: axis_label("energy change", "e_kin", false),
                 lines: vec![
                     ("kinetic", col("e_kin")),
                     ("gravitational", rel("e_grav")),
@@ -101,12 +113,12 @@ impl TimeseriesFigure<'_> {
                 log: false,
             },
             Panel {
-                ylabel: "injected (J)",
+                ylabel: axis_label("injected", "energy_injected", false),
                 lines: vec![("energy injected", col("energy_injected"))],
                 log: false,
             },
             Panel {
-                ylabel: "a/g, z (log)",
+                ylabel: "a/g, z (log)".into(),
                 lines: vec![
                     ("max a/g", col("max_accel_g")),
                     ("max outlier z", col("max_z")),
@@ -114,12 +126,12 @@ impl TimeseriesFigure<'_> {
                 log: true,
             },
             Panel {
-                ylabel: "checkerboard CB",
+                ylabel: axis_label("checkerboard CB", "checkerboard", false),
                 lines: vec![("CB", col("checkerboard"))],
                 log: false,
             },
             Panel {
-                ylabel: "departure (log)",
+                ylabel: axis_label("departure", "hydro_rel_rms", true),
                 lines: vec![
                     ("hydro rel. RMS", col("hydro_rel_rms")),
                     ("hydro max / rho0 g H", col("hydro_max")),
@@ -195,7 +207,7 @@ impl TimeseriesFigure<'_> {
             .build_cartesian_2d(0.0..at.t_max, y)
             .map_err(err)?;
         let mut mesh = chart.configure_mesh();
-        mesh.y_desc(panel.ylabel)
+        mesh.y_desc(panel.ylabel.as_str())
             .label_style((SANS, 13))
             .axis_desc_style((SANS, 15))
             .y_label_formatter(y_fmt)

@@ -4,7 +4,7 @@
 //! hallmark), that blew up, and the survival time as median [min, max].
 
 use crate::plot_common::Res;
-use crate::report_data::{median, spread_text, Matrix, Row};
+use crate::report_data::{median, spread_text, Matrix, ParamKey, Row};
 use crate::report_html::{Cell, Page};
 use crate::summary::Status;
 use monitor::Cause;
@@ -16,7 +16,7 @@ fn baseline(m: &Matrix) -> Vec<(usize, String)> {
     m.axes
         .iter()
         .enumerate()
-        .filter(|(_, k)| k.starts_with("method."))
+        .filter(|(_, k)| matches!(k, ParamKey::Method(_)))
         .map(|(i, _)| {
             let mut counts: BTreeMap<&String, usize> = BTreeMap::new();
             for r in &m.rows {
@@ -38,7 +38,7 @@ fn label(m: &Matrix, base: &[(usize, String)], r: &Row) -> String {
         .iter()
         .filter(|(i, mode)| r.params[*i] != *mode)
         .map(|(i, _)| {
-            let key = m.axes[*i].trim_start_matches("method.");
+            let key = m.axes[*i].field();
             format!("{key} = {}", r.params[*i])
         })
         .collect();
@@ -259,7 +259,7 @@ mod tests {
     #[test]
     fn a_method_row_counts_kicks_over_all_runs_and_late_figures_over_completed_runs() {
         let m = Matrix {
-            axes: vec!["method.transfer".into()],
+            axes: vec![ParamKey::Method("transfer".into())],
             rows: vec![
                 run("pic", Some((0.05, 0.01)), vec![event(Cause::Impact)]),
                 run("apic", Some((0.2, 0.3)), vec![]),

@@ -3,7 +3,7 @@
 //! that show or refute it. Survival counts a completed run as t_end.
 
 use crate::plot_common::{short, Res};
-use crate::report_data::{f64_column, median, read_parquet, Matrix, Row};
+use crate::report_data::{f64_column, median, read_parquet, Matrix, ParamKey, Row};
 use crate::report_html::Page;
 use crate::summary::Status;
 use std::collections::BTreeMap;
@@ -16,11 +16,12 @@ pub const CHECKERBOARD_HIGH: f64 = 0.3;
 /// ... and below this at the smallest K, over the same window.
 pub const CHECKERBOARD_LOW: f64 = 0.1;
 
-fn param(r: &Row, suffix: &str) -> Option<f64> {
+/// The first parameter of the run whose key `is`, as a number.
+fn param(r: &Row, is: fn(&ParamKey) -> bool) -> Option<f64> {
     r.summary
         .params
         .iter()
-        .find(|(k, _)| k.ends_with(suffix))
+        .find(|(k, _)| is(&ParamKey::parse(k)))
         .and_then(|(_, v)| v.as_f64())
 }
 
@@ -66,7 +67,11 @@ struct ByK<'a> {
 impl<'a> ByK<'a> {
     /// None unless the matrix has at least two values of K.
     fn of(m: &'a Matrix) -> Option<Self> {
-        let mut ks: Vec<f64> = m.rows.iter().filter_map(|r| param(r, ".K")).collect();
+        let mut ks: Vec<f64> = m
+            .rows
+            .iter()
+            .filter_map(|r| param(r, ParamKey::is_bulk_modulus))
+            .collect();
         ks.sort_by(f64::total_cmp);
         ks.dedup();
         let (&k_min, &k_max) = (ks.first()?, ks.last()?);
@@ -76,7 +81,7 @@ impl<'a> ByK<'a> {
         let at = |keep: &dyn Fn(f64) -> bool| -> Vec<&Row> {
             m.rows
                 .iter()
-                .filter(|r| param(r, ".K").is_some_and(keep))
+                .filter(|r| param(r, ParamKey::is_bulk_modulus).is_some_and(keep))
                 .collect()
         };
         Some(ByK {
@@ -150,7 +155,7 @@ fn large_k_far_from_hydrostatic(by_k: &ByK) -> String {
         "2. Larger K (K &ge; {} Pa) survives to t_end with a pressure orders of magnitude off hydrostatic. \
          {} of {} runs completed; their late hydrostatic departure (relative RMS over the last second): \
          median {}, {} of them &ge; 10. {}",
-        short(large.iter().filter_map(|r| param(r, ".K")).fold(f64::INFINITY, f64::min)),
+        short(large.iter().filter_map(|r| param(r, ParamKey::is_bulk_modulus)).fold(f64::INFINITY, f64::min)),
         completed.len(),
         large.len(),
         median_of(late.iter().copied()),
@@ -190,10 +195,10 @@ fn large_k_checkerboards(by_k: &ByK) -> String {
 /// Behaviour 4: less viscosity, less stable; every case paired with its
 /// viscous twin (None without a viscosity axis).
 fn less_viscosity_less_stable(m: &Matrix) -> Option<String> {
-    let mu_axis = m.axis(".viscosity")?;
+    let mu_axis = m.axis(ParamKey::is_viscosity)?;
     let mut pairs: BTreeMap<Vec<String>, [Vec<f64>; 2]> = BTreeMap::new();
     for r in &m.rows {
-        let Some(mu) = param(r, ".viscosity") else {
+        let Some(mu) = param(r, ParamKey::is_viscosity) else {
             continue;
         };
         let mut key = r.params.clone();

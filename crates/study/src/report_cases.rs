@@ -24,7 +24,7 @@ pub fn ensemble_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
     }
     page.h2("Ensembles");
     page.p("Each case ran as several members whose initial positions differ by a seeded jitter of at most scene.jitter h (scene.seed per member): survival and first-kick time as median [min, max] over the members.");
-    let mut headers = m.axes.clone();
+    let mut headers: Vec<String> = m.axes.iter().map(ToString::to_string).collect();
     headers.extend(
         [
             "runs",
@@ -71,7 +71,7 @@ pub fn ensemble_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
 pub fn case_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
     page.h2("Cases");
     let mut headers = vec!["case".to_string()];
-    headers.extend(m.axes.iter().cloned());
+    headers.extend(m.axes.iter().map(ToString::to_string));
     headers.extend(
         [
             "status",

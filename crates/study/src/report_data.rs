@@ -267,8 +267,77 @@ fn axis_text(
 
 /// The rows of a matrix, sorted by the varying parameters, and those parameters' keys.
 pub struct Matrix {
-    pub axes: Vec<String>,
+    pub axes: Vec<ParamKey>,
     pub rows: Vec<Row>,
+}
+
+/// A study parameter's dotted key (`materials.water.K`, `method.j_bar.blend`,
+/// `scene.cell`), typed by what it sets.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum ParamKey {
+    /// `materials.NAME.FIELD`
+    Material { name: String, field: String },
+    /// `method.FIELD` (a remedy's setting is dotted: `j_bar.blend`)
+    Method(String),
+    /// `scene.FIELD`
+    Scene(String),
+    /// Any other key (`drag.update`, ...), as written.
+    Other(String),
+}
+
+impl ParamKey {
+    pub fn parse(key: &str) -> Self {
+        if let Some((name, field)) = key
+            .strip_prefix("materials.")
+            .and_then(|k| k.split_once('.'))
+        {
+            return ParamKey::Material {
+                name: name.into(),
+                field: field.into(),
+            };
+        }
+        if let Some(field) = key.strip_prefix("method.") {
+            return ParamKey::Method(field.into());
+        }
+        if let Some(field) = key.strip_prefix("scene.") {
+            return ParamKey::Scene(field.into());
+        }
+        ParamKey::Other(key.into())
+    }
+
+    /// A material's bulk modulus K.
+    pub fn is_bulk_modulus(&self) -> bool {
+        matches!(self, ParamKey::Material { field, .. } if field == "K")
+    }
+
+    /// A material's viscosity.
+    pub fn is_viscosity(&self) -> bool {
+        matches!(self, ParamKey::Material { field, .. } if field == "viscosity")
+    }
+
+    /// The cell size h.
+    pub fn is_cell_size(&self) -> bool {
+        matches!(self, ParamKey::Scene(f) if f == "cell")
+    }
+
+    /// The key without its section (`K`, `transfer`, `cell`).
+    pub fn field(&self) -> &str {
+        match self {
+            ParamKey::Material { field, .. } => field,
+            ParamKey::Method(f) | ParamKey::Scene(f) | ParamKey::Other(f) => f,
+        }
+    }
+}
+
+impl std::fmt::Display for ParamKey {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ParamKey::Material { name, field } => write!(f, "materials.{name}.{field}"),
+            ParamKey::Method(k) => write!(f, "method.{k}"),
+            ParamKey::Scene(k) => write!(f, "scene.{k}"),
+            ParamKey::Other(k) => f.write_str(k),
+        }
+    }
 }
 
 impl Matrix {
@@ -286,11 +355,11 @@ impl Matrix {
             .collect::<Res<_>>()?;
         let defaults = method_defaults();
         let text = |s: &Summary, k: &String| axis_text(&s.params, k, &defaults);
-        let axes = Matrix::axes_of(&summaries, &text);
+        let keys = Matrix::axes_of(&summaries, &text);
         let mut rows: Vec<Row> = summaries
             .into_iter()
             .map(|(dir, summary)| Row {
-                params: axes.iter().map(|k| text(&summary, k)).collect(),
+                params: keys.iter().map(|k| text(&summary, k)).collect(),
                 summary,
                 dir,
                 link: None,
@@ -304,6 +373,7 @@ impl Matrix {
                 .find(|o| o.is_ne())
                 .unwrap_or(std::cmp::Ordering::Equal)
         });
+        let axes = keys.iter().map(|k| ParamKey::parse(k)).collect();
         Ok(Matrix { axes, rows })
     }
 
@@ -343,8 +413,9 @@ impl Matrix {
             .collect()
     }
 
-    pub fn axis(&self, suffix: &str) -> Option<usize> {
-        self.axes.iter().position(|n| n.ends_with(suffix))
+    /// The first axis whose key `is` (e.g. `ParamKey::is_bulk_modulus`).
+    pub fn axis(&self, is: impl Fn(&ParamKey) -> bool) -> Option<usize> {
+        self.axes.iter().position(is)
     }
 }
 

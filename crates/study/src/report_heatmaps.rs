@@ -5,7 +5,7 @@
 
 use crate::plot_common::{render, short, ColourScale, Res};
 use crate::plot_matrix::{HeatCell, HeatKey, HeatPanel, HeatmapFigure};
-use crate::report_data::{by_value, spread, Class, Matrix, Row};
+use crate::report_data::{by_value, spread, Class, Matrix, ParamKey, Row};
 use crate::report_html::Page;
 use crate::summary::Status;
 use plotters::style::RGBColor;
@@ -37,8 +37,8 @@ struct HeatLayout<'a> {
 
 impl<'a> HeatLayout<'a> {
     fn new(m: &'a Matrix) -> Self {
-        let x_axis = m.axis(".K").unwrap_or(0);
-        let panel_axis = m.axis(".viscosity").filter(|&p| p != x_axis);
+        let x_axis = m.axis(ParamKey::is_bulk_modulus).unwrap_or(0);
+        let panel_axis = m.axis(ParamKey::is_viscosity).filter(|&p| p != x_axis);
         let y_axes: Vec<usize> = (0..m.axes.len())
             .filter(|&k| k != x_axis && Some(k) != panel_axis)
             .collect();
@@ -83,7 +83,7 @@ impl<'a> HeatLayout<'a> {
     fn y_label(&self) -> String {
         self.y_axes
             .iter()
-            .map(|&k| self.m.axes[k].as_str())
+            .map(|&k| self.m.axes[k].to_string())
             .collect::<Vec<_>>()
             .join(" / ")
     }
@@ -143,7 +143,7 @@ impl<'a> HeatLayout<'a> {
             .collect();
         HeatmapFigure {
             title: title.into(),
-            x_label: self.m.axes[self.x_axis].clone(),
+            x_label: self.m.axes[self.x_axis].to_string(),
             y_label: self.y_label(),
             x_cats: self.x_cats.clone(),
             y_cats: self.y_cats.clone(),

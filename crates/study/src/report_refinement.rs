@@ -10,7 +10,7 @@ use crate::plot_matrix::RefinementFigure;
 use crate::probes::darcy::DarcyFigures;
 use crate::probes::drag_layer::DragLayerFigures;
 use crate::probes::surge_front::SurgeFrontFigures;
-use crate::report_data::{median, Matrix, Row};
+use crate::report_data::{median, Matrix, ParamKey, Row};
 use crate::report_html::{Cell, Page};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -80,7 +80,7 @@ type Groups<'a> = BTreeMap<Vec<String>, BTreeMap<u64, Vec<&'a Row>>>;
 /// `report_matrix::MATRIX_SECTIONS`); nothing without a `scene.cell` axis
 /// or a case run at two cell sizes.
 pub fn refinement_table(m: &Matrix, out: &Path, page: &mut Page) -> Res {
-    let Some(h_axis) = m.axis("scene.cell") else {
+    let Some(h_axis) = m.axis(ParamKey::is_cell_size) else {
         return Ok(());
     };
     let mut rows: Vec<TableRow> = vec![];

@@ -4,7 +4,7 @@
 
 use crate::plot_common::{render, Res};
 use crate::plot_matrix::LinesFigure;
-use crate::report_data::{spread, Matrix, Row};
+use crate::report_data::{spread, Matrix, ParamKey, Row};
 use crate::report_html::Page;
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -12,10 +12,10 @@ use std::path::Path;
 /// Survival time against K, one line per combination of the other axes.
 /// (A matrix section: `report_matrix::MATRIX_SECTIONS`.)
 pub fn stability_map(m: &Matrix, out: &Path, page: &mut Page) -> Res {
-    let Some(kx) = m.axis(".K") else {
+    let Some(kx) = m.axis(ParamKey::is_bulk_modulus) else {
         return Ok(());
     };
-    let short_key = |k: usize| m.axes[k].rsplit('.').next().unwrap_or(&m.axes[k]);
+    let short_key = |k: usize| m.axes[k].field();
     let family = |r: &Row| {
         (0..m.axes.len())
             .filter(|&k| k != kx)
