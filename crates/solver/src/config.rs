@@ -32,6 +32,10 @@ pub struct Body {
     /// table); None in a single-phase scene.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub phase: Option<Phase>,
+    /// An initial flow over the body, added to `velocity` once the initial
+    /// state stands (docs/physics.md section 7).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flow: Option<crate::flows::Flow>,
 }
 
 /// The two phases of a mixture (docs/physics.md section 6): the solid
@@ -149,6 +153,7 @@ impl Scene {
                 velocity: [0.0, 0.0],
                 fraction: 1.0,
                 phase: None,
+                flow: None,
             }],
             materials: vec![material],
             ..Scene::default()
@@ -444,6 +449,9 @@ impl SolverConfig {
                 &format!("scene.body[{i}].velocity"),
                 "must be finite",
             )?;
+            if let Some(flow) = &b.flow {
+                flow.check(b.rect, s, &format!("scene.body[{i}].flow"))?;
+            }
         }
         if s.initial == InitialState::HydrostaticGate {
             self.validate_gates()?;

@@ -18,6 +18,7 @@ mod config_error;
 pub mod deletion;
 pub mod energy;
 pub mod eos;
+pub mod flows;
 pub mod grid;
 mod init_hydrostatic;
 pub mod material;
@@ -177,6 +178,7 @@ impl Solver {
                 init_hydrostatic::relax_behind_gates(cfg, particles).map_err(failed)?
             }
         };
+        solver.start_flows();
         solver.start_clock();
         Ok(solver)
     }
@@ -231,6 +233,47 @@ impl Solver {
         solver.remedies = solver.cfg.build_remedies(&solver.grid, n);
         solver.start_clock();
         solver
+    }
+
+    /// Adds the bodies' initial flows (docs/physics.md section 7) to the
+    /// particles of their material inside their rectangle, once the initial
+    /// state stands (a hydrostatic relaxation would damp them): velocity,
+    /// APIC affine velocity, and the pressure that goes with the flow.
+    fn start_flows(&mut self) {
+        let s = &self.cfg.scene;
+        let l = s.cell / s.ppc as f64;
+        let ps = &mut self.particles;
+        for body in s.bodies.iter().filter(|b| b.flow.is_some()) {
+            let (Some(flow), Some(material)) = (body.flow, s.material_index(body)) else {
+                continue;
+            };
+            let mat = &s.materials[material];
+            let r = body.rect;
+            let inside = |x: Vec2| {
+                x.x >= r[0] - 0.5 * l
+                    && x.x <= r[2] + 0.5 * l
+                    && x.y >= r[1] - 0.5 * l
+                    && x.y <= r[3] + 0.5 * l
+            };
+            for q in 0..ps.len() {
+                if ps.material[q] as usize != material || !inside(ps.x[q]) {
+                    continue;
+                }
+                let x = ps.x[q];
+                ps.v[q] += flow.velocity(x, r, s.gravity);
+                ps.affine[q] = flow.gradient(x, r, s.gravity);
+                let dp = flow.pressure(x, r, mat.rho0);
+                if dp != 0.0 {
+                    let p = ps.pressure[q] + dp;
+                    let j = mat.j_at_pressure(p);
+                    ps.vol[q] *= j / ps.j[q];
+                    ps.f[q] *= (j / ps.j[q]).sqrt();
+                    ps.j[q] = j;
+                    ps.pressure[q] = p;
+                    ps.stress[q] = -p * Mat2::identity();
+                }
+            }
+        }
     }
 
     /// Sets t = 0: fixes the time step from the current state and measures energy.

@@ -17,6 +17,7 @@ fn thrown(on_escape: OnLoss) -> Solver {
         velocity: [1000.0, 0.0],
         fraction: 1.0,
         phase: None,
+        flow: None,
     });
     scene.on_escape = on_escape;
     let method = Method {

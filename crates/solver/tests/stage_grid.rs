@@ -97,6 +97,7 @@ fn guarded_nodes_get_exactly_gravity_despite_stress() {
         velocity: [vx, 0.0],
         fraction: 1.0,
         phase: None,
+        flow: None,
     };
     let mut scene = common::box_scene([1.0, 1.0], [0.0; 4], reference.clone(), G);
     scene.cell = 0.02;

@@ -223,6 +223,7 @@ fn uniform_deformation_gives_the_eos_pressure() {
                         velocity: [0.0, 0.0],
                         fraction: 1.0,
                         phase: None,
+                        flow: None,
                     })
                     .collect();
                 scene.materials = run_mats.clone();

@@ -93,6 +93,7 @@ pub fn mpm88_sized(n_particles: usize, n_grid: usize) -> (SolverConfig, Particle
             velocity: [0.0, -1.0],
             fraction: 1.0,
             phase: None,
+            flow: None,
         }],
         materials: vec![mat],
         ..Scene::default()

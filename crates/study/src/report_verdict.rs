@@ -284,6 +284,31 @@ pub const METRICS: &[(&str, &str, &str)] = &[
         "largest momentum drift",
         "of Σ m |v| at t = 0",
     ),
+    ("checks.mode_decay.k", "initial flow's wavenumber k", "1/m"),
+    ("checks.mode_decay.a0", "initial flow's amplitude", "m/s"),
+    (
+        "checks.mode_decay.rate",
+        "initial flow's decay rate (log-linear fit)",
+        "1/s",
+    ),
+    (
+        "checks.mode_decay.nu_equivalent",
+        "viscosity the decay amounts to",
+        "m²/s",
+    ),
+    ("checks.mode_decay.fit_from_s", "decay fit from", "s"),
+    ("checks.mode_decay.fit_to_s", "decay fit to", "s"),
+    ("checks.mode_decay.fit_rows", "decay fit rows", "count"),
+    (
+        "checks.mode_decay.ratio_end",
+        "initial flow left at the end",
+        "of its amplitude",
+    ),
+    (
+        "checks.mode_decay.later_max_ratio",
+        "initial flow's largest return after the fit",
+        "of its amplitude",
+    ),
 ];
 
 /// The metrics object with nested objects flattened to dotted keys.
@@ -418,6 +443,7 @@ mod tests {
         m.set_check(&terzaghi::TerzaghiFigures::default());
         m.set_check(&surface::SurfaceFigures::default());
         m.set_check(&mixture_conservation::MixtureFigures::default());
+        m.set_check(&crate::probes::mode_decay::ModeDecayFigures::default());
         let all = flat_metrics(&m);
         for key in all.keys() {
             let listed = METRICS.iter().filter(|(k, _, _)| k == key).count();

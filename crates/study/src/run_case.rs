@@ -7,6 +7,7 @@
 use crate::output_files::write_atomic;
 use crate::probes::checkpoint_ring::CheckpointRing;
 use crate::probes::event_frames::EventFrames;
+use crate::probes::mode_decay::ModeDecay;
 use crate::probes::particle_files::ParticleFiles;
 use crate::probes::surge_front::SurgeFront;
 use crate::run_mixture;
@@ -105,6 +106,9 @@ fn simulate(case: &Case, dir: &Path, opts: &CaseOptions) -> std::io::Result<Simu
             runner.attach(EventFrames::new(dir.join("particles"), particles));
             if let Some(front) = SurgeFront::new(&case.solver.scene) {
                 runner.attach(front);
+            }
+            if let Some(decay) = ModeDecay::new(&case.solver.scene, dir.to_path_buf(), opts.csv) {
+                runner.attach(decay);
             }
             runner.run()
         }

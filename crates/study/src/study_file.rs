@@ -780,6 +780,28 @@ fn plain_part(key: &str, v: &Value) -> String {
             format!("noslip-{}", names.join("-"))
         }
         ("dt", Value::String(s)) if s == "dynamic" => "dyn".into(),
+        // An initial flow by its kind and mode: `tg-m2`, `shear`, `wave-m1`.
+        ("flow", Value::Table(t)) => {
+            let kind = match t.get("kind").and_then(Value::as_str) {
+                Some("taylor_green") => "tg",
+                Some("shear_wave") => "shear",
+                Some("standing_wave") => "wave",
+                _ => "flow",
+            };
+            match t.get("mode") {
+                Some(m) => format!("{kind}-m{}", as_f64(m)),
+                None => kind.into(),
+            }
+        }
+        // Bodies that differ by their flows, by those.
+        ("body", Value::Array(bodies)) if bodies.iter().all(|b| b.get("flow").is_some()) => {
+            let flows: Vec<String> = bodies
+                .iter()
+                .filter_map(|b| b.get("flow"))
+                .map(|f| plain_part("flow", f))
+                .collect();
+            flows.join("+")
+        }
         (_, Value::String(s)) => s.clone(),
         // A table that changes nothing: the axis's reference value.
         (_, Value::Table(t)) if t.is_empty() => "base".into(),
@@ -943,6 +965,13 @@ mod tests {
         assert_eq!(name_part("drag.coefficient", &toml("3.2e5")), "B3.2e5");
         assert_eq!(name_part("method", &toml("{}")), "base");
         assert_eq!(name_part("scene.cell", &toml("0.005")), "h0.5cm");
+        assert_eq!(
+            name_part(
+                "scene.body",
+                &toml("[{ rect = [0.0, 0.0, 0.2, 0.2], flow = { kind = \"taylor_green\", amplitude = 0.01, mode = 2 } }]")
+            ),
+            "tg-m2"
+        );
         assert_eq!(name_part("scene.no_slip", &toml("[]")), "slip");
         assert_eq!(
             name_part("scene.no_slip", &toml("[\"floor\"]")),

@@ -33,6 +33,7 @@ pub fn box_scene(size: [f64; 2], rect: [f64; 4], material: Material, gravity: f6
             velocity: [0.0, 0.0],
             fraction: 1.0,
             phase: None,
+            flow: None,
         }],
         materials: vec![material],
         ..Scene::default()
