@@ -450,7 +450,8 @@ impl SolverConfig {
                 "must be finite",
             )?;
             if let Some(flow) = &b.flow {
-                flow.check(b.rect, s, &format!("scene.body[{i}].flow"))?;
+                let key = format!("scene.body[{i}].flow");
+                flow.check(b.rect, s.periodic, s.gravity, &key)?;
             }
         }
         if s.initial == InitialState::HydrostaticGate {

@@ -2,7 +2,6 @@
 //! linear-theory velocity fields whose decay measures a method's own
 //! dissipation against the fluid's viscosity.
 
-use crate::config::Scene;
 use crate::config_error::ConfigError;
 use crate::particles::{Mat2, Vec2};
 use serde::{Deserialize, Serialize};
@@ -123,10 +122,17 @@ impl Flow {
         }
     }
 
-    /// The flow is defined on this body of this scene: a finite positive
-    /// amplitude, a mode of at least 1, a square body for Taylor-Green,
-    /// both axes periodic for the shear wave, gravity for the standing wave.
-    pub fn check(&self, rect: [f64; 4], scene: &Scene, key: &str) -> Result<(), ConfigError> {
+    /// The flow is defined on this body of a scene with these periodic
+    /// axes and gravity: a finite positive amplitude, a mode of at least 1,
+    /// a square body for Taylor-Green, both axes periodic for the shear
+    /// wave, gravity for the standing wave.
+    pub fn check(
+        &self,
+        rect: [f64; 4],
+        periodic: [bool; 2],
+        gravity: f64,
+        key: &str,
+    ) -> Result<(), ConfigError> {
         let bad = |field: &str, message: &str| ConfigError {
             key: format!("{key}.{field}"),
             message: message.into(),
@@ -144,11 +150,11 @@ impl Flow {
                 "kind",
                 "taylor_green needs a square body (width = height)",
             )),
-            Flow::ShearWave { .. } if scene.periodic != [true, true] => Err(bad(
+            Flow::ShearWave { .. } if periodic != [true, true] => Err(bad(
                 "kind",
                 "shear_wave needs scene.periodic = [true, true]",
             )),
-            Flow::StandingWave { .. } if scene.gravity <= 0.0 => {
+            Flow::StandingWave { .. } if gravity <= 0.0 => {
                 Err(bad("kind", "standing_wave needs scene.gravity > 0"))
             }
             _ => Ok(()),
@@ -267,31 +273,26 @@ mod tests {
 
     #[test]
     fn flows_outside_their_conditions_are_refused_by_key() {
-        let scene = Scene::default();
         let tg = |mode| Flow::TaylorGreen {
             amplitude: 0.01,
             mode,
         };
         let key = "scene.body[0].flow";
         assert_eq!(
-            tg(0).check(BOX, &scene, key).unwrap_err().key,
+            tg(0).check(BOX, [false, false], 9.81, key).unwrap_err().key,
             "scene.body[0].flow.mode"
         );
         let wide = [0.0, 0.0, 0.4, 0.2];
-        assert!(tg(1).check(wide, &scene, key).is_err());
-        assert!(tg(1).check(BOX, &scene, key).is_ok());
+        assert!(tg(1).check(wide, [false, false], 9.81, key).is_err());
+        assert!(tg(1).check(BOX, [false, false], 9.81, key).is_ok());
         let shear = Flow::ShearWave { amplitude: 0.01 };
-        assert!(shear.check(BOX, &scene, key).is_err());
-        let periodic = Scene {
-            periodic: [true, true],
-            ..Scene::default()
-        };
-        assert!(shear.check(BOX, &periodic, key).is_ok());
+        assert!(shear.check(BOX, [false, false], 9.81, key).is_err());
+        assert!(shear.check(BOX, [true, true], 0.0, key).is_ok());
         let bad = Flow::ShearWave {
             amplitude: f64::NAN,
         };
         assert_eq!(
-            bad.check(BOX, &periodic, key).unwrap_err().key,
+            bad.check(BOX, [true, true], 0.0, key).unwrap_err().key,
             "scene.body[0].flow.amplitude"
         );
     }
