@@ -311,36 +311,6 @@ pub const METRICS: &[(&str, &str, &str)] = &[
     ),
 ];
 
-/// The metrics object with nested objects flattened to dotted keys.
-fn flat_metrics(m: &Metrics) -> serde_json::Map<String, serde_json::Value> {
-    fn flatten(
-        prefix: &str,
-        v: serde_json::Value,
-        out: &mut serde_json::Map<String, serde_json::Value>,
-    ) {
-        match v {
-            serde_json::Value::Object(map) => {
-                for (k, v) in map {
-                    let key = if prefix.is_empty() {
-                        k
-                    } else {
-                        format!("{prefix}.{k}")
-                    };
-                    flatten(&key, v, out);
-                }
-            }
-            leaf => {
-                out.insert(prefix.to_string(), leaf);
-            }
-        }
-    }
-    let mut out = serde_json::Map::new();
-    if let Ok(v) = serde_json::to_value(m) {
-        flatten("", v, &mut out);
-    }
-    out
-}
-
 /// A row for a value that applies: defined, and for counts and fractions
 /// not zero.
 fn row(label: &'static str, v: f64, unit: &'static str) -> Option<MetricRow> {
@@ -358,7 +328,7 @@ fn row(label: &'static str, v: f64, unit: &'static str) -> Option<MetricRow> {
 /// The rows of the metrics that apply: the event counts, the timeseries
 /// figures (from their column declarations), then losses and checks.
 pub fn metric_rows(m: &Metrics) -> Vec<MetricRow> {
-    let values = flat_metrics(m);
+    let values = m.flattened();
     let listed = |key: &str, label, unit| row(label, values.get(key)?.as_f64()?, unit);
     let nested = |key: &&(&str, &str, &str)| key.0.contains('.');
     let events = METRICS
@@ -444,7 +414,7 @@ mod tests {
         m.set_check(&surface::SurfaceFigures::default());
         m.set_check(&mixture_conservation::MixtureFigures::default());
         m.set_check(&crate::probes::mode_decay::ModeDecayFigures::default());
-        let all = flat_metrics(&m);
+        let all = m.flattened();
         for key in all.keys() {
             let listed = METRICS.iter().filter(|(k, _, _)| k == key).count();
             let figure = key

@@ -79,6 +79,37 @@ impl Metrics {
         serde_json::from_value(value.clone()).ok()
     }
 
+    /// The metrics as one flat object: nested objects (figures, causes,
+    /// losses, checks) by dotted keys, e.g. `checks.darcy.flux`.
+    pub fn flattened(&self) -> serde_json::Map<String, serde_json::Value> {
+        fn flatten(
+            prefix: &str,
+            v: serde_json::Value,
+            out: &mut serde_json::Map<String, serde_json::Value>,
+        ) {
+            match v {
+                serde_json::Value::Object(map) => {
+                    for (k, v) in map {
+                        let key = if prefix.is_empty() {
+                            k
+                        } else {
+                            format!("{prefix}.{k}")
+                        };
+                        flatten(&key, v, out);
+                    }
+                }
+                leaf => {
+                    out.insert(prefix.to_string(), leaf);
+                }
+            }
+        }
+        let mut out = serde_json::Map::new();
+        if let Ok(v) = serde_json::to_value(self) {
+            flatten("", v, &mut out);
+        }
+        out
+    }
+
     pub fn set_check<C: Check>(&mut self, figures: &C) {
         if let Ok(value) = serde_json::to_value(figures) {
             self.checks.insert(C::NAME.to_string(), value);

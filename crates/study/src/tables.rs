@@ -106,35 +106,9 @@ pub struct SummaryRow {
     pub summary: Summary,
 }
 
-/// Each row's metrics as one flat object: nested objects (figures,
-/// causes, losses, checks) by dotted keys, e.g. `checks.darcy.flux`.
+/// Each row's metrics as one flat object (`Metrics::flattened`).
 fn metrics_objects(rows: &[SummaryRow]) -> Vec<serde_json::Map<String, Value>> {
-    fn flatten(prefix: &str, v: Value, out: &mut serde_json::Map<String, Value>) {
-        match v {
-            Value::Object(m) => {
-                for (k, v) in m {
-                    let key = if prefix.is_empty() {
-                        k
-                    } else {
-                        format!("{prefix}.{k}")
-                    };
-                    flatten(&key, v, out);
-                }
-            }
-            leaf => {
-                out.insert(prefix.to_string(), leaf);
-            }
-        }
-    }
-    rows.iter()
-        .map(|r| {
-            let mut flat = serde_json::Map::new();
-            if let Ok(v) = serde_json::to_value(&r.summary.metrics) {
-                flatten("", v, &mut flat);
-            }
-            flat
-        })
-        .collect()
+    rows.iter().map(|r| r.summary.metrics.flattened()).collect()
 }
 
 /// One row per case: `case`, one column per parameter (dotted key), the run's
