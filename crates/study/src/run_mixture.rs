@@ -62,7 +62,7 @@ pub(crate) fn attach_checks(runner: &mut Runner<Mixture>, case: &Case, spec: &Mi
     let csv = runner.options().csv;
     let mix = &runner.stepper;
     let law = DecayLaw::of(scene, spec, mix);
-    let decay = DecayCheck::new(scene, spec, mix);
+    let decay = law.map(|law| DecayCheck::new(law, spec.drag.update));
     let layer = LayerCheck::new(scene, spec, mix);
     let terzaghi = TerzaghiCheck::new(scene, spec, mix).map(|check| Terzaghi {
         check,

@@ -58,6 +58,17 @@ pub fn decay_time(scene: &Scene, spec: &MixtureSpec) -> Option<f64> {
     })
 }
 
+/// The factor by which an update multiplies the relative velocity over a
+/// step of dt = r tau, with no other force: 1 - r explicit, 1 / (1 + r)
+/// implicit, exp(-r) exponential.
+pub fn discrete_decay(update: DragUpdate, r: f64) -> f64 {
+    match update {
+        DragUpdate::Explicit => 1.0 - r,
+        DragUpdate::Implicit => 1.0 / (1.0 + r),
+        DragUpdate::Exponential => (-r).exp(),
+    }
+}
+
 /// The exact decay dv0 exp(-t/tau).
 #[derive(Clone, Copy, Debug)]
 pub struct DecayLaw {
@@ -106,15 +117,16 @@ pub struct DecayCheck {
 }
 
 impl DecayCheck {
-    pub fn new(scene: &Scene, spec: &MixtureSpec, mix: &Mixture) -> Option<Self> {
-        DecayLaw::of(scene, spec, mix).map(|law| DecayCheck {
+    /// Against the scene's exact decay `law`, for the drag's `update`.
+    pub fn new(law: DecayLaw, update: DragUpdate) -> Self {
+        DecayCheck {
             law,
-            update: spec.drag.update,
+            update,
             discrete: 1.0,
             max_error: 0.0,
             max_discrete_error: 0.0,
             first_ratio: None,
-        })
+        }
     }
 }
 
@@ -125,11 +137,7 @@ impl Probe<Mixture> for DecayCheck {
         let DecayLaw { tau, dv0 } = self.law;
         let r = dt / tau;
         self.first_ratio.get_or_insert(r);
-        self.discrete *= match self.update {
-            DragUpdate::Explicit => 1.0 - r,
-            DragUpdate::Implicit => 1.0 / (1.0 + r),
-            DragUpdate::Exponential => (-r).exp(),
-        };
+        self.discrete *= discrete_decay(self.update, r);
         let scale = dv0.norm();
         self.max_error = self.max_error.max((dv - self.law.exact(t)).norm() / scale);
         self.max_discrete_error = self

@@ -1,5 +1,6 @@
 //! The drag-convergence scene (docs/physics.md section 6).
 
+use super::drag_decay::discrete_decay;
 use super::mixture_scene::{fixed_layer, mean_velocity};
 use crate::runner::{Probe, Run, Simulated};
 use crate::study_file::MixtureSpec;
@@ -66,11 +67,7 @@ impl Probe<Mixture> for LayerCheck {
             mean_velocity(run.stepper.phase(1)),
         );
         let r = dt / self.tau;
-        self.law *= match self.update {
-            DragUpdate::Explicit => 1.0 - r,
-            DragUpdate::Implicit => 1.0 / (1.0 + r),
-            DragUpdate::Exponential => (-r).exp(),
-        };
+        self.law *= discrete_decay(self.update, r);
         let expected = self.u0 * (self.share * self.law + 1.0 - self.share);
         let error = (u - expected).norm() / (self.u0.norm() * self.share);
         self.max_error = self.max_error.max(error);
