@@ -309,6 +309,50 @@ pub const METRICS: &[(&str, &str, &str)] = &[
         "initial flow's largest return after the fit",
         "of its amplitude",
     ),
+    ("checks.slosh.k", "standing wave's wavenumber k", "1/m"),
+    (
+        "checks.slosh.period_theory_s",
+        "slosh period, linear theory",
+        "s",
+    ),
+    ("checks.slosh.period_s", "slosh period, measured", "s"),
+    (
+        "checks.slosh.period_error",
+        "slosh period error",
+        "of linear theory's",
+    ),
+    (
+        "checks.slosh.decay_theory",
+        "slosh decay rate, linear theory (2 nu k²)",
+        "1/s",
+    ),
+    (
+        "checks.slosh.decay_rate",
+        "slosh decay rate, measured",
+        "1/s",
+    ),
+    (
+        "checks.slosh.decay_ratio",
+        "slosh decay rate over linear theory's",
+        "ratio",
+    ),
+    (
+        "checks.slosh.swing_theory_m",
+        "swing of the centre of mass, linear theory",
+        "m",
+    ),
+    (
+        "checks.slosh.swing_m",
+        "swing of the centre of mass, first",
+        "m",
+    ),
+    ("checks.slosh.extremes", "slosh extremes fitted", "count"),
+    (
+        "checks.slosh.crossings",
+        "slosh zero crossings fitted",
+        "count",
+    ),
+    ("checks.slosh.followed_to_s", "slosh followed to", "s"),
 ];
 
 /// A row for a value that applies: defined, and for counts and fractions
@@ -414,6 +458,7 @@ mod tests {
         m.set_check(&surface::SurfaceFigures::default());
         m.set_check(&mixture_conservation::MixtureFigures::default());
         m.set_check(&crate::probes::mode_decay::ModeDecayFigures::default());
+        m.set_check(&crate::probes::slosh::SloshFigures::default());
         let all = m.flattened();
         for key in all.keys() {
             let listed = METRICS.iter().filter(|(k, _, _)| k == key).count();

@@ -259,49 +259,22 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Study, StudyError> {
     }
     let mut matrix = root.remove("matrix");
     let ensemble = ensemble_size(&mut matrix).map_err(|(k, m)| err(&k, m))?;
+    let extra = extra_blocks(&mut matrix).map_err(|(k, m)| err(&k, m))?;
     let axes = matrix_axes(matrix).map_err(|(k, m)| err(&k, m))?;
     let base = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "case".into());
-    let total: usize = axes.iter().map(|(_, v)| v.len()).product();
-    let mut cases = vec![];
-    for index in 0..total {
-        let mut table = root.clone();
-        let mut rest = index;
-        let mut name_parts = vec![];
-        for (key, values) in axes.iter().rev() {
-            let v = &values[rest % values.len()];
-            rest /= values.len();
-            set_path(&mut table, key, v.clone()).map_err(|m| err(&format!("matrix.{key}"), m))?;
-            name_parts.push(name_part(key, v));
-        }
-        name_parts.reverse();
-        let name = if name_parts.is_empty() {
-            base.clone()
-        } else {
-            name_parts.join("_")
-        };
-        match ensemble {
-            None => cases.push(case(name, table).map_err(|(k, m)| err(&k, m))?),
-            Some(n) => {
-                for member in 0..n {
-                    let mut table = table.clone();
-                    let scene = table
-                        .entry("scene")
-                        .or_insert_with(|| Value::Table(Table::new()));
-                    if let Value::Table(scene) = scene {
-                        scene
-                            .entry("jitter")
-                            .or_insert(Value::Float(ENSEMBLE_JITTER));
-                        // Members K of a base seed s: seeds s + K.
-                        let base = scene.get("seed").and_then(Value::as_integer).unwrap_or(0);
-                        scene.insert("seed".into(), Value::Integer(base + member as i64));
-                    }
-                    let name = format!("{name}_e{member}");
-                    cases.push(case(name, table).map_err(|(k, m)| err(&k, m))?);
-                }
+    let mut cases = expand(&root, &axes, ensemble, &base).map_err(|(k, m)| err(&k, m))?;
+    for (i, block) in extra.into_iter().enumerate() {
+        let key = format!("matrix.also[{i}]");
+        let axes = replace_axes(&axes, block, &key).map_err(|(k, m)| err(&k, m))?;
+        for case in expand(&root, &axes, ensemble, &base).map_err(|(k, m)| err(&k, m))? {
+            if cases.iter().any(|c| c.name == case.name) {
+                let message = format!("case {} is already in the matrix", case.name);
+                return Err(err(&key, message));
             }
+            cases.push(case);
         }
     }
     Ok(Study {
@@ -315,6 +288,104 @@ pub const ENSEMBLE_JITTER: f64 = 1e-9;
 
 /// The keys that tell ensemble members apart (not axes of a matrix).
 pub const ENSEMBLE_KEYS: [&str; 2] = ["scene.seed", "scene.jitter"];
+
+/// The cases of one product of `axes` over `root`, in axis order (the
+/// last axis varies fastest), each ensemble member a case of its own.
+fn expand(
+    root: &Table,
+    axes: &[Axis],
+    ensemble: Option<u64>,
+    base: &str,
+) -> Result<Vec<Case>, KeyError> {
+    let total: usize = axes.iter().map(|(_, v)| v.len()).product();
+    let mut cases = vec![];
+    for index in 0..total {
+        let mut table = root.clone();
+        let mut rest = index;
+        let mut name_parts = vec![];
+        for (key, values) in axes.iter().rev() {
+            let v = &values[rest % values.len()];
+            rest /= values.len();
+            set_path(&mut table, key, v.clone()).map_err(|m| (format!("matrix.{key}"), m))?;
+            name_parts.push(name_part(key, v));
+        }
+        name_parts.reverse();
+        let name = if name_parts.is_empty() {
+            base.to_string()
+        } else {
+            name_parts.join("_")
+        };
+        let Some(n) = ensemble else {
+            cases.push(case(name, table)?);
+            continue;
+        };
+        for member in 0..n {
+            let mut table = table.clone();
+            let scene = table
+                .entry("scene")
+                .or_insert_with(|| Value::Table(Table::new()));
+            if let Value::Table(scene) = scene {
+                scene
+                    .entry("jitter")
+                    .or_insert(Value::Float(ENSEMBLE_JITTER));
+                // Members K of a base seed s: seeds s + K.
+                let base = scene.get("seed").and_then(Value::as_integer).unwrap_or(0);
+                scene.insert("seed".into(), Value::Integer(base + member as i64));
+            }
+            cases.push(case(format!("{name}_e{member}"), table)?);
+        }
+    }
+    Ok(cases)
+}
+
+/// `[[matrix.also]]`: further blocks of cases, each the main product with
+/// some axes' values replaced (e.g. every remedy at one cell size beside
+/// the baselines at three), so a study need not run the full product.
+fn extra_blocks(matrix: &mut Option<Value>) -> Result<Vec<Table>, KeyError> {
+    let Some(Value::Table(t)) = matrix else {
+        return Ok(vec![]);
+    };
+    match t.remove("also") {
+        None => Ok(vec![]),
+        Some(Value::Array(blocks)) => blocks
+            .into_iter()
+            .enumerate()
+            .map(|(i, b)| match b {
+                Value::Table(b) if !b.is_empty() => Ok(b),
+                _ => Err((
+                    format!("matrix.also[{i}]"),
+                    "must be a table of axis = [values] (write [[matrix.also]])".into(),
+                )),
+            })
+            .collect(),
+        Some(_) => Err((
+            "matrix.also".into(),
+            "must be an array of tables (write [[matrix.also]])".into(),
+        )),
+    }
+}
+
+/// The main axes with a block's values in place of theirs; a block may only
+/// replace axes of `[matrix]`, so every case's name has the same parts.
+fn replace_axes(axes: &[Axis], block: Table, key: &str) -> Result<Vec<Axis>, KeyError> {
+    let mut replaced = axes.to_vec();
+    for (axis, values) in matrix_axes(Some(Value::Table(block)))
+        .map_err(|(k, m)| (k.replacen("matrix", key, 1), m))?
+    {
+        let Some(slot) = replaced.iter_mut().find(|(k, _)| *k == axis) else {
+            let names: Vec<&str> = axes.iter().map(|(k, _)| k.as_str()).collect();
+            return Err((
+                format!("{key}.{axis}"),
+                format!(
+                    "is not an axis of [matrix] (a block replaces the values of: {})",
+                    names.join(", ")
+                ),
+            ));
+        };
+        slot.1 = values;
+    }
+    Ok(replaced)
+}
 
 /// `[matrix] ensemble = N`: every case runs as N members `CASE_e0 .. CASE_e{N-1}`,
 /// each with its own `scene.seed` (and `scene.jitter`, default `ENSEMBLE_JITTER`).
@@ -1011,6 +1082,54 @@ mod tests {
         let e = load(&path, &[]).unwrap_err();
         assert_eq!(e.key, "matrix.ensemble", "{e}");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// `[[matrix.also]]` adds the main product with some axes' values
+    /// replaced; it may not add an axis or repeat a case.
+    #[test]
+    fn matrix_also_blocks_add_cases_beside_the_product() {
+        let dir = std::env::temp_dir().join(format!("kick_also_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("s.toml");
+        let text =
+            "[scene]\n[[scene.body]]\nrect = [0.0, 0.0, 0.2, 0.4]\n[materials.water]\nK = 1e5\n\
+                    [matrix]\n\"method\" = [{ }]\n\"scene.cell\" = [0.02, 0.01]\n\
+                    \"materials.water.K\" = [1e5, 1e6]\n\
+                    [[matrix.also]]\n\"method\" = [{ j_bar = true }, { f_reset = true }]\n\
+                    \"scene.cell\" = [0.01]\n";
+        std::fs::write(&path, text).unwrap();
+        let study = load(&path, &[]).unwrap();
+        let names: Vec<&str> = study.cases.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "base_h2cm_K100kPa",
+                "base_h2cm_K1MPa",
+                "base_h1cm_K100kPa",
+                "base_h1cm_K1MPa",
+                "j_bar1.0_h1cm_K100kPa",
+                "j_bar1.0_h1cm_K1MPa",
+                "f_reset_h1cm_K100kPa",
+                "f_reset_h1cm_K1MPa",
+            ]
+        );
+        assert!(study.cases[4].solver.method.remedies.j_bar.is_some());
+        assert_eq!(study.cases[7].solver.scene.cell, 0.01);
+        let refused = |text: String| load_text(&path, &text).unwrap_err();
+        let e = refused(text.replace("\"scene.cell\" = [0.01]", "\"scene.ppc\" = [3]"));
+        assert_eq!(e.key, "matrix.also[0].scene.ppc", "{e}");
+        assert!(e.message.contains("not an axis"), "{e}");
+        let e = refused(text.replace("{ f_reset = true }", "{ }"));
+        assert_eq!(e.key, "matrix.also[0]", "{e}");
+        assert!(e.message.contains("base_h1cm_K100kPa"), "{e}");
+        let e = refused(text.replace("\"scene.cell\" = [0.01]\n", "\"scene.cell\" = []\n"));
+        assert_eq!(e.key, "matrix.also[0].scene.cell", "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    fn load_text(path: &Path, text: &str) -> Result<Study, StudyError> {
+        std::fs::write(path, text).unwrap();
+        load(path, &[])
     }
 
     const MIXTURE: &str = "[scene]\nbox = [0.1, 0.1]\ncell = 0.01\nperiodic = [true, true]\n\
