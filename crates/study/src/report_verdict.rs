@@ -298,7 +298,7 @@ pub const METRICS: &[(&str, &str, &str)] = &[
     ),
     ("checks.mode_decay.fit_from_s", "decay fit from", "s"),
     ("checks.mode_decay.fit_to_s", "decay fit to", "s"),
-    ("checks.mode_decay.fit_rows", "decay fit rows", "count"),
+    ("checks.mode_decay.fit_steps", "decay fit steps", "count"),
     (
         "checks.mode_decay.ratio_end",
         "initial flow left at the end",
