@@ -76,6 +76,8 @@ fn run_completes_and_writes_the_case_folder() {
         "max_z",
         "checkerboard",
         "hydro_rel_rms",
+        "hydro_floor_rel_rms",
+        "hydro_excess_rel_rms",
         "front_x",
         "courant",
         "j_min",
@@ -91,6 +93,8 @@ fn run_completes_and_writes_the_case_folder() {
     assert_eq!(raw["schema_version"], study::summary::SCHEMA_VERSION);
     for k in [
         "hydro_rel_rms_late",
+        "hydro_floor_late",
+        "hydro_excess_late",
         "hydro_max_late",
         "checkerboard_late",
         "checkerboard_peak",

@@ -1,6 +1,6 @@
 //! Box, cells and scales the monitor's metrics are defined on.
 
-use solver::{Scene, Vec2};
+use solver::{Material, Scene, Vec2};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Geometry {
@@ -11,6 +11,8 @@ pub struct Geometry {
     pub ppc: usize,
     pub gravity: f64,
     pub rho0: f64,
+    /// The first material, whose EOS the rest layer of the hydrostatic floor obeys.
+    pub material: Option<Material>,
     /// Initial column height H (tallest body) and width a (widest body).
     pub column_height: f64,
     pub column_width: f64,
@@ -36,6 +38,7 @@ impl Geometry {
             ppc: scene.ppc,
             gravity: scene.gravity,
             rho0: scene.materials.first().map_or(1000.0, |m| m.rho0),
+            material: scene.materials.first().cloned(),
             column_height: height,
             column_width: width,
         }

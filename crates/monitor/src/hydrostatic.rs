@@ -10,8 +10,13 @@
 //! p_a is not explained by the motion (sloshing, a run-up at a wall): it is
 //! the pressure's own error, or the reference's sampling of a disordered
 //! strip.
+//!
+//! The same score of an exact rest field (`rest_field`) on the same
+//! particles is the floor this reference's sampling sets: on a disordered
+//! arrangement even the exact pressure scores above 0.
 
 use crate::geometry::Geometry;
+use crate::rest_field::RestField;
 use solver::Vec2;
 
 #[derive(Clone, Debug)]
@@ -27,6 +32,8 @@ pub struct Hydrostatic {
     pub reference: Vec<f64>,
     /// p_a: the weight and the vertical inertia above.
     pub with_accel: Vec<f64>,
+    /// The flat layer's exact rest pressure at each particle.
+    pub rest: RestField,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -37,6 +44,10 @@ pub struct Departure {
     pub max: f64,
     /// sqrt(sum V (p - p_a)^2 / sum V p_h^2): the part the accelerations do not explain.
     pub unexplained_rel_rms: f64,
+    /// sqrt(sum V (p_rest - p_h)^2 / sum V p_h^2): the exact rest field's score.
+    pub floor_rel_rms: f64,
+    /// sqrt(max(rel_rms^2 - floor_rel_rms^2, 0)).
+    pub excess_rel_rms: f64,
 }
 
 impl Hydrostatic {
@@ -49,12 +60,15 @@ impl Hydrostatic {
             suffix_load: vec![0.0; particles + 1],
             reference: vec![0.0; particles],
             with_accel: vec![0.0; particles],
+            rest: RestField::new(geom, particles),
         }
     }
 
-    /// Fills `self.reference` with p_h and `self.with_accel` with p_a for
-    /// every particle (`accel`: the particles' accelerations, gravity included).
+    /// Fills `self.reference` with p_h, `self.with_accel` with p_a and
+    /// `self.rest` with the rest field for every particle (`accel`: the
+    /// particles' accelerations, gravity included).
     pub fn compute(&mut self, geom: &Geometry, x: &[Vec2], mass: &[f64], accel: &[Vec2]) {
+        self.rest.compute(geom, x, mass);
         let nx = geom.cells[0];
         let strip = |xp: &Vec2| geom.cell_of(*xp).0;
         if x.len() > self.order.len() {
@@ -117,19 +131,27 @@ impl Hydrostatic {
 
     pub fn departure(&self, geom: &Geometry, volume: &[f64], pressure: &[f64]) -> Departure {
         let (mut num, mut den, mut max, mut rest) = (0.0, 0.0, 0.0f64, 0.0);
+        let mut floor = 0.0;
         for p in 0..pressure.len() {
             let d = pressure[p] - self.reference[p];
             let e = pressure[p] - self.with_accel[p];
+            let f = self.rest.pressure[p] - self.reference[p];
             num += volume[p] * d * d;
             rest += volume[p] * e * e;
+            floor += volume[p] * f * f;
             den += volume[p] * self.reference[p] * self.reference[p];
             max = max.max(d.abs());
         }
         let relative = |x: f64| if den > 0.0 { (x / den).sqrt() } else { 0.0 };
+        let (rel_rms, floor_rel_rms) = (relative(num), relative(floor));
         Departure {
-            rel_rms: relative(num),
+            rel_rms,
             max: max / (geom.rho0 * geom.gravity * geom.column_height).max(1e-300),
             unexplained_rel_rms: relative(rest),
+            floor_rel_rms,
+            excess_rel_rms: (rel_rms * rel_rms - floor_rel_rms * floor_rel_rms)
+                .max(0.0)
+                .sqrt(),
         }
     }
 }

@@ -15,6 +15,7 @@ pub mod front;
 pub mod geometry;
 pub mod hydrostatic;
 pub mod particle_history;
+pub mod rest_field;
 mod state;
 pub mod step_history;
 
@@ -114,6 +115,11 @@ pub struct FieldMetrics {
     /// RMS of (p_particle - p_cell) / (rho0 g h).
     pub pressure_spread: f64,
     pub hydro_rel_rms: f64,
+    /// The same score of the exact rest field of a flat layer holding the
+    /// particles' mass: the reference's own sampling floor.
+    pub hydro_floor_rel_rms: f64,
+    /// sqrt(max(rel_rms^2 - floor^2, 0)): the departure above that floor.
+    pub hydro_excess_rel_rms: f64,
     pub hydro_max: f64,
     /// Departure from the pressure that the weight and the vertical
     /// accelerations above demand, relative to the hydrostatic pressure.
@@ -1131,6 +1137,8 @@ impl Monitor {
             checkerboard,
             pressure_spread,
             hydro_rel_rms: dep.rel_rms,
+            hydro_floor_rel_rms: dep.floor_rel_rms,
+            hydro_excess_rel_rms: dep.excess_rel_rms,
             hydro_max: dep.max,
             hydro_unexplained_rel_rms: dep.unexplained_rel_rms,
             front_x,

@@ -134,6 +134,8 @@ impl TimeseriesFigure<'_> {
                 ylabel: axis_label("departure", "hydro_rel_rms", true),
                 lines: vec![
                     ("hydro rel. RMS", col("hydro_rel_rms")),
+                    ("its floor (exact rest field)", col("hydro_floor_rel_rms")),
+                    ("excess over the floor", col("hydro_excess_rel_rms")),
                     ("hydro max / rho0 g H", col("hydro_max")),
                     (
                         "not explained by accelerations",

@@ -67,7 +67,7 @@ fn method_groups<'a>(m: &'a Matrix, base: &[(usize, String)]) -> Vec<(String, Ve
     groups
 }
 
-const HEADERS: [&str; 14] = [
+const HEADERS: [&str; 16] = [
     "method",
     "runs",
     "kicked",
@@ -79,6 +79,8 @@ const HEADERS: [&str; 14] = [
     "survived (s)",
     "completed",
     "late departure",
+    "late floor",
+    "late excess",
     "late checkerboard",
     "M particle-steps/s",
     "wall (s)",
@@ -118,6 +120,8 @@ fn method_cells(label: &str, runs: &[&Row]) -> Vec<Cell> {
         Cell::Num(spread_text(runs.iter().map(|r| r.summary.t_end), n, 2)),
         Cell::Num(completed.len().to_string()),
         late(&|r| r.summary.metrics.figure("hydro_rel_rms_late")),
+        late(&|r| r.summary.metrics.figure("hydro_floor_late")),
+        late(&|r| r.summary.metrics.figure("hydro_excess_late")),
         late(&|r| r.summary.metrics.figure("checkerboard_late")),
         Cell::Num(spread_text(
             runs.iter().map(|r| r.summary.particle_steps_per_s / 1e6),
@@ -197,7 +201,7 @@ pub fn ablation_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
         return Ok(());
     }
     page.h2("Methods: which change removes the kick");
-    page.p("One row per method, named by what it changes from the most common value of each varying method key. Over all its runs (every case and ensemble member): the share with at least one kick, with a kick of each cause, with a kick that has the hallmark (the anomaly proper), with a time-step (cfl) event, and that blew up; the time survived (a completed run counts its t_end) as median [min, max]. Over its completed runs only: the late hydrostatic departure and checkerboard index (each the mean over the last simulated second) as median [min, max]. The median particle-steps per second, and the wall seconds summed over the runs.");
+    page.p("One row per method, named by what it changes from the most common value of each varying method key. Over all its runs (every case and ensemble member): the share with at least one kick, with a kick of each cause, with a kick that has the hallmark (the anomaly proper), with a time-step (cfl) event, and that blew up; the time survived (a completed run counts its t_end) as median [min, max]. Over its completed runs only, each the mean over the last simulated second as median [min, max]: the late hydrostatic departure, its floor (the same score of the exact rest field of a flat layer of the same mass on the same particles: what the reference's sampling of a disordered arrangement costs even the exact pressure) and its excess over that floor, sqrt(departure^2 - floor^2), and the checkerboard index. The median particle-steps per second, and the wall seconds summed over the runs.");
     let headers: Vec<String> = HEADERS.map(String::from).to_vec();
     let rows: Vec<(String, Vec<Cell>)> = groups
         .iter()
@@ -231,6 +235,11 @@ mod tests {
         metrics
             .figures
             .insert("checkerboard_late".into(), late.map(|l| l.1));
+        // A floor of half the departure: the excess is sqrt(3) / 2 of it.
+        let floor = late.map(|l| 0.5 * l.0);
+        let excess = late.map(|l| 0.75f64.sqrt() * l.0);
+        metrics.figures.insert("hydro_floor_late".into(), floor);
+        metrics.figures.insert("hydro_excess_late".into(), excess);
         let summary = Summary {
             schema_version: SCHEMA_VERSION,
             case: transfer.into(),
@@ -295,6 +304,8 @@ mod tests {
         assert_eq!(apic[column("completed")], "2");
         // The blown-up run has no late window: it is not counted as zero.
         assert_eq!(apic[column("late departure")], "0.300 [0.200, 0.400]");
+        assert_eq!(apic[column("late floor")], "0.150 [0.100, 0.200]");
+        assert_eq!(apic[column("late excess")], "0.260 [0.173, 0.346]");
         assert_eq!(apic[column("late checkerboard")], "0.200 [0.100, 0.300]");
         assert_eq!(apic[column("wall (s)")], "30");
         // PIC's one run completed without a kick; the baseline's one of three.

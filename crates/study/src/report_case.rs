@@ -391,25 +391,20 @@ fn particles_section(c: &CaseInputs, page: &mut Page) -> Res {
         .iter()
         .map(|b| (b.rect[2] - b.rect[0]) * (b.rect[3] - b.rect[1]))
         .sum();
+    let late = |name: &str| c.summary.metrics.figure(name).map_or("-".into(), short);
     let fig = PressureDepthFigure {
         snap: &last,
         level: scene.origin[1] + area / scene.size[0],
         rho0: scene.materials.first().map_or(1000.0, |m| m.rho0),
         gravity: c.gravity(),
         title: format!(
-            "{}, t = {:.2} s: late hydrostatic rel. RMS {} ({} not explained by the accelerations)",
+            "{}, t = {:.2} s: late hydrostatic rel. RMS {} (floor {}, excess {}; {} not explained by the accelerations)",
             c.name(),
             last.t,
-            c.summary
-                .metrics
-                .figure("hydro_rel_rms_late")
-                .map(short)
-                .unwrap_or("-".into()),
-            c.summary
-                .metrics
-                .figure("hydro_unexplained_rel_rms_late")
-                .map(short)
-                .unwrap_or("-".into())
+            late("hydro_rel_rms_late"),
+            late("hydro_floor_late"),
+            late("hydro_excess_late"),
+            late("hydro_unexplained_rel_rms_late"),
         ),
     };
     page.figure(

@@ -78,6 +78,8 @@ pub fn case_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
             "t end (s)",
             "first kick (s)",
             "hydro late",
+            "its floor",
+            "excess over the floor",
             "of it not explained by accelerations",
             "checkerboard late",
             "front error (Z)",
@@ -98,6 +100,8 @@ pub fn case_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
                 Cell::Num(format!("{:.3}", s.t_end)),
                 cell(s.metrics.t_first_kick),
                 cell(s.metrics.figure("hydro_rel_rms_late")),
+                cell(s.metrics.figure("hydro_floor_late")),
+                cell(s.metrics.figure("hydro_excess_late")),
                 cell(s.metrics.figure("hydro_unexplained_rel_rms_late")),
                 cell(s.metrics.figure("checkerboard_late")),
                 cell(

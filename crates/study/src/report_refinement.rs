@@ -21,7 +21,7 @@ type Line = (String, Vec<(f64, f64)>);
 /// A row of the table: its class and cells.
 type TableRow = (String, Vec<Cell>);
 
-const FIGURES: [(&str, Figure); 6] = [
+const FIGURES: [(&str, Figure); 8] = [
     ("surge front, early shifted RMS (Z)", |r| {
         r.summary
             .metrics
@@ -58,6 +58,15 @@ const FIGURES: [(&str, Figure); 6] = [
             .check::<DarcyFigures>()
             .map(|c| c.dp_rel_error)
     }),
+    // Appended, so that the earlier figures keep their file names.
+    (
+        "late hydrostatic floor (rel. RMS of the exact rest field)",
+        |r| r.summary.metrics.figure("hydro_floor_late"),
+    ),
+    (
+        "late hydrostatic departure above its floor (rel. RMS)",
+        |r| r.summary.metrics.figure("hydro_excess_late"),
+    ),
 ];
 
 /// A case name without its cell-size token (`h2cm`, `h0.5cm`): the name of

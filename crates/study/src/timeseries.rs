@@ -376,6 +376,23 @@ pub const COLUMNS: &[Column] = &[
         ],
     ),
     field(
+        "hydro_floor_rel_rms",
+        "of rho g depth",
+        "the same departure of the exact rest field of a flat layer of the same mass: the reference's sampling floor",
+        |f| f.hydro_floor_rel_rms,
+        &[late("hydro_floor_late", "late floor of the hydrostatic departure")],
+    ),
+    field(
+        "hydro_excess_rel_rms",
+        "of rho g depth",
+        "hydrostatic departure above its floor, sqrt(max(departure^2 - floor^2, 0))",
+        |f| f.hydro_excess_rel_rms,
+        &[late(
+            "hydro_excess_late",
+            "late hydrostatic departure above its floor",
+        )],
+    ),
+    field(
         "hydro_max",
         "of rho g depth",
         "largest departure from hydrostatic pressure",
