@@ -45,6 +45,10 @@ pub struct Output {
     /// Simulated times (s) at which particle VTK files are written; times
     /// past `scene.t_end` are allowed and never reached.
     pub vtk_times: Vec<f64>,
+    /// End a case before t_end once its checks have their answers (the
+    /// mode decay's fit window closed and followed on, docs/physics.md
+    /// section 7); the summary's reason says when.
+    pub end_when_checked: bool,
 }
 
 impl Default for Output {
@@ -53,6 +57,7 @@ impl Default for Output {
             timeseries_rows: 1000,
             checkpoint_every: 20_000,
             vtk_times: vec![],
+            end_when_checked: false,
         }
     }
 }

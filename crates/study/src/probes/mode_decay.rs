@@ -24,6 +24,11 @@ pub const FIT_FROM: f64 = 0.9;
 /// ... and ends before A / A0 falls below this, or at `FIT_UNTIL_S`.
 pub const FIT_TO: f64 = 0.05;
 pub const FIT_UNTIL_S: f64 = 5.0;
+/// With `output.end_when_checked`, the run goes on after the fit's window
+/// closes for as long again as it took to close (this factor), and at least
+/// `FOLLOW_MIN_S`, to see whether the mode comes back (`later_max_ratio`).
+pub const FOLLOW_FACTOR: f64 = 1.0;
+pub const FOLLOW_MIN_S: f64 = 0.25;
 /// Samples taken at one stride before it doubles.
 pub const SAMPLES_PER_STRIDE: usize = 1000;
 
@@ -94,6 +99,9 @@ struct DecayFit {
     c_ty: f64,
     from: Option<f64>,
     to: Option<f64>,
+    /// When the window closed, and the last sample's time.
+    closed_at: Option<f64>,
+    last_t: f64,
     last_ratio: f64,
     later_max_ratio: f64,
 }
@@ -103,11 +111,13 @@ impl DecayFit {
         let a0 = *self.a0.get_or_insert(a);
         let ratio = a / a0;
         self.last_ratio = ratio;
+        self.last_t = t;
         if self.window == Window::Before && ratio <= FIT_FROM {
             self.window = Window::Inside;
         }
         if self.window == Window::Inside && !(ratio >= FIT_TO && t <= FIT_UNTIL_S) {
             self.window = Window::After;
+            self.closed_at = Some(t);
         }
         match self.window {
             Window::Before => {}
@@ -127,6 +137,13 @@ impl DecayFit {
         self.c_ty += weight * dt * (y - self.mean_y);
         self.from.get_or_insert(t);
         self.to = Some(t);
+    }
+
+    /// The window has closed and been followed long enough: when it closed.
+    fn followed(&self) -> Option<f64> {
+        let closed = self.closed_at?;
+        let follow = (FOLLOW_FACTOR * closed).max(FOLLOW_MIN_S);
+        (self.last_t >= closed + follow).then_some(closed)
     }
 
     /// The fitted decay rate; None with fewer than 3 samples in the window.
@@ -199,6 +216,14 @@ impl Probe<Solver> for ModeDecay {
         Ok(())
     }
 
+    fn ends_run(&self) -> Option<String> {
+        let closed = self.decay.followed()?;
+        Some(format!(
+            "mode decay fitted: its window closed at t = {closed:.4} s and was followed to {:.4} s",
+            self.decay.last_t
+        ))
+    }
+
     fn row(&mut self, run: &Run<Solver>) {
         let a = self.amplitude(run.stepper);
         self.rows.push((run.stepper.time(), a));
@@ -259,6 +284,15 @@ mod tests {
         assert_eq!(fit.to, Some(1.99));
         assert_eq!(fit.n, 192);
         assert!(fit.later_max_ratio < 0.05);
+        // Closed at 2.0 s and followed for as long again, to 4.0 s.
+        assert_eq!(fit.closed_at, Some(2.0));
+        assert_eq!(fit.followed(), Some(2.0));
+        let fit = fit_of(
+            (0..=390)
+                .map(|i| 0.01 * i as f64)
+                .map(|t| (t, (-1.5 * t).exp())),
+        );
+        assert_eq!(fit.followed(), None);
         // A mode that swings back: the same fit, but it comes back to 1.
         let fit = fit_of(times().map(|t| (t, 2.0 * (10.0 * t).cos())));
         assert!(fit.later_max_ratio > 0.99, "{fit:?}");

@@ -56,6 +56,12 @@ pub trait Probe<S: Stepper> {
         Ok(())
     }
 
+    /// This probe's check has its answer and the run may end here (with
+    /// `RunOptions::end_when_checked`): why, for the summary's reason.
+    fn ends_run(&self) -> Option<String> {
+        None
+    }
+
     /// The run ended: the last files, and this probe's part of the outcome.
     fn finish(&mut self, _run: &Run<S>, _outcome: &mut Simulated) -> std::io::Result<()> {
         Ok(())
@@ -101,6 +107,8 @@ pub struct RunOptions {
     pub until_step: Option<u64>,
     /// Stop when a monitor calls a blow-out (a benchmark only records it).
     pub stop_on_blow_out: bool,
+    /// End the run once a probe's check has its answer (`Probe::ends_run`).
+    pub end_when_checked: bool,
     /// Progress bar to drive (its position in thousandths of t_end).
     pub bar: Option<ProgressBar>,
 }
@@ -113,6 +121,7 @@ impl RunOptions {
             csv: false,
             until_step: None,
             stop_on_blow_out: true,
+            end_when_checked: false,
             bar: None,
         }
     }
@@ -221,6 +230,11 @@ impl<'p, S: Stepper> Runner<'p, S> {
                 break (Status::BlewUp, reason);
             }
             self.each(|p, run| p.between_steps(run))?;
+            if self.opts.end_when_checked {
+                if let Some(reason) = self.probes.iter().find_map(|p| p.ends_run()) {
+                    break (Status::Completed, reason);
+                }
+            }
         };
         self.row(status != Status::Completed);
         self.finish(status, reason)
