@@ -27,6 +27,7 @@ pub mod report_refinement;
 pub mod report_speed;
 pub mod report_stability;
 pub mod report_verdict;
+pub mod report_yardsticks;
 pub mod reproduce;
 pub mod run_case;
 pub mod run_mixture;

@@ -109,6 +109,10 @@ struct ReproduceArgs {
 struct ReportArgs {
     /// A case folder (summary.json) or a matrix folder (summary.parquet).
     dir: PathBuf,
+    /// Matrix folders of studies/viscous_decay.toml and studies/slosh.toml:
+    /// the Methods table gains each method's yardsticks (repeatable).
+    #[arg(long = "yardsticks", value_name = "MATRIX_DIR")]
+    yardsticks: Vec<PathBuf>,
 }
 
 #[derive(Args)]
@@ -325,11 +329,22 @@ fn reproduce_command(args: ReproduceArgs) -> ExitCode {
 }
 
 fn report_command(args: ReportArgs) -> ExitCode {
-    let ReportArgs { dir } = args;
-    if !dir.is_dir() {
-        return bad_input(&format!("{}: no such folder", dir.display()));
+    let ReportArgs { dir, yardsticks } = args;
+    for d in std::iter::once(&dir).chain(&yardsticks) {
+        if !d.is_dir() {
+            return bad_input(&format!("{}: no such folder", d.display()));
+        }
     }
-    match report::report(&dir) {
+    if let Some(d) = yardsticks
+        .iter()
+        .find(|d| !d.join("summary.parquet").exists())
+    {
+        return bad_input(&format!(
+            "--yardsticks {}: not a matrix folder (no summary.parquet)",
+            d.display()
+        ));
+    }
+    match report::report(&dir, &yardsticks) {
         Ok(index) => {
             println!("report: {}", index.display());
             ExitCode::SUCCESS

@@ -10,10 +10,12 @@ use crate::report_case::case_report;
 use crate::report_matrix::matrix_report;
 use std::path::{Path, PathBuf};
 
-/// Writes the report of `dir` (a case or a matrix) and returns the page's path.
-pub fn report(dir: &Path) -> Res<PathBuf> {
+/// Writes the report of `dir` (a case or a matrix) and returns the page's
+/// path. A matrix's Methods table also reads the viscous-decay and slosh
+/// matrix folders `yardsticks` (report_yardsticks.rs).
+pub fn report(dir: &Path, yardsticks: &[PathBuf]) -> Res<PathBuf> {
     if dir.join("summary.parquet").exists() {
-        matrix_report(dir)
+        matrix_report(dir, yardsticks)
     } else if dir.join("summary.json").exists() {
         case_report(dir)
     } else {

@@ -6,6 +6,7 @@
 use crate::plot_common::Res;
 use crate::report_data::{median, spread_text, Matrix, ParamKey, Row};
 use crate::report_html::{Cell, Page};
+use crate::report_yardsticks::{self as yardsticks, Yardsticks};
 use crate::summary::Status;
 use monitor::Cause;
 use std::collections::BTreeMap;
@@ -202,13 +203,58 @@ pub fn ablation_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
     }
     page.h2("Methods: which change removes the kick");
     page.p("One row per method, named by what it changes from the most common value of each varying method key. Over all its runs (every case and ensemble member): the share with at least one kick, with a kick of each cause, with a kick that has the hallmark (the anomaly proper), with a time-step (cfl) event, and that blew up; the time survived (a completed run counts its t_end) as median [min, max]. Over its completed runs only, each the mean over the last simulated second as median [min, max]: the late hydrostatic departure, its floor (the same score of the exact rest field of a flat layer of the same mass on the same particles: what the reference's sampling of a disordered arrangement costs even the exact pressure) and its excess over that floor, sqrt(departure^2 - floor^2), and the checkerboard index. The median particle-steps per second, and the wall seconds summed over the runs.");
-    let headers: Vec<String> = HEADERS.map(String::from).to_vec();
+    let sticks = Yardsticks::of(&m.rows).merged(Yardsticks::of(&m.reference_rows));
+    let mut headers: Vec<String> = HEADERS.map(String::from).to_vec();
+    if !sticks.is_empty() {
+        page.p(&format!("The yardsticks a damper cannot pass (docs/physics.md section 7), measured for the same method (the same resolved method settings and particles per cell) at h = {} cm and K = {} MPa: from the walled Taylor-Green vortex, the fluid's viscosity as the method sees it (nu_phys, mode 1) and the method's own dissipation nu_num and beta (rate / (2 k²) = nu_num + beta k² over the inviscid rates of modes 1 and 2), both over the fluid's nu; from the sloshing tank at the viscous run, the period error against linear theory and the decay rate over 2 nu k². A method whose nu_num exceeds {} nu is a damper: whatever its kicks and late departure, it gets there by taking the flow's energy.", 100.0 * yardsticks::CELL, yardsticks::BULK_MODULUS / 1e6, yardsticks::DAMPER_SHARE));
+        headers.extend(YARDSTICK_HEADERS.map(String::from));
+    }
     let rows: Vec<(String, Vec<Cell>)> = groups
         .iter()
-        .map(|(l, runs)| (String::new(), method_cells(l, runs)))
+        .map(|(l, runs)| {
+            let mut cells = method_cells(l, runs);
+            if !sticks.is_empty() {
+                cells.extend(yardstick_cells(&sticks, runs));
+            }
+            (String::new(), cells)
+        })
         .collect();
     page.table("ablation", &headers, &rows);
     Ok(())
+}
+
+const YARDSTICK_HEADERS: [&str; 6] = [
+    "nu_phys / nu",
+    "nu_num / nu",
+    "beta (m⁴/s)",
+    "slosh period error",
+    "slosh decay / theory",
+    "damper",
+];
+
+/// A method's yardsticks (its runs share one method; the first one's).
+fn yardstick_cells(sticks: &Yardsticks, runs: &[&Row]) -> Vec<Cell> {
+    let y = runs
+        .first()
+        .and_then(|r| sticks.of_method(&r.summary))
+        .cloned()
+        .unwrap_or_default();
+    let num = |v: Option<f64>, f: &dyn Fn(f64) -> String| {
+        Cell::Num(v.filter(|x| x.is_finite()).map_or("-".into(), f))
+    };
+    let over_nu = |v: Option<f64>| v.zip(y.nu).map(|(v, nu)| v / nu);
+    vec![
+        num(over_nu(y.nu_phys), &|x| format!("{x:.3}")),
+        num(over_nu(y.nu_num), &|x| format!("{x:.3}")),
+        num(y.beta, &|x| format!("{x:.2e}")),
+        num(y.slosh_period_error, &|x| format!("{:+.2} %", 100.0 * x)),
+        num(y.slosh_decay_ratio, &|x| format!("{x:.2}")),
+        Cell::Text(match y.is_damper() {
+            Some(true) => "damper".into(),
+            Some(false) => "no".into(),
+            None => "-".into(),
+        }),
+    ]
 }
 
 #[cfg(test)]
@@ -268,6 +314,7 @@ mod tests {
     #[test]
     fn a_method_row_counts_kicks_over_all_runs_and_late_figures_over_completed_runs() {
         let m = Matrix {
+            reference_rows: vec![],
             axes: vec![ParamKey::Method("transfer".into())],
             rows: vec![
                 run("pic", Some((0.05, 0.01)), vec![event(Cause::Impact)]),

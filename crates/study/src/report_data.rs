@@ -269,6 +269,9 @@ fn axis_text(
 pub struct Matrix {
     pub axes: Vec<ParamKey>,
     pub rows: Vec<Row>,
+    /// Cases of other matrices that the report reads for reference (the
+    /// yardsticks' folders, `kick report --yardsticks`); not this matrix's.
+    pub reference_rows: Vec<Row>,
 }
 
 /// A study parameter's dotted key (`materials.water.K`, `method.j_bar.blend`,
@@ -374,7 +377,11 @@ impl Matrix {
                 .unwrap_or(std::cmp::Ordering::Equal)
         });
         let axes = keys.iter().map(|k| ParamKey::parse(k)).collect();
-        Ok(Matrix { axes, rows })
+        Ok(Matrix {
+            axes,
+            rows,
+            reference_rows: vec![],
+        })
     }
 
     /// The keys whose text (`text`) differs between the summaries, but the

@@ -87,9 +87,12 @@ pub const MATRIX_SECTIONS: &[Section] = &[
 ];
 
 /// The matrix page (and every case's page); returns its path.
-pub fn matrix_report(dir: &Path) -> Res<PathBuf> {
+pub fn matrix_report(dir: &Path, yardsticks: &[PathBuf]) -> Res<PathBuf> {
     let out = dir.join("report");
     let mut m = Matrix::read(dir)?;
+    for other in yardsticks {
+        m.reference_rows.extend(Matrix::read(other)?.rows);
+    }
     std::fs::create_dir_all(&out).map_err(err)?;
     // Case pages first, so the matrix page can link them.
     for r in &mut m.rows {

@@ -1,0 +1,274 @@
+//! The yardsticks a damper cannot pass (docs/physics.md section 7), per
+//! method, for the Methods table: from viscous-decay cases (Taylor-Green,
+//! `checks.mode_decay`) the fluid's viscosity as the method sees it
+//! (nu_phys, mode 1), the method's own dissipation nu_num and beta (the two
+//! modes' inviscid rates: rate / (2 k^2) = nu_num + beta k^2); from slosh
+//! cases (`checks.slosh`) the period error and the decay ratio at the
+//! viscous run. All at the reference point h = 1 cm, K = 1.5 MPa. A method
+//! is the same method in every study when its resolved `method.*` settings
+//! and `scene.ppc` are.
+
+use crate::probes::mode_decay::ModeDecayFigures;
+use crate::probes::slosh::SloshFigures;
+use crate::report_data::Row;
+use crate::summary::{Status, Summary};
+use std::collections::BTreeMap;
+
+/// The reference point of the Methods table's yardsticks.
+pub const CELL: f64 = 0.01;
+pub const BULK_MODULUS: f64 = 1.5e6;
+/// A method whose own dissipation exceeds this share of the fluid's
+/// viscosity is a damper (issue 44).
+pub const DAMPER_SHARE: f64 = 0.25;
+/// A mode whose projection comes back above this share after its fit
+/// swings rather than decays: it has no decay rate.
+const SWINGS_BACK: f64 = 0.5;
+
+/// One method's yardstick figures (None where not measured).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Yardstick {
+    /// The fluid's kinematic viscosity of the viscous runs (m^2/s).
+    pub nu: Option<f64>,
+    pub nu_phys: Option<f64>,
+    pub nu_num: Option<f64>,
+    pub beta: Option<f64>,
+    pub slosh_period_error: Option<f64>,
+    pub slosh_decay_ratio: Option<f64>,
+}
+
+impl Yardstick {
+    /// nu_num over the fluid's viscosity exceeds `DAMPER_SHARE`.
+    pub fn is_damper(&self) -> Option<bool> {
+        Some(self.nu_num? > DAMPER_SHARE * self.nu?)
+    }
+}
+
+/// Yardsticks by method identity (`method_id`).
+#[derive(Clone, Debug, Default)]
+pub struct Yardsticks {
+    pub by_method: BTreeMap<String, Yardstick>,
+}
+
+/// A method's identity across studies: its resolved `method.*` settings and
+/// `scene.ppc` as `key=value` lines (a remedy switched on by `true` and by
+/// its settings table are the same).
+pub fn method_id(s: &Summary) -> String {
+    let keys: Vec<&String> = s
+        .params
+        .keys()
+        .filter(|k| k.starts_with("method.") || *k == "scene.ppc")
+        .collect();
+    keys.iter()
+        .filter(|k| {
+            let prefix = format!("{k}.");
+            !(s.params[**k] == serde_json::Value::Bool(true)
+                && keys.iter().any(|o| o.starts_with(&prefix)))
+        })
+        .map(|k| format!("{k}={}", s.params[*k]))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+fn param(s: &Summary, suffix: &str) -> Option<f64> {
+    s.params
+        .iter()
+        .find(|(k, _)| k.ends_with(suffix))
+        .and_then(|(_, v)| v.as_f64())
+}
+
+fn at_reference(s: &Summary) -> bool {
+    let near = |v: Option<f64>, x: f64| v.is_some_and(|v| (v / x - 1.0).abs() < 1e-9);
+    near(param(s, "scene.cell"), CELL)
+        && (near(param(s, ".K"), BULK_MODULUS) || param(s, ".K").is_none())
+}
+
+fn viscous(s: &Summary) -> bool {
+    param(s, ".viscosity").is_some_and(|mu| mu > 0.0)
+}
+
+/// The mode number of a case's initial flow.
+fn mode(s: &Summary) -> Option<u64> {
+    let body = s.params.get("scene.body")?.as_array()?.first()?;
+    body.get("flow")?.get("mode")?.as_u64()
+}
+
+impl Yardsticks {
+    /// The yardsticks of the completed reference-point cases among `rows`.
+    pub fn of(rows: &[Row]) -> Self {
+        let mut decay: BTreeMap<String, ModeRates> = BTreeMap::new();
+        let mut y = Yardsticks::default();
+        for s in rows.iter().map(|r| &r.summary) {
+            if s.status != Status::Completed || !at_reference(s) {
+                continue;
+            }
+            let id = method_id(s);
+            if viscous(s) {
+                let nu = param(s, ".viscosity")
+                    .zip(param(s, ".rho0"))
+                    .map(|(m, r)| m / r);
+                y.by_method.entry(id.clone()).or_default().nu = nu;
+            }
+            if let (Some(c), Some(m)) = (s.metrics.check::<ModeDecayFigures>(), mode(s)) {
+                let rate = c.rate.filter(|_| c.later_max_ratio <= SWINGS_BACK);
+                decay
+                    .entry(id)
+                    .or_default()
+                    .insert((m, viscous(s)), (rate, c.k));
+            } else if let Some(c) = s.metrics.check::<SloshFigures>() {
+                if viscous(s) {
+                    let entry = y.by_method.entry(id).or_default();
+                    entry.slosh_period_error = c.period_error;
+                    entry.slosh_decay_ratio = c.decay_ratio;
+                }
+            }
+        }
+        for (id, modes) in decay {
+            let entry = y.by_method.entry(id).or_default();
+            fit_decay(entry, &modes);
+        }
+        y
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.by_method.is_empty()
+    }
+
+    /// The yardsticks of the method that ran `s`, if any were measured.
+    pub fn of_method(&self, s: &Summary) -> Option<&Yardstick> {
+        self.by_method.get(&method_id(s))
+    }
+
+    /// Both sets, `other`'s figures filling what this one lacks.
+    pub fn merged(mut self, other: Yardsticks) -> Self {
+        for (id, o) in other.by_method {
+            let e = self.by_method.entry(id).or_default();
+            let fill = |a: &mut Option<f64>, b: Option<f64>| *a = a.or(b);
+            fill(&mut e.nu, o.nu);
+            fill(&mut e.nu_phys, o.nu_phys);
+            fill(&mut e.nu_num, o.nu_num);
+            fill(&mut e.beta, o.beta);
+            fill(&mut e.slosh_period_error, o.slosh_period_error);
+            fill(&mut e.slosh_decay_ratio, o.slosh_decay_ratio);
+        }
+        self
+    }
+}
+
+/// A method's decay rate (None: no rate) and wavenumber by (mode, viscous).
+type ModeRates = BTreeMap<(u64, bool), (Option<f64>, f64)>;
+
+/// nu_phys from mode 1's viscous and inviscid rates; nu_num and beta from
+/// the two lowest modes' inviscid rates.
+fn fit_decay(y: &mut Yardstick, modes: &ModeRates) {
+    let rate = |m: u64, v: bool| modes.get(&(m, v)).and_then(|r| r.0.map(|x| (x, r.1)));
+    if let (Some((a, k)), Some((b, _))) = (rate(1, false), rate(1, true)) {
+        y.nu_phys = Some((b - a) / (2.0 * k * k));
+    }
+    let inviscid: Vec<(f64, f64)> = modes
+        .iter()
+        .filter(|((_, v), _)| !v)
+        .filter_map(|(_, r)| r.0.map(|x| (x, r.1)))
+        .take(2)
+        .collect();
+    if let [(r1, k1), (r2, k2)] = inviscid[..] {
+        let (y1, y2) = (r1 / (2.0 * k1 * k1), r2 / (2.0 * k2 * k2));
+        let beta = (y2 - y1) / (k2 * k2 - k1 * k1);
+        y.beta = Some(beta);
+        y.nu_num = Some(y1 - beta * k1 * k1);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::summary::{Metrics, SCHEMA_VERSION};
+    use serde_json::json;
+
+    fn summary(method: &str, mode: u64, mu: f64, check: impl FnOnce(&mut Metrics)) -> Row {
+        let mut metrics = Metrics::default();
+        check(&mut metrics);
+        let params = BTreeMap::from([
+            ("method.transfer".to_string(), json!(method)),
+            ("method.j_bar".to_string(), json!(true)),
+            ("method.j_bar.fit".to_string(), json!("linear")),
+            ("scene.ppc".to_string(), json!(2)),
+            ("scene.cell".to_string(), json!(0.01)),
+            ("materials.water.K".to_string(), json!(1.5e6)),
+            ("materials.water.rho0".to_string(), json!(1000.0)),
+            ("materials.water.viscosity".to_string(), json!(mu)),
+            (
+                "scene.body".to_string(),
+                json!([{ "flow": { "kind": "taylor_green", "mode": mode } }]),
+            ),
+        ]);
+        let s = Summary {
+            schema_version: SCHEMA_VERSION,
+            case: format!("{method}_m{mode}_mu{mu}"),
+            params,
+            status: Status::Completed,
+            reason: String::new(),
+            steps: 1,
+            t_end: 1.0,
+            wall_s: 1.0,
+            particles: 1,
+            particle_steps_per_s: 1.0,
+            final_state_hash: "0".into(),
+            events: vec![],
+            metrics,
+            phases: vec![],
+        };
+        Row::for_test(s, vec![])
+    }
+
+    fn decay(rate: f64, k: f64, later: f64) -> impl FnOnce(&mut Metrics) {
+        move |m| {
+            m.set_check(&ModeDecayFigures {
+                k,
+                rate: Some(rate),
+                later_max_ratio: later,
+                ..Default::default()
+            })
+        }
+    }
+
+    /// Rates made from nu_num = 1e-4, beta = 1e-6 and nu = 5e-4 give those
+    /// back; a damper is named; a mode that swings back gives no rate.
+    #[test]
+    fn the_decay_rates_give_nu_num_beta_and_nu_phys_back() {
+        let (nu_num, beta, nu) = (1e-4, 1e-6, 5e-4);
+        let (k1, k2) = (15.0, 30.0);
+        let rate = |k: f64, nu_fluid: f64| 2.0 * k * k * (nu_num + beta * k * k + nu_fluid);
+        let rows = vec![
+            summary("apic", 1, 0.0, decay(rate(k1, 0.0), k1, 0.01)),
+            summary("apic", 2, 0.0, decay(rate(k2, 0.0), k2, 0.01)),
+            summary("apic", 1, 0.5, decay(rate(k1, nu), k1, 0.01)),
+            summary("flip", 1, 0.0, decay(1.0, k1, 0.99)),
+            summary("flip", 2, 0.0, decay(2.0, k2, 0.01)),
+        ];
+        let y = Yardsticks::of(&rows);
+        let apic = y.of_method(&rows[0].summary).expect("measured");
+        assert!(
+            (apic.nu_num.unwrap() / nu_num - 1.0).abs() < 1e-9,
+            "{apic:?}"
+        );
+        assert!((apic.beta.unwrap() / beta - 1.0).abs() < 1e-9, "{apic:?}");
+        assert!((apic.nu_phys.unwrap() / nu - 1.0).abs() < 1e-9, "{apic:?}");
+        assert_eq!(apic.nu, Some(5e-4));
+        assert_eq!(apic.is_damper(), Some(false));
+        let flip = y.of_method(&rows[3].summary).expect("measured");
+        assert_eq!(flip.nu_num, None, "mode 1 swings back: one rate only");
+    }
+
+    /// `j_bar = true` beside its settings is the same method as the
+    /// settings alone; another setting is another method.
+    #[test]
+    fn a_method_is_known_by_its_resolved_settings() {
+        let a = summary("apic", 1, 0.0, |_| {});
+        let mut b = a.summary.clone();
+        b.params.remove("method.j_bar");
+        assert_eq!(method_id(&a.summary), method_id(&b));
+        b.params
+            .insert("method.j_bar.fit".into(), json!("constant"));
+        assert_ne!(method_id(&a.summary), method_id(&b));
+    }
+}
