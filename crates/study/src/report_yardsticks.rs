@@ -4,12 +4,15 @@
 //! (nu_phys, mode 1), the method's own dissipation nu_num and beta (the two
 //! modes' inviscid rates: rate / (2 k^2) = nu_num + beta k^2); from slosh
 //! cases (`checks.slosh`) the period error and the decay ratio at the
-//! viscous run. All at the reference point h = 1 cm, K = 1.5 MPa. A method
+//! viscous run; from surge-front cases (`checks.surge_front`, the viscous
+//! run on a free-slip floor) the early error after the best time shift and
+//! the late front speed. All at the reference point h = 1 cm, K = 1.5 MPa. A method
 //! is the same method in every study when its resolved `method.*` settings
 //! and `scene.ppc` are.
 
 use crate::probes::mode_decay::ModeDecayFigures;
 use crate::probes::slosh::SloshFigures;
+use crate::probes::surge_front::SurgeFrontFigures;
 use crate::report_data::Row;
 use crate::summary::{Status, Summary};
 use std::collections::BTreeMap;
@@ -34,6 +37,8 @@ pub struct Yardstick {
     pub beta: Option<f64>,
     pub slosh_period_error: Option<f64>,
     pub slosh_decay_ratio: Option<f64>,
+    pub surge_early_shifted: Option<f64>,
+    pub surge_speed_late: Option<f64>,
 }
 
 impl Yardstick {
@@ -86,6 +91,14 @@ fn viscous(s: &Summary) -> bool {
     param(s, ".viscosity").is_some_and(|mu| mu > 0.0)
 }
 
+/// No wall is no-slip (the surge front's free-slip floor).
+fn free_slip(s: &Summary) -> bool {
+    s.params
+        .get("scene.no_slip")
+        .and_then(|v| v.as_array())
+        .is_none_or(|walls| walls.is_empty())
+}
+
 /// The mode number of a case's initial flow.
 fn mode(s: &Summary) -> Option<u64> {
     let body = s.params.get("scene.body")?.as_array()?.first()?;
@@ -120,6 +133,12 @@ impl Yardsticks {
                     entry.slosh_period_error = c.period_error;
                     entry.slosh_decay_ratio = c.decay_ratio;
                 }
+            } else if let Some(c) = s.metrics.check::<SurgeFrontFigures>() {
+                if viscous(s) && free_slip(s) {
+                    let entry = y.by_method.entry(id).or_default();
+                    entry.surge_early_shifted = c.rms_error_early_shifted;
+                    entry.surge_speed_late = c.speed_late;
+                }
             }
         }
         for (id, modes) in decay {
@@ -149,6 +168,8 @@ impl Yardsticks {
             fill(&mut e.beta, o.beta);
             fill(&mut e.slosh_period_error, o.slosh_period_error);
             fill(&mut e.slosh_decay_ratio, o.slosh_decay_ratio);
+            fill(&mut e.surge_early_shifted, o.surge_early_shifted);
+            fill(&mut e.surge_speed_late, o.surge_speed_late);
         }
         self
     }
