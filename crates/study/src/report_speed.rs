@@ -1,13 +1,17 @@
 //! Speed against accuracy on the matrix page: cost (wall seconds per
-//! simulated second) against the late hydrostatic departure and, when the
-//! study tracks a surge front, its early error; each with its Pareto front
-//! as a figure and as a table of the cheapest case for a stated error.
+//! simulated second) against the late hydrostatic departure, its excess
+//! over the exact floor, and, when the study tracks a surge front, its early
+//! error; when the methods' yardsticks are known (report_yardsticks.rs),
+//! against the method's own dissipation nu_num / nu too. Each with its
+//! Pareto front as a figure and as a table of the cheapest case for a
+//! stated error.
 
 use crate::plot_common::{render, Res};
 use crate::plot_matrix::{pareto_front, ParetoFigure};
 use crate::probes::surge_front::SurgeFrontFigures;
 use crate::report_data::{Matrix, Row};
 use crate::report_html::{link, Cell, Page};
+use crate::report_yardsticks::Yardsticks;
 use crate::summary::Status;
 use std::path::Path;
 
@@ -37,6 +41,41 @@ pub fn speed_accuracy(m: &Matrix, out: &Path, page: &mut Page) -> Res {
                 .and_then(|c| c.rms_error_early_shifted),
         )
     };
+    let excess = |r: &Row| Row::nan(r.summary.metrics.figure("hydro_excess_late"));
+    if rows.iter().any(|r| excess(r).is_finite()) {
+        pareto(
+            m,
+            out,
+            page,
+            (
+                "speed_accuracy_excess",
+                "late hydrostatic excess over its floor",
+                "the late hydrostatic departure's excess over the exact floor, sqrt(d² - f²)",
+            ),
+            excess,
+        )?;
+    }
+    let sticks = Yardsticks::of(&m.rows).merged(Yardsticks::of(&m.reference_rows));
+    let own = |r: &Row| {
+        let y = sticks.of_method(&r.summary);
+        Row::nan(
+            y.and_then(|y| y.nu_num.zip(y.nu))
+                .map(|(n, nu)| n.abs() / nu),
+        )
+    };
+    if rows.iter().any(|r| own(r).is_finite()) {
+        pareto(
+            m,
+            out,
+            page,
+            (
+                "speed_accuracy_dissipation",
+                "method's own dissipation |nu_num| / nu",
+                "the method's own dissipation (Taylor-Green, h = 1 cm, 1.5 MPa) over the fluid's viscosity",
+            ),
+            own,
+        )?;
+    }
     if rows.iter().any(|r| front(r).is_finite()) {
         pareto(
             m,
