@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The yardsticks a damper cannot pass (docs/physics.md section 7), per method.
 
-Usage: scripts/yardsticks.py [--decay DIR] [--slosh DIR] [--remedies DIR] [--nu NU]
+Usage: scripts/yardsticks.py [--decay DIR...] [--slosh DIR...] [--remedies DIR...] [--nu NU]
 
 DIR: a `kick matrix` folder of studies/viscous_decay.toml (--decay),
 studies/slosh.toml (--slosh) and a dam-break matrix such as
@@ -45,9 +45,10 @@ def method_of(name):
     return m.group(1) if m else name.split("_")[0]
 
 
-def summaries(folder):
-    for path in sorted(Path(folder).glob("*/summary.json")):
-        yield json.loads(path.read_text())
+def summaries(folders):
+    for folder in folders:
+        for path in sorted(Path(folder).glob("*/summary.json")):
+            yield json.loads(path.read_text())
 
 
 def mode_of(params):
@@ -208,7 +209,7 @@ def print_methods(fits, tank, excess, nu):
         med = e[len(e) // 2] if e else None
         n = f["nu_num"]
         if n is None:
-            verdict = "no rate" if mode1 else "-"
+            verdict = "swings back: no decay rate" if mode1 else "-"
         elif n > DAMPER * nu:
             verdict = "damper"
         elif fine.get("decay_ratio") is None:
@@ -225,9 +226,9 @@ def print_methods(fits, tank, excess, nu):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--decay")
-    ap.add_argument("--slosh")
-    ap.add_argument("--remedies")
+    ap.add_argument("--decay", nargs="+")
+    ap.add_argument("--slosh", nargs="+")
+    ap.add_argument("--remedies", nargs="+")
     ap.add_argument("--nu", type=float, default=5e-4)
     a = ap.parse_args()
     fits = decay(a.decay, a.nu) if a.decay else {}
