@@ -471,6 +471,18 @@ fn missing_study_file_exits_2() {
 }
 
 #[test]
+fn report_yardsticks_must_be_matrix_folders() {
+    let dir = scratch("yardsticks");
+    let d = dir.to_str().unwrap();
+    let o = kick(&["report", d, "--yardsticks", "no/such/folder"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no/such/folder"), "{}", stderr(&o));
+    let o = kick(&["report", d, "--yardsticks", d]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not a matrix folder"), "{}", stderr(&o));
+}
+
+#[test]
 fn bench_prints_one_json_line() {
     let o = kick(&[
         "bench",

@@ -264,6 +264,56 @@ fn yardstick_cells(sticks: &Yardsticks, runs: &[&Row]) -> Vec<Cell> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// With Taylor-Green cases among the reference rows, the Methods table
+    /// gains the yardstick columns and names the damper; without, it has
+    /// none.
+    #[test]
+    fn the_methods_table_shows_the_yardsticks_of_its_methods() {
+        use crate::report_yardsticks::test_rows::{decay, summary};
+        let rate = |k: f64, nu: f64| 2.0 * k * k * nu;
+        let reference = vec![
+            summary("apic", 1, 0.0, decay(rate(15.0, 1e-4), 15.0, 0.0)),
+            summary("apic", 2, 0.0, decay(rate(30.0, 1e-4), 30.0, 0.0)),
+            summary("pic", 1, 0.0, decay(rate(15.0, 0.3), 15.0, 0.0)),
+            summary("pic", 2, 0.0, decay(rate(30.0, 0.3), 30.0, 0.0)),
+            summary("pic", 1, 0.5, decay(rate(15.0, 0.3005), 15.0, 0.0)),
+            summary("apic", 1, 0.5, decay(rate(15.0, 6e-4), 15.0, 0.0)),
+        ];
+        // The dam-break rows: the same methods (same resolved settings).
+        let dam_break = |t: &str| {
+            let mut r = run(t, Some((0.1, 0.1)), vec![]);
+            r.summary.params = reference[if t == "pic" { 2 } else { 0 }]
+                .summary
+                .params
+                .clone();
+            r
+        };
+        let rows = vec![dam_break("apic"), dam_break("apic"), dam_break("pic")];
+        let mut m = Matrix {
+            reference_rows: reference,
+            axes: vec![ParamKey::Method("transfer".into())],
+            rows,
+        };
+        let html = |m: &Matrix| {
+            let mut page = Page::default();
+            ablation_table(m, Path::new("."), &mut page).unwrap();
+            page.finish("t")
+        };
+        let with = html(&m);
+        for header in YARDSTICK_HEADERS {
+            assert!(
+                with.contains(&format!("<th>{header}</th>")),
+                "{header}: {with}"
+            );
+        }
+        // nu_num / nu: 0.2 for APIC, 600 for PIC, which is the damper.
+        assert!(with.contains("<td>0.200</td>"), "{with}");
+        assert!(with.contains("<td>600.000</td>"), "{with}");
+        assert_eq!(with.matches(">damper</td>").count(), 1, "{with}");
+        m.reference_rows.clear();
+        assert!(!html(&m).contains("nu_num"), "no yardsticks, no columns");
+    }
     use crate::summary::{sample_event, Metrics, Summary, SCHEMA_VERSION};
 
     fn event(cause: Cause) -> monitor::Event {

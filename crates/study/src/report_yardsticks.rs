@@ -199,13 +199,15 @@ fn fit_decay(y: &mut Yardstick, modes: &ModeRates) {
     }
 }
 
+/// Taylor-Green cases at the reference point, for tests of the sections
+/// that show the yardsticks.
 #[cfg(test)]
-mod tests {
+pub mod test_rows {
     use super::*;
     use crate::summary::{Metrics, SCHEMA_VERSION};
     use serde_json::json;
 
-    fn summary(method: &str, mode: u64, mu: f64, check: impl FnOnce(&mut Metrics)) -> Row {
+    pub fn summary(method: &str, mode: u64, mu: f64, check: impl FnOnce(&mut Metrics)) -> Row {
         let mut metrics = Metrics::default();
         check(&mut metrics);
         let params = BTreeMap::from([
@@ -241,7 +243,7 @@ mod tests {
         Row::for_test(s, vec![])
     }
 
-    fn decay(rate: f64, k: f64, later: f64) -> impl FnOnce(&mut Metrics) {
+    pub fn decay(rate: f64, k: f64, later: f64) -> impl FnOnce(&mut Metrics) {
         move |m| {
             m.set_check(&ModeDecayFigures {
                 k,
@@ -251,6 +253,13 @@ mod tests {
             })
         }
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_rows::{decay, summary};
+    use super::*;
+    use serde_json::json;
 
     /// Rates made from nu_num = 1e-4, beta = 1e-6 and nu = 5e-4 give those
     /// back; a damper is named; a mode that swings back gives no rate.
