@@ -11,7 +11,9 @@ floor). Reads every CASE/summary.json and prints markdown:
 - decay: per method, cell size and K, the fitted rates of each Taylor-Green
   mode inviscid and viscous (1/s); nu_phys = (viscous - inviscid rate) /
   (2 k^2) against NU (default 5e-4 m^2/s, the 0.5 Pa s water); nu_num and
-  beta from the two modes' inviscid rates, rate / (2 k^2) = nu_num + beta k^2;
+  beta by least squares over the modes' inviscid rates, rate / (2 k^2) =
+  nu_num + beta k^2, and how far nu_num moves when the rates move by 1 %
+  (more than 10 %: the fit needs more modes);
   the observed order in h where three cell sizes are there. A mode that
   swings back (later_max_ratio > 0.5) has no decay rate.
 - slosh: per method, cell size and viscosity, the period error against
@@ -95,15 +97,30 @@ def decay(folder, nu):
             k = (a or b)[1]
             wall = sum(v[2] for v in (a, b) if v)
             modes[m] = (a and a[0], b and b[0], k, wall)
-        fit = {"modes": modes, "nu_num": None, "beta": None}
+        fit = {"modes": modes, "nu_num": None, "beta": None, "sensitivity": None}
         inviscid = [(v[0], v[2]) for m, v in sorted(modes.items()) if v[0] is not None]
         if len(inviscid) >= 2:
-            (r1, k1), (r2, k2) = inviscid[:2]
-            y1, y2 = r1 / (2 * k1 * k1), r2 / (2 * k2 * k2)
-            fit["beta"] = (y2 - y1) / (k2 * k2 - k1 * k1)
-            fit["nu_num"] = y1 - fit["beta"] * k1 * k1
+            fit["nu_num"], fit["beta"] = mode_fit(inviscid)
+            # The issue's stability test: every rate moved by 1 %, in
+            # alternating senses (the worst of the two patterns).
+            n, moved = fit["nu_num"], []
+            for e in (0.01, -0.01):
+                shifted = [(r * (1 + e * (-1) ** i), k) for i, (r, k) in enumerate(inviscid)]
+                moved.append(mode_fit(shifted)[0])
+            fit["sensitivity"] = max(abs(m - n) for m in moved) / abs(n) if n else None
+            fit["modes_fitted"] = len(inviscid)
         out[key] = fit
     return out
+
+
+def mode_fit(rates):
+    """(nu_num, beta): least squares of rate / (2 k^2) = nu_num + beta k^2
+    over [(rate, k)] (exact through two modes)."""
+    pts = [(k * k, r / (2 * k * k)) for r, k in rates]
+    mx = sum(p[0] for p in pts) / len(pts)
+    my = sum(p[1] for p in pts) / len(pts)
+    beta = sum((p[0] - mx) * (p[1] - my) for p in pts) / sum((p[0] - mx) ** 2 for p in pts)
+    return my - beta * mx, beta
 
 
 def nu_phys(a, b, k):
@@ -121,12 +138,15 @@ def print_decay(fits, nu):
             phys = nu_phys(a, b, k)
             print(f"| {key[0]} | {key[1]} | {key[2]:.3g} | {m} | {fmt(a)} | {fmt(b)} "
                   f"| {fmt(phys and phys / nu, '.3f')} | {wall:.0f} |")
-    print("\n| method | h (m) | K (Pa) | nu_num (m²/s) | nu_num / nu | beta (m⁴/s) |")
-    print("|---|---|---|---|---|---|")
+    print("\n| method | h (m) | K (Pa) | nu_num (m²/s) | nu_num / nu | beta (m⁴/s) "
+          "| modes | nu_num moved by rates ±1 % | enough modes |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for key in sorted(fits, key=order_key):
-        n, b = fits[key]["nu_num"], fits[key]["beta"]
+        n, b, sens = fits[key]["nu_num"], fits[key]["beta"], fits[key]["sensitivity"]
+        enough = "-" if sens is None else ("yes" if sens <= 0.1 else "no: ask for more modes")
         print(f"| {key[0]} | {key[1]} | {key[2]:.3g} | {fmt(n)} "
-              f"| {fmt(n and n / nu, '.3g')} | {fmt(b)} |")
+              f"| {fmt(n and n / nu, '.3g')} | {fmt(b)} | {fits[key].get('modes_fitted', '-')} "
+              f"| {fmt(sens, '.1%')} | {enough} |")
     by = defaultdict(list)
     for (m, h, K), f in fits.items():
         if f["nu_num"] is not None:

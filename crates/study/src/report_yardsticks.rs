@@ -1,8 +1,9 @@
 //! The yardsticks a damper cannot pass (docs/physics.md section 7), per
 //! method, for the Methods table: from viscous-decay cases (Taylor-Green,
 //! `checks.mode_decay`) the fluid's viscosity as the method sees it
-//! (nu_phys, mode 1), the method's own dissipation nu_num and beta (the two
-//! modes' inviscid rates: rate / (2 k^2) = nu_num + beta k^2); from slosh
+//! (nu_phys, mode 1), the method's own dissipation nu_num and beta (least
+//! squares over the modes' inviscid rates: rate / (2 k^2) = nu_num +
+//! beta k^2); from slosh
 //! cases (`checks.slosh`) the period error and the decay ratio at the
 //! viscous run; from surge-front cases (`checks.surge_front`, the viscous
 //! run on a free-slip floor) the early error after the best time shift and
@@ -178,24 +179,23 @@ impl Yardsticks {
 /// A method's decay rate (None: no rate) and wavenumber by (mode, viscous).
 type ModeRates = BTreeMap<(u64, bool), (Option<f64>, f64)>;
 
-/// nu_phys from mode 1's viscous and inviscid rates; nu_num and beta from
-/// the two lowest modes' inviscid rates.
+/// nu_phys from mode 1's viscous and inviscid rates; nu_num and beta by
+/// least squares over every mode's inviscid rate (exact through two).
 fn fit_decay(y: &mut Yardstick, modes: &ModeRates) {
     let rate = |m: u64, v: bool| modes.get(&(m, v)).and_then(|r| r.0.map(|x| (x, r.1)));
     if let (Some((a, k)), Some((b, _))) = (rate(1, false), rate(1, true)) {
         y.nu_phys = Some((b - a) / (2.0 * k * k));
     }
-    let inviscid: Vec<(f64, f64)> = modes
+    let points: Vec<(f64, f64)> = modes
         .iter()
         .filter(|((_, v), _)| !v)
-        .filter_map(|(_, r)| r.0.map(|x| (x, r.1)))
-        .take(2)
+        .filter_map(|(_, r)| r.0.map(|x| (r.1 * r.1, x / (2.0 * r.1 * r.1))))
         .collect();
-    if let [(r1, k1), (r2, k2)] = inviscid[..] {
-        let (y1, y2) = (r1 / (2.0 * k1 * k1), r2 / (2.0 * k2 * k2));
-        let beta = (y2 - y1) / (k2 * k2 - k1 * k1);
-        y.beta = Some(beta);
-        y.nu_num = Some(y1 - beta * k1 * k1);
+    if points.len() >= 2 {
+        if let Some((beta, nu_num)) = crate::metrics::line_fit(&points) {
+            y.beta = Some(beta);
+            y.nu_num = Some(nu_num);
+        }
     }
 }
 
@@ -287,6 +287,17 @@ mod tests {
         assert_eq!(apic.is_damper(), Some(false));
         let flip = y.of_method(&rows[3].summary).expect("measured");
         assert_eq!(flip.nu_num, None, "mode 1 swings back: one rate only");
+        // Three modes on the line: the same figures by least squares.
+        let k3 = 45.0;
+        let mut three = rows[..3].to_vec();
+        three.push(summary("apic", 3, 0.0, decay(rate(k3, 0.0), k3, 0.01)));
+        let y3 = Yardsticks::of(&three);
+        let apic = y3.of_method(&three[0].summary).unwrap();
+        assert!(
+            (apic.nu_num.unwrap() / nu_num - 1.0).abs() < 1e-9,
+            "{apic:?}"
+        );
+        assert!((apic.beta.unwrap() / beta - 1.0).abs() < 1e-9, "{apic:?}");
     }
 
     /// `j_bar = true` beside its settings is the same method as the
