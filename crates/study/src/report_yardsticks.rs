@@ -289,8 +289,11 @@ mod tests {
         assert_eq!(flip.nu_num, None, "mode 1 swings back: one rate only");
         // Three modes on the line: the same figures by least squares.
         let k3 = 45.0;
-        let mut three = rows[..3].to_vec();
-        three.push(summary("apic", 3, 0.0, decay(rate(k3, 0.0), k3, 0.01)));
+        let three = vec![
+            summary("apic", 1, 0.0, decay(rate(k1, 0.0), k1, 0.01)),
+            summary("apic", 2, 0.0, decay(rate(k2, 0.0), k2, 0.01)),
+            summary("apic", 3, 0.0, decay(rate(k3, 0.0), k3, 0.01)),
+        ];
         let y3 = Yardsticks::of(&three);
         let apic = y3.of_method(&three[0].summary).unwrap();
         assert!(
