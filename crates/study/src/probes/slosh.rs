@@ -40,7 +40,8 @@ pub struct SloshFigures {
     /// decay_rate / decay_theory (None inviscid).
     pub decay_ratio: Option<f64>,
     /// Linear theory's swing of X (m), 2 a W / (m pi)^2 / d, and the first
-    /// measured extreme's.
+    /// measured extreme's (the largest |X - X(0)| if the swing never
+    /// crossed back).
     pub swing_theory_m: f64,
     pub swing_m: f64,
     /// Extremes and crossings used, and the time of the last one used (s).
@@ -100,6 +101,15 @@ impl Slosh {
         }
     }
 
+    /// The largest |X - X(0)|: the swing of a wave damped before it
+    /// crossed back once (no half swing closed).
+    fn largest_swing(&self) -> f64 {
+        let x0 = self.samples.first().map_or(0.0, |s| s.1);
+        self.samples
+            .iter()
+            .fold(0.0, |m: f64, s| m.max((s.1 - x0).abs()))
+    }
+
     fn figures(&self) -> SloshFigures {
         let k = self.flow.wavenumber(self.rect);
         let (w, d) = (self.rect[2] - self.rect[0], self.rect[3] - self.rect[1]);
@@ -123,7 +133,7 @@ impl Slosh {
                 .filter(|_| decay_theory > 0.0)
                 .map(|r| r / decay_theory),
             swing_theory_m: 2.0 * amplitude * w / (mode * PI).powi(2) / d,
-            swing_m: swing.extremes.first().map_or(0.0, |e| e.1),
+            swing_m: swing.extremes.first().map_or_else(|| self.largest_swing(), |e| e.1),
             extremes: swing.extremes.len(),
             crossings: swing.crossings.len(),
             followed_to_s: swing.followed_to,
