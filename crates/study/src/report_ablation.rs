@@ -253,10 +253,16 @@ fn yardstick_cells(sticks: &Yardsticks, runs: &[&Row]) -> Vec<Cell> {
         num(y.slosh_decay_ratio, &|x| format!("{x:.2}")),
         num(y.surge_early_shifted, &|x| format!("{x:.3}")),
         num(y.surge_speed_late, &|x| format!("{x:.2}")),
-        Cell::Text(match y.is_damper() {
-            Some(true) => "damper".into(),
-            Some(false) => "no".into(),
-            None => "-".into(),
+        Cell::Text(match (y.is_damper(), y.nu_num_sensitivity) {
+            (Some(true), _) => "damper".into(),
+            (Some(false), _) => "no".into(),
+            (None, Some(m)) if m > yardsticks::STABLE_FIT => {
+                format!(
+                    "undecided: nu_num moves {:.0} % for 1 % on the rates",
+                    100.0 * m
+                )
+            }
+            _ => "-".into(),
         }),
     ]
 }

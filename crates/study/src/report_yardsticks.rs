@@ -24,6 +24,9 @@ pub const BULK_MODULUS: f64 = 1.5e6;
 /// A method whose own dissipation exceeds this share of the fluid's
 /// viscosity is a damper (issue 44).
 pub const DAMPER_SHARE: f64 = 0.25;
+/// The issue's test of the mode fit: nu_num moves by at most this share
+/// when the rates move by 1 %.
+pub const STABLE_FIT: f64 = 0.1;
 /// A mode whose projection comes back above this share after its fit
 /// swings rather than decays: it has no decay rate.
 const SWINGS_BACK: f64 = 0.5;
@@ -36,6 +39,9 @@ pub struct Yardstick {
     pub nu_phys: Option<f64>,
     pub nu_num: Option<f64>,
     pub beta: Option<f64>,
+    /// How far nu_num moves (relative) when the rates move by 1 % in
+    /// alternating senses: above `STABLE_FIT` the line needs more modes.
+    pub nu_num_sensitivity: Option<f64>,
     pub slosh_period_error: Option<f64>,
     pub slosh_decay_ratio: Option<f64>,
     pub surge_early_shifted: Option<f64>,
@@ -43,8 +49,12 @@ pub struct Yardstick {
 }
 
 impl Yardstick {
-    /// nu_num over the fluid's viscosity exceeds `DAMPER_SHARE`.
+    /// nu_num over the fluid's viscosity exceeds `DAMPER_SHARE`; None when
+    /// unmeasured or when the fit is not stable (`STABLE_FIT`).
     pub fn is_damper(&self) -> Option<bool> {
+        if self.nu_num_sensitivity? > STABLE_FIT {
+            return None;
+        }
         Some(self.nu_num? > DAMPER_SHARE * self.nu?)
     }
 }
@@ -167,6 +177,7 @@ impl Yardsticks {
             fill(&mut e.nu_phys, o.nu_phys);
             fill(&mut e.nu_num, o.nu_num);
             fill(&mut e.beta, o.beta);
+            fill(&mut e.nu_num_sensitivity, o.nu_num_sensitivity);
             fill(&mut e.slosh_period_error, o.slosh_period_error);
             fill(&mut e.slosh_decay_ratio, o.slosh_decay_ratio);
             fill(&mut e.surge_early_shifted, o.surge_early_shifted);
@@ -180,23 +191,47 @@ impl Yardsticks {
 type ModeRates = BTreeMap<(u64, bool), (Option<f64>, f64)>;
 
 /// nu_phys from mode 1's viscous and inviscid rates; nu_num and beta by
-/// least squares over every mode's inviscid rate (exact through two).
+/// least squares over every mode's inviscid rate (exact through two), only
+/// when mode 1 has a rate (an intercept from the small scales alone is an
+/// extrapolation), and how far nu_num moves when the rates move by 1 %.
 fn fit_decay(y: &mut Yardstick, modes: &ModeRates) {
     let rate = |m: u64, v: bool| modes.get(&(m, v)).and_then(|r| r.0.map(|x| (x, r.1)));
-    if let (Some((a, k)), Some((b, _))) = (rate(1, false), rate(1, true)) {
+    let Some((a, k)) = rate(1, false) else {
+        return;
+    };
+    if let Some((b, _)) = rate(1, true) {
         y.nu_phys = Some((b - a) / (2.0 * k * k));
     }
-    let points: Vec<(f64, f64)> = modes
+    let rates: Vec<(f64, f64)> = modes
         .iter()
         .filter(|((_, v), _)| !v)
-        .filter_map(|(_, r)| r.0.map(|x| (r.1 * r.1, x / (2.0 * r.1 * r.1))))
+        .filter_map(|(_, r)| r.0.map(|x| (x, r.1)))
         .collect();
-    if points.len() >= 2 {
-        if let Some((beta, nu_num)) = crate::metrics::line_fit(&points) {
-            y.beta = Some(beta);
-            y.nu_num = Some(nu_num);
-        }
-    }
+    let Some((beta, nu_num)) = line_of(&rates, 0.0) else {
+        return;
+    };
+    y.beta = Some(beta);
+    y.nu_num = Some(nu_num);
+    let moved = [0.01, -0.01].map(|e| line_of(&rates, e).map_or(f64::INFINITY, |l| l.1));
+    y.nu_num_sensitivity = Some(
+        moved
+            .iter()
+            .fold(0.0, |m: f64, n| m.max((n - nu_num).abs() / nu_num.abs())),
+    );
+}
+
+/// (beta, nu_num) of rate / (2 k^2) = nu_num + beta k^2 over (rate, k),
+/// each rate moved by `shift` in alternating senses.
+fn line_of(rates: &[(f64, f64)], shift: f64) -> Option<(f64, f64)> {
+    let points: Vec<(f64, f64)> = rates
+        .iter()
+        .enumerate()
+        .map(|(i, &(r, k))| {
+            let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+            (k * k, r * (1.0 + sign * shift) / (2.0 * k * k))
+        })
+        .collect();
+    crate::metrics::line_fit(&points)
 }
 
 /// Taylor-Green cases at the reference point, for tests of the sections
@@ -285,6 +320,15 @@ mod tests {
         assert!((apic.nu_phys.unwrap() / nu - 1.0).abs() < 1e-9, "{apic:?}");
         assert_eq!(apic.nu, Some(5e-4));
         assert_eq!(apic.is_damper(), Some(false));
+        // Through two modes, 1 % on the rates moves nu_num by
+        // (2 k1^2 k2^2 / (k2^2 - k1^2)) (r1 / k1^2 + r2 / k2^2) 0.01 / (2 nu_num).
+        let (y1, y2) = (rate(k1, 0.0) / (k1 * k1), rate(k2, 0.0) / (k2 * k2));
+        let expected = 0.01 * (y1 * k2 * k2 + y2 * k1 * k1) / (k2 * k2 - k1 * k1) / (2.0 * nu_num);
+        let moved = apic.nu_num_sensitivity.unwrap();
+        assert!(
+            (moved / expected - 1.0).abs() < 1e-6,
+            "{moved} vs {expected}"
+        );
         let flip = y.of_method(&rows[3].summary).expect("measured");
         assert_eq!(flip.nu_num, None, "mode 1 swings back: one rate only");
         // Three modes on the line: the same figures by least squares.
