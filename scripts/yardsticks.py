@@ -42,9 +42,12 @@ SLOSH_RATIO_MAX = 1.2
 
 
 def method_of(name):
-    """The method part of a case name: everything before `_h<cell>cm`."""
+    """The method part of a case name: everything before `_h<cell>cm`, or
+    after the material parts (`K1.5MPa_tait_mu0.5_`) of a dam-break case."""
     m = re.match(r"(.*?)_h[0-9.]+cm(_|$)", name)
-    return m.group(1) if m else name.split("_")[0]
+    if m:
+        return m.group(1)
+    return re.sub(r"^(K[0-9.]+[kMG]?Pa_)?((power-g[0-9.]+|tait|linear)_)?(mu[0-9.]+_)?", "", name)
 
 
 def summaries(folders):
