@@ -55,7 +55,7 @@ pub fn speed_accuracy(m: &Matrix, out: &Path, page: &mut Page) -> Res {
             excess,
         )?;
     }
-    let sticks = Yardsticks::of(&m.rows).merged(Yardsticks::of(&m.reference_rows));
+    let sticks = Yardsticks::of_matrix(m);
     let own = |r: &Row| {
         let y = sticks.of_method(&r.summary);
         Row::nan(

@@ -14,7 +14,7 @@
 use crate::probes::mode_decay::ModeDecayFigures;
 use crate::probes::slosh::SloshFigures;
 use crate::probes::surge_front::SurgeFrontFigures;
-use crate::report_data::Row;
+use crate::report_data::{Matrix, Row};
 use crate::summary::{Status, Summary};
 use std::collections::BTreeMap;
 
@@ -157,6 +157,12 @@ impl Yardsticks {
             fit_decay(entry, &modes);
         }
         y
+    }
+
+    /// The yardsticks of a matrix's own cases and of its reference rows
+    /// (`kick report --yardsticks`), its own first.
+    pub fn of_matrix(m: &Matrix) -> Self {
+        Yardsticks::of(&m.rows).merged(Yardsticks::of(&m.reference_rows))
     }
 
     pub fn is_empty(&self) -> bool {
