@@ -109,7 +109,7 @@ struct ReproduceArgs {
 struct ReportArgs {
     /// A case folder (summary.json) or a matrix folder (summary.parquet).
     dir: PathBuf,
-    /// Matrix folders of studies/viscous_decay.toml and studies/slosh.toml:
+    /// Matrix folders of studies/viscous_decay.toml, slosh.toml, surge_front.toml:
     /// the Methods table gains each method's yardsticks (repeatable).
     #[arg(long = "yardsticks", value_name = "MATRIX_DIR")]
     yardsticks: Vec<PathBuf>,

@@ -11,7 +11,7 @@ use crate::report_matrix::matrix_report;
 use std::path::{Path, PathBuf};
 
 /// Writes the report of `dir` (a case or a matrix) and returns the page's
-/// path. A matrix's Methods table also reads the viscous-decay and slosh
+/// path. A matrix's Methods table also reads the viscous-decay, slosh and surge-front
 /// matrix folders `yardsticks` (report_yardsticks.rs).
 pub fn report(dir: &Path, yardsticks: &[PathBuf]) -> Res<PathBuf> {
     if dir.join("summary.parquet").exists() {
