@@ -12,8 +12,9 @@ floor). Reads every CASE/summary.json and prints markdown:
   mode inviscid and viscous (1/s); nu_phys = (viscous - inviscid rate) /
   (2 k^2) against NU (default 5e-4 m^2/s, the 0.5 Pa s water); nu_num and
   beta by least squares over the modes' inviscid rates, rate / (2 k^2) =
-  nu_num + beta k^2, and how far nu_num moves when the rates move by 1 %
-  (more than 10 %: the fit needs more modes);
+  nu_num + beta k^2, and nu_num's uncertainty: the larger of its movement
+  when the rates move by 1 % and, from three modes, when the highest mode
+  is left out (the line's model error);
   the observed order in h where three cell sizes are there. A mode that
   swings back (later_max_ratio > 0.5) has no decay rate.
 - slosh: per method, cell size and viscosity, the period error against
@@ -22,8 +23,10 @@ floor). Reads every CASE/summary.json and prints markdown:
 - the re-judged methods: one row per method at h = 1 cm, K = 1.5 MPa, with
   nu_phys (mode 1), nu_num, beta, the slosh period error and decay ratio,
   the hydrostatic excess over its floor (late), and the verdict: a damper
-  when nu_num > 0.25 nu; accurate only if nu_num <= 0.25 nu and the slosh
-  decay ratio at h = 0.5 cm is at most 1.2.
+  when nu_num exceeds 0.25 nu by more than its uncertainty, undecided when
+  nu_num +- its uncertainty straddles 0.25 nu; accurate only if nu_num +
+  its uncertainty <= 0.25 nu and the slosh decay ratio at h = 0.5 cm is at
+  most 1.2.
 
 Methods are named by the first part of their case names (`base`,
 `linear-flip-usf-fixed`, `j_bar1.0`, ...), the same in every study.
@@ -100,19 +103,22 @@ def decay(folder, nu):
             k = (a or b)[1]
             wall = sum(v[2] for v in (a, b) if v)
             modes[m] = (a and a[0], b and b[0], k, wall)
-        fit = {"modes": modes, "nu_num": None, "beta": None, "sensitivity": None}
+        fit = {"modes": modes, "nu_num": None, "beta": None, "uncertainty": None}
         inviscid = [(v[0], v[2]) for m, v in sorted(modes.items()) if v[0] is not None]
         # Mode 1 must have a rate: an intercept from the small scales alone
         # is an extrapolation.
         if len(inviscid) >= 2 and modes.get(1, (None,))[0] is not None:
             fit["nu_num"], fit["beta"] = mode_fit(inviscid)
             # The issue's stability test: every rate moved by 1 %, in
-            # alternating senses (the worst of the two patterns).
+            # alternating senses (the worst of the two patterns); and the
+            # line's model error: the highest mode left out.
             n, moved = fit["nu_num"], []
             for e in (0.01, -0.01):
                 shifted = [(r * (1 + e * (-1) ** i), k) for i, (r, k) in enumerate(inviscid)]
                 moved.append(mode_fit(shifted)[0])
-            fit["sensitivity"] = max(abs(m - n) for m in moved) / abs(n) if n else None
+            if len(inviscid) >= 3:
+                moved.append(mode_fit(inviscid[:-1])[0])
+            fit["uncertainty"] = max(abs(m - n) for m in moved)
             fit["modes_fitted"] = len(inviscid)
         out[key] = fit
     return out
@@ -126,6 +132,17 @@ def mode_fit(rates):
     my = sum(p[1] for p in pts) / len(pts)
     beta = sum((p[0] - mx) * (p[1] - my) for p in pts) / sum((p[0] - mx) ** 2 for p in pts)
     return my - beta * mx, beta
+
+
+def damper_verdict(n, u, nu):
+    """'damper', 'no' or 'undecided' (nu_num +- u straddles 0.25 nu); None unmeasured."""
+    if n is None or u is None:
+        return None
+    if n - u > DAMPER * nu:
+        return "damper"
+    if n + u <= DAMPER * nu:
+        return "no"
+    return f"undecided: {n / nu:.2f} ± {u / nu:.2f} nu straddles {DAMPER}"
 
 
 def nu_phys(a, b, k):
@@ -144,14 +161,13 @@ def print_decay(fits, nu):
             print(f"| {key[0]} | {key[1]} | {key[2]:.3g} | {m} | {fmt(a)} | {fmt(b)} "
                   f"| {fmt(phys and phys / nu, '.3f')} | {wall:.0f} |")
     print("\n| method | h (m) | K (Pa) | nu_num (m²/s) | nu_num / nu | beta (m⁴/s) "
-          "| modes | nu_num moved by rates ±1 % | enough modes |")
+          "| modes | uncertainty / nu | verdict |")
     print("|---|---|---|---|---|---|---|---|---|")
     for key in sorted(fits, key=order_key):
-        n, b, sens = fits[key]["nu_num"], fits[key]["beta"], fits[key]["sensitivity"]
-        enough = "-" if sens is None else ("yes" if sens <= 0.1 else "no: ask for more modes")
+        n, b, u = fits[key]["nu_num"], fits[key]["beta"], fits[key]["uncertainty"]
         print(f"| {key[0]} | {key[1]} | {key[2]:.3g} | {fmt(n)} "
               f"| {fmt(n and n / nu, '.3g')} | {fmt(b)} | {fits[key].get('modes_fitted', '-')} "
-              f"| {fmt(sens, '.1%')} | {enough} |")
+              f"| {fmt(u and u / nu, '.3f')} | {damper_verdict(n, u, nu) or '-'} |")
     by = defaultdict(list)
     for (m, h, K), f in fits.items():
         if f["nu_num"] is not None:
@@ -232,13 +248,11 @@ def print_methods(fits, tank, excess, nu):
         fine = tank.get((m, 0.005), {}).get(True, {})
         e = sorted(excess.get(m, []))
         med = e[len(e) // 2] if e else None
-        n, sens = f["nu_num"], f.get("sensitivity")
+        n, judged = f["nu_num"], damper_verdict(f["nu_num"], f.get("uncertainty"), nu)
         if n is None:
             verdict = "swings back: no decay rate" if mode1 else "-"
-        elif sens is not None and sens > 0.1:
-            verdict = f"undecided: nu_num moves {sens:.0%} for 1 % on the rates"
-        elif n > DAMPER * nu:
-            verdict = "damper"
+        elif judged != "no":
+            verdict = judged
         elif fine.get("decay_ratio") is None:
             verdict = "not a damper at 1 cm (no slosh at 0.5 cm)"
         elif fine["decay_ratio"] <= SLOSH_RATIO_MAX:

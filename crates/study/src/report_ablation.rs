@@ -206,7 +206,7 @@ pub fn ablation_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
     let sticks = Yardsticks::of_matrix(m);
     let mut headers: Vec<String> = HEADERS.map(String::from).to_vec();
     if !sticks.is_empty() {
-        page.p(&format!("The yardsticks a damper cannot pass (docs/physics.md section 7), measured for the same method (the same resolved method settings and particles per cell) at h = {} cm and K = {} MPa: from the walled Taylor-Green vortex, the fluid's viscosity as the method sees it (nu_phys, mode 1) and the method's own dissipation nu_num and beta (least squares of rate / (2 k²) = nu_num + beta k² over the inviscid rates of every mode run), both over the fluid's nu; from the sloshing tank at the viscous run, the period error against linear theory and the decay rate over 2 nu k²; from the surge front (viscous, free-slip floor) the early RMS error in Z after the best time shift and the late front speed dZ/dT (the data about 1.7). A method whose nu_num exceeds {} nu is a damper: whatever its kicks and late departure, it gets there by taking the flow's energy.", 100.0 * yardsticks::CELL, yardsticks::BULK_MODULUS / 1e6, yardsticks::DAMPER_SHARE));
+        page.p(&format!("The yardsticks a damper cannot pass (docs/physics.md section 7), measured for the same method (the same resolved method settings and particles per cell) at h = {} cm and K = {} MPa: from the walled Taylor-Green vortex, the fluid's viscosity as the method sees it (nu_phys, mode 1) and the method's own dissipation nu_num and beta (least squares of rate / (2 k²) = nu_num + beta k² over the inviscid rates of every mode run), both over the fluid's nu; from the sloshing tank at the viscous run, the period error against linear theory and the decay rate over 2 nu k²; from the surge front (viscous, free-slip floor) the early RMS error in Z after the best time shift and the late front speed dZ/dT (the data about 1.7). A method whose nu_num exceeds {} nu by more than its uncertainty (the larger of its movement when the rates move by 1 % and, from three modes, when the highest mode is left out) is a damper: whatever its kicks and late departure, it gets there by taking the flow's energy. Where nu_num, give or take its uncertainty, straddles that share, the verdict is undecided at this h.", 100.0 * yardsticks::CELL, yardsticks::BULK_MODULUS / 1e6, yardsticks::DAMPER_SHARE));
         headers.extend(YARDSTICK_HEADERS.map(String::from));
     }
     let rows: Vec<(String, Vec<Cell>)> = groups
@@ -253,17 +253,21 @@ fn yardstick_cells(sticks: &Yardsticks, runs: &[&Row]) -> Vec<Cell> {
         num(y.slosh_decay_ratio, &|x| format!("{x:.2}")),
         num(y.surge_early_shifted, &|x| format!("{x:.3}")),
         num(y.surge_speed_late, &|x| format!("{x:.2}")),
-        Cell::Text(match (y.is_damper(), y.nu_num_sensitivity) {
-            (Some(true), _) => "damper".into(),
-            (Some(false), _) => "no".into(),
-            (None, Some(m)) if m > yardsticks::STABLE_FIT => {
-                format!(
-                    "undecided: nu_num moves {:.0} % for 1 % on the rates",
-                    100.0 * m
-                )
-            }
-            _ => "-".into(),
-        }),
+        Cell::Text(
+            match (
+                y.is_damper(),
+                over_nu(y.nu_num),
+                over_nu(y.nu_num_uncertainty),
+            ) {
+                (Some(true), _, _) => "damper".into(),
+                (Some(false), _, _) => "no".into(),
+                (None, Some(n), Some(u)) => format!(
+                    "undecided: nu_num = {n:.2} ± {u:.2} nu straddles {}",
+                    yardsticks::DAMPER_SHARE
+                ),
+                _ => "-".into(),
+            },
+        ),
     ]
 }
 
