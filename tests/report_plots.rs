@@ -115,7 +115,8 @@ fn case_plots_render_as_png_and_svg() {
         "energy_injected",
         "max_accel_g",
         "max_z",
-        "checkerboard",
+        "checkerboard_means",
+        "checkerboard_nodal",
         "hydro_rel_rms",
         "hydro_max",
     ];
@@ -157,7 +158,7 @@ fn case_plots_render_as_png_and_svg() {
         &[
             "time t (s)",
             "energy change (J/m)",
-            "checkerboard CB (index)",
+            "checkerboard",
             "#1*",
             "#2",
             "a/g, z (log)",

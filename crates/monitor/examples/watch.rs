@@ -56,7 +56,7 @@ fn main() {
         if r.t >= next {
             next += 0.1;
             let f = m.field_metrics(&s.view());
-            println!("t {:.2} maxz {:.1} maxa {:.1}g inj {:.3e} floor {:.2e} cb {:?} hydro {:.3} front {:?} cour {:.2}", r.t, za, aa, r.energy_injected, r.injection_floor, f.checkerboard.map(|c| (c*1000.0).round()/1000.0), f.hydro_rel_rms, f.front_z, r.courant);
+            println!("t {:.2} maxz {:.1} maxa {:.1}g inj {:.3e} floor {:.2e} cb {:?} hydro {:.3} front {:?} cour {:.2}", r.t, za, aa, r.energy_injected, r.injection_floor, f.checkerboard_nodal.map(|c| (c*1000.0).round()/1000.0), f.hydro_rel_rms, f.front_z, r.courant);
             za = 0.0;
             aa = 0.0;
         }

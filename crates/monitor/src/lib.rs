@@ -8,6 +8,7 @@
 pub mod accel_outliers;
 pub mod cells;
 pub mod checkerboard;
+pub mod checkerboard_fields;
 pub mod config;
 pub mod energy_budget;
 pub mod events;
@@ -15,6 +16,7 @@ pub mod front;
 pub mod geometry;
 pub mod hydrostatic;
 pub mod particle_history;
+pub mod remedy_booking;
 pub mod rest_field;
 mod state;
 pub mod step_history;
@@ -28,10 +30,12 @@ pub use geometry::Geometry;
 use accel_outliers::WindowStats;
 use cells::CellBins;
 use checkerboard::CellField;
+use checkerboard_fields::FieldCheckerboard;
 use energy_budget::EnergyBudget;
 use front::Front;
 use hydrostatic::Hydrostatic;
 use particle_history::{Calm, ParticleHistory};
+use remedy_booking::{Booked, RemedyBooking, REMEDIES};
 use serde::Serialize;
 use solver::{Mat2, StateView};
 use step_history::StepHistory;
@@ -54,9 +58,23 @@ pub struct StepReport {
     pub injection_floor: f64,
     /// Transfer loss accumulated since t = 0: sum over steps and particles of
     /// 1/2 m (|v_prev + dt a_p|^2 - |v|^2), the kinetic energy the transfer
-    /// took from FLIP's exact update (PIC and APIC dissipate there). It is
-    /// added to the total in every injection test, except under APIC.
+    /// took from FLIP's exact update (PIC and APIC dissipate there), less
+    /// what the remedies' after-G2P hooks (the FLIP/PIC blend) took, which
+    /// is booked to them. It is added to the total in every injection test,
+    /// except under APIC.
     pub transfer_loss: f64,
+    /// Every remedy's removals since t = 0 (its dissipation), and its
+    /// additions (its injection, left visible to the injection test).
+    pub remedy_dissipated: f64,
+    pub remedy_injected: f64,
+    /// The same per remedy, in registry order (None: not in the method).
+    pub booked: [Option<Booked>; REMEDIES],
+    /// The budget with every booking, E + L + remedy dissipation - remedy
+    /// injection, minus its value at t = 0: what no term accounts for (the
+    /// time integration's error; under APIC also the transfer's loss).
+    pub budget_drift: f64,
+    /// The same without the remedies' bookings, E + L minus its value at t = 0.
+    pub budget_drift_unbooked: f64,
     /// Largest force-driven acceleration |a_p| (in g).
     pub max_accel_g: f64,
     /// Largest transfer jump |v - v_prev - dt a_p| (m/s): the velocity change
@@ -111,7 +129,14 @@ impl StepReport {
 /// Field metrics, computed at output rows and when an event opens.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct FieldMetrics {
-    pub checkerboard: Option<f64>,
+    /// The checkerboard share of the cell means of particle pressure
+    /// (blind to a mode J-bar reads back from its nodes).
+    pub checkerboard_means: Option<f64>,
+    /// The alternating amplitude of the nodal pressure that drives the
+    /// forces, over rho0 g h (`checkerboard_fields`).
+    pub checkerboard_nodal: Option<f64>,
+    /// The same of the cell pressure, for a method that carries one.
+    pub checkerboard_cell: Option<f64>,
     /// RMS of (p_particle - p_cell) / (rho0 g h).
     pub pressure_spread: f64,
     pub hydro_rel_rms: f64,
@@ -329,6 +354,7 @@ pub struct Monitor {
     event_mark: Vec<u32>,
     events: Vec<Event>,
     field: CellField,
+    field_checkerboard: FieldCheckerboard,
     hydro: Hydrostatic,
     front: Front,
     report: StepReport,
@@ -349,6 +375,10 @@ pub struct Monitor {
     initial_mass: f64,
     /// Transfer loss accumulated since t = 0 (see `StepReport::transfer_loss`).
     transfer_loss: f64,
+    /// Each remedy's energy booked since t = 0.
+    booking: RemedyBooking,
+    /// E at t = 0 (the budgets' drifts are measured from it).
+    initial_total: f64,
 }
 
 /// Nodes lighter than this fraction of a full cell's mass rho0 h^2 are left
@@ -401,6 +431,7 @@ impl Monitor {
             event_mark: vec![0; v.n_initial],
             events: Vec::new(),
             field: CellField::new(&geom),
+            field_checkerboard: FieldCheckerboard::default(),
             hydro: Hydrostatic::new(&geom, n),
             front: Front::new(&geom),
             report: StepReport::default(),
@@ -413,6 +444,8 @@ impl Monitor {
             ids: v.id.to_vec(),
             initial_mass: v.mass.iter().sum::<f64>() + v.losses.mass(),
             transfer_loss: 0.0,
+            booking: RemedyBooking::default(),
+            initial_total: v.energy.total(),
             geom,
             cfg,
         }
@@ -492,12 +525,17 @@ impl Monitor {
         // APIC the particle kinetic energy leaves out the affine velocity's,
         // so energy moved into C would count as lost (a floor impact then
         // reads as an injection): logged, not added.
-        let loss = if v.transfer == solver::TransferKind::Apic {
-            0.0
-        } else {
+        let loss_counted = v.transfer != solver::TransferKind::Apic;
+        let loss = if loss_counted {
             self.transfer_loss
+        } else {
+            0.0
         };
-        let mut injection = self.energy.observe(v.time, v.energy.total() + loss);
+        // Each remedy's removals are its dissipation; its additions stay
+        // in the total, where the injection test sees them.
+        self.booking.book(v.remedies.energy_parts());
+        let watched = v.energy.total() + loss + self.booking.detector_offset(loss_counted);
+        let mut injection = self.energy.observe(v.time, watched);
         // Periodic along gravity, a particle that wraps jumps by m g H in
         // potential energy: the budget is undefined there, so its rule is off.
         let budget_defined = !(v.scene.periodic[1] && g > 0.0);
@@ -534,7 +572,12 @@ impl Monitor {
             energy_injected: undefined(injection.total),
             injection_window: undefined(injection.window),
             injection_floor: floor,
-            transfer_loss: self.transfer_loss,
+            transfer_loss: self.transfer_loss + self.booking.in_transfer_loss(),
+            remedy_dissipated: self.booking.dissipated(),
+            remedy_injected: self.booking.injected(),
+            booked: self.booking.booked,
+            budget_drift: watched - self.booking.injected() - self.initial_total,
+            budget_drift_unbooked: v.energy.total() + loss - self.initial_total,
             max_accel_g: scan.max_a2.sqrt() / g,
             max_transfer_jump: scan.max_jump2.sqrt(),
             max_z,
@@ -1121,7 +1164,11 @@ impl Monitor {
     pub fn field_metrics(&mut self, v: &StateView) -> FieldMetrics {
         let geom = &self.geom;
         self.field.accumulate(geom, v.x, v.pressure);
-        let checkerboard = checkerboard::index(geom, &self.field);
+        let checkerboard_means = checkerboard::index(geom, &self.field);
+        let scale = v.materials[0].rho0 * self.g_ref() * v.grid.h;
+        let checkerboard_nodal = self.field_checkerboard.nodal(v, scale);
+        let checkerboard_cell = self.field_checkerboard.cell(v, scale);
+        let geom = &self.geom;
         let pressure_spread = checkerboard::intra_cell_spread(geom, &self.field, v.x, v.pressure);
         self.hydro.compute(geom, v.x, v.mass, v.accel);
         let dep = self.hydro.departure(geom, v.volume, v.pressure);
@@ -1134,7 +1181,9 @@ impl Monitor {
             None => (None, front::dimensionless(geom, 0.0, v.time).1),
         };
         FieldMetrics {
-            checkerboard,
+            checkerboard_means,
+            checkerboard_nodal,
+            checkerboard_cell,
             pressure_spread,
             hydro_rel_rms: dep.rel_rms,
             hydro_floor_rel_rms: dep.floor_rel_rms,

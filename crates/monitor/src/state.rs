@@ -8,7 +8,7 @@ use crate::Monitor;
 use bincode::Options;
 use solver::checkpoint::{unseal, CheckpointError, Reader, Writer};
 
-const MAGIC: &[u8; 8] = b"KICKMON7";
+const MAGIC: &[u8; 8] = b"KICKMON8";
 
 /// The events' encoding: bincode (little-endian, varint integers, f64 bits as
 /// they are) through `Event`'s serde derive, so the checkpoint and the summary
@@ -84,6 +84,8 @@ impl Monitor {
         w.u64(next as u64);
         w.u64(filled as u64);
         w.f64(self.transfer_loss);
+        w.f64s(&self.booking.state());
+        w.f64(self.initial_total);
         w.f64(self.prev_injected);
         w.f64(self.prev_vertical_speed);
         w.u64(self.events_dropped);
@@ -135,6 +137,10 @@ impl Monitor {
         }
         self.energy.restore(minimum, &times, &recent, next, filled);
         self.transfer_loss = r.f64()?;
+        let mut booking = vec![0.0; crate::remedy_booking::RemedyBooking::STATE_LEN];
+        r.f64s(&mut booking)?;
+        self.booking.restore(&booking);
+        self.initial_total = r.f64()?;
         self.prev_injected = r.f64()?;
         self.prev_vertical_speed = r.f64()?;
         self.events_dropped = r.u64()?;

@@ -82,6 +82,10 @@ pub struct StateView<'a> {
     pub culled: &'a [Culled],
     /// Particle count at t = 0 (ids run from 0 below it).
     pub n_initial: usize,
+    /// The remedies: each one's energy change in the last step
+    /// (`energy_parts`) and the fields it builds the pressure from
+    /// (`pressure_fields`).
+    pub remedies: &'a crate::remedies::Remedies,
 }
 
 pub fn make(s: &Solver) -> StateView<'_> {
@@ -131,5 +135,6 @@ pub fn make(s: &Solver) -> StateView<'_> {
         losses: s.losses,
         culled: &s.culled,
         n_initial: s.n_initial,
+        remedies: &s.remedies,
     }
 }

@@ -383,7 +383,7 @@ mod tests {
         let mut row = |t: f64, value: f64, event: bool| {
             let fields = FieldMetrics {
                 hydro_rel_rms: value,
-                checkerboard: Some(value),
+                checkerboard_means: Some(value),
                 ..Default::default()
             };
             let report = StepReport {
@@ -401,17 +401,17 @@ mod tests {
         }
         let done = summarise(&ts, &[], true);
         assert_eq!(done.figure("hydro_rel_rms_late"), Some(1.0));
-        assert_eq!(done.figure("checkerboard_late"), Some(1.0));
+        assert_eq!(done.figure("checkerboard_means_late"), Some(1.0));
         assert_eq!(done.figure("hydro_rel_rms_pre_failure"), None);
         assert_eq!(
-            done.figure("checkerboard_peak"),
+            done.figure("checkerboard_means_peak"),
             Some(100.0),
             "peaks see every row"
         );
         let failed = summarise(&ts, &[], false);
         assert_eq!(failed.figure("hydro_rel_rms_late"), None);
         assert_eq!(failed.figure("hydro_rel_rms_pre_failure"), Some(1.0));
-        assert_eq!(failed.figure("checkerboard_pre_failure"), Some(1.0));
+        assert_eq!(failed.figure("checkerboard_means_pre_failure"), Some(1.0));
         // A failing run: rows of 1.0 until a particle is lost at 1.5 s, then
         // the collapse (1e6). Its pre-failure window ends before the loss.
         let mut failing = Timeseries::new();
@@ -421,7 +421,7 @@ mod tests {
             let value = if lost { 1e6 } else { 1.0 };
             let fields = FieldMetrics {
                 hydro_rel_rms: value,
-                checkerboard: Some(value),
+                checkerboard_means: Some(value),
                 ..Default::default()
             };
             let report = StepReport {
@@ -433,7 +433,7 @@ mod tests {
         }
         let failed = summarise(&failing, &[], false);
         assert_eq!(failed.figure("hydro_rel_rms_pre_failure"), Some(1.0));
-        assert_eq!(failed.figure("checkerboard_pre_failure"), Some(1.0));
+        assert_eq!(failed.figure("checkerboard_means_pre_failure"), Some(1.0));
         // Without a loss, the failing (last) row itself is left out.
         let mut blown = Timeseries::new();
         for (t, value) in [(0.5, 2.0), (1.0, 2.0), (1.25, 1e9)] {

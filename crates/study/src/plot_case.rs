@@ -126,8 +126,12 @@ impl TimeseriesFigure<'_> {
                 log: true,
             },
             Panel {
-                ylabel: axis_label("checkerboard CB", "checkerboard", false),
-                lines: vec![("CB", col("checkerboard"))],
+                ylabel: "checkerboard".into(),
+                lines: vec![
+                    ("cell means (share)", col("checkerboard_means")),
+                    ("nodal (of rho g h)", col("checkerboard_nodal")),
+                    ("cell (of rho g h)", col("checkerboard_cell")),
+                ],
                 log: false,
             },
             Panel {

@@ -28,7 +28,10 @@ fn param(r: &Row, is: fn(&ParamKey) -> bool) -> Option<f64> {
 /// Largest checkerboard index over `CHECKERBOARD_WINDOW`, from the case's timeseries.
 pub fn early_checkerboard(r: &Row) -> Option<f64> {
     let df = read_parquet(&r.dir.join("timeseries.parquet")).ok()?;
-    let (t, cb) = (f64_column(&df, "t")?, f64_column(&df, "checkerboard")?);
+    let (t, cb) = (
+        f64_column(&df, "t")?,
+        f64_column(&df, "checkerboard_means")?,
+    );
     let (lo, hi) = CHECKERBOARD_WINDOW;
     t.iter()
         .zip(&cb)

@@ -81,7 +81,8 @@ pub fn case_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
             "its floor",
             "excess over the floor",
             "of it not explained by accelerations",
-            "checkerboard late",
+            "checkerboard of cell means, late",
+            "nodal checkerboard, late",
             "front error (Z)",
             "wall (s)",
         ]
@@ -103,7 +104,8 @@ pub fn case_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
                 cell(s.metrics.figure("hydro_floor_late")),
                 cell(s.metrics.figure("hydro_excess_late")),
                 cell(s.metrics.figure("hydro_unexplained_rel_rms_late")),
-                cell(s.metrics.figure("checkerboard_late")),
+                cell(s.metrics.figure("checkerboard_means_late")),
+                cell(s.metrics.figure("checkerboard_nodal_late")),
                 cell(
                     s.metrics
                         .check::<SurgeFrontFigures>()

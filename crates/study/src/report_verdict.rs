@@ -497,13 +497,13 @@ mod tests {
         };
         for (name, v) in [
             ("hydro_rel_rms_pre_failure", 0.12),
-            ("checkerboard_peak", 0.3),
+            ("checkerboard_means_peak", 0.3),
             ("energy_injected_max", 2.5),
             ("max_accel_g", 40.0),
         ] {
             m.figures.insert(name.into(), Some(v));
         }
-        m.figures.insert("checkerboard_late".into(), None);
+        m.figures.insert("checkerboard_means_late".into(), None);
         m.set_check(&crate::probes::surge_front::SurgeFrontFigures {
             rms_error: Some(0.2),
             ..Default::default()
@@ -515,7 +515,7 @@ mod tests {
             [
                 "largest energy injected",
                 "largest acceleration",
-                "largest checkerboard index",
+                "largest checkerboard of the cell means",
                 "hydrostatic departure in the second before the blow-up, RMS",
                 "surge front against Martin & Moyce, RMS error",
             ]

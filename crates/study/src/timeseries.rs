@@ -137,6 +137,36 @@ fn or_nan(v: Option<f64>) -> f64 {
 
 use Sample::{Max, Min, Now, Sum};
 
+/// One remedy's booking column (registry slot, key, `dissipated` or
+/// `injected`), with its total as a figure.
+macro_rules! booked {
+    ($slot:literal, $key:ident, $part:ident) => {
+        step(
+            concat!("booked_", stringify!($key), "_", stringify!($part)),
+            "J/m",
+            concat!(
+                "energy ",
+                stringify!($key),
+                " ",
+                stringify!($part),
+                " so far (empty: not in the method)"
+            ),
+            |r| r.booked[$slot].map_or(f64::NAN, |b| b.$part),
+            Now,
+            &[peak(
+                concat!(
+                    "booked_",
+                    stringify!($key),
+                    "_",
+                    stringify!($part),
+                    "_total"
+                ),
+                concat!("energy ", stringify!($key), " ", stringify!($part)),
+            )],
+        )
+    };
+}
+
 pub const COLUMNS: &[Column] = &[
     step("t", "s", "simulated time", |r| r.t, Now, &[]),
     step("dt", "s", "time step", |r| r.dt, Now, &[]),
@@ -204,6 +234,75 @@ pub const COLUMNS: &[Column] = &[
         |r| r.transfer_loss,
         Now,
         &[],
+    ),
+    step(
+        "remedy_dissipated",
+        "J/m",
+        "energy the remedies removed so far (booked as their dissipation)",
+        |r| r.remedy_dissipated,
+        Now,
+        &[peak(
+            "remedy_dissipated_total",
+            "energy the remedies removed",
+        )],
+    ),
+    step(
+        "remedy_injected",
+        "J/m",
+        "energy the remedies added so far (booked as their injection, seen by the injection test)",
+        |r| r.remedy_injected,
+        Now,
+        &[peak("remedy_injected_total", "energy the remedies added")],
+    ),
+    booked!(0, pic_damping, dissipated),
+    booked!(0, pic_damping, injected),
+    booked!(1, min_node_mass, dissipated),
+    booked!(1, min_node_mass, injected),
+    booked!(2, f_reset, dissipated),
+    booked!(2, f_reset, injected),
+    booked!(3, bulk_damping, dissipated),
+    booked!(3, bulk_damping, injected),
+    booked!(4, cell_dilatation, dissipated),
+    booked!(4, cell_dilatation, injected),
+    booked!(5, j_bar, dissipated),
+    booked!(5, j_bar, injected),
+    booked!(6, volume_relaxation, dissipated),
+    booked!(6, volume_relaxation, injected),
+    booked!(7, pressure_smoothing, dissipated),
+    booked!(7, pressure_smoothing, injected),
+    booked!(8, null_space_filter, dissipated),
+    booked!(8, null_space_filter, injected),
+    booked!(9, shifting, dissipated),
+    booked!(9, shifting, injected),
+    step(
+        "budget_drift",
+        "J/m",
+        "the budget with every booking (E + transfer loss + remedy dissipation - remedy injection) minus its value at t = 0",
+        |r| r.budget_drift,
+        Now,
+        &[],
+    ),
+    step(
+        "budget_closure",
+        "J/m",
+        "largest |budget_drift| since the previous row",
+        |r| r.budget_drift.abs(),
+        Max(0.0),
+        &[peak(
+            "budget_closure_max",
+            "largest |drift| of the booked budget",
+        )],
+    ),
+    step(
+        "budget_closure_unbooked",
+        "J/m",
+        "largest |E + transfer loss - its value at t = 0| since the previous row (the remedies not booked)",
+        |r| r.budget_drift_unbooked.abs(),
+        Max(0.0),
+        &[peak(
+            "budget_closure_unbooked_max",
+            "largest |drift| of the budget without the remedies' bookings",
+        )],
     ),
     step(
         "max_accel_g",
@@ -342,17 +441,44 @@ pub const COLUMNS: &[Column] = &[
         &[],
     ),
     field(
-        "checkerboard",
+        "checkerboard_means",
         "index",
-        "checkerboard index of the cell means of particle pressure",
-        |f| or_nan(f.checkerboard),
+        "checkerboard share of the cell means of particle pressure (blind to a mode J-bar reads back from its nodes)",
+        |f| or_nan(f.checkerboard_means),
         &[
-            late("checkerboard_late", "late checkerboard index"),
+            late("checkerboard_means_late", "late checkerboard of the cell means"),
             pre_failure(
-                "checkerboard_pre_failure",
-                "checkerboard index in the second before the blow-up",
+                "checkerboard_means_pre_failure",
+                "checkerboard of the cell means in the second before the blow-up",
             ),
-            peak("checkerboard_peak", "largest checkerboard index"),
+            peak(
+                "checkerboard_means_peak",
+                "largest checkerboard of the cell means",
+            ),
+        ],
+    ),
+    field(
+        "checkerboard_nodal",
+        "of rho g h",
+        "alternating amplitude of the nodal pressure that drives the forces",
+        |f| or_nan(f.checkerboard_nodal),
+        &[
+            late("checkerboard_nodal_late", "late nodal checkerboard"),
+            pre_failure(
+                "checkerboard_nodal_pre_failure",
+                "nodal checkerboard in the second before the blow-up",
+            ),
+            peak("checkerboard_nodal_peak", "largest nodal checkerboard"),
+        ],
+    ),
+    field(
+        "checkerboard_cell",
+        "of rho g h",
+        "alternating amplitude of the cell pressure (methods that carry one)",
+        |f| or_nan(f.checkerboard_cell),
+        &[
+            late("checkerboard_cell_late", "late cell checkerboard"),
+            peak("checkerboard_cell_peak", "largest cell checkerboard"),
         ],
     ),
     field(
@@ -572,6 +698,30 @@ impl Timeseries {
 mod tests {
     use super::*;
 
+    /// One pair of booking columns per remedy, reading its own registry
+    /// slot.
+    #[test]
+    fn each_remedy_has_its_booking_columns_in_registry_order() {
+        let keys = solver::remedies::REMEDY_KEYS;
+        assert_eq!(keys.len(), monitor::remedy_booking::REMEDIES);
+        for (i, key) in keys.iter().enumerate() {
+            let mut r = StepReport::default();
+            r.booked[i] = Some(monitor::remedy_booking::Booked {
+                dissipated: 1.0 + i as f64,
+                injected: 100.0 + i as f64,
+            });
+            for (part, want) in [("dissipated", 1.0), ("injected", 100.0)] {
+                let c = column(&format!("booked_{key}_{part}")).expect("declared");
+                let Source::Step(get, Now) = c.source else {
+                    panic!("{} is not a step column", c.name)
+                };
+                assert_eq!(get(&r), want + i as f64, "{}", c.name);
+            }
+        }
+        let booked = COLUMNS.iter().filter(|c| c.name.starts_with("booked_"));
+        assert_eq!(booked.count(), 2 * keys.len());
+    }
+
     #[test]
     fn names_are_unique_and_every_figure_name_is_unique() {
         let mut names: Vec<&str> = COLUMNS.iter().map(|c| c.name).collect();
@@ -624,7 +774,7 @@ mod tests {
         assert_eq!(ts.column("max_accel_g")[1], 0.0);
         assert!(ts.column("j_min")[1].is_nan(), "no step since the last row");
         assert!(
-            ts.column("checkerboard")[1].is_nan(),
+            ts.column("checkerboard_means")[1].is_nan(),
             "no checkerboard figure"
         );
     }

@@ -42,6 +42,24 @@ impl Averager {
             self.averaged.resize(n, 0.0);
         }
     }
+
+    /// Padded node count.
+    pub fn nodes(&self) -> usize {
+        self.node_mass.len()
+    }
+
+    /// The last round trip's nodal value at padded node `i` (the plane's
+    /// value at the node under the linear fit), and its weight sum N m;
+    /// None where no particle reached the node.
+    pub fn node_value(&self, i: usize) -> Option<(f64, f64)> {
+        if self.node_moments.is_empty() {
+            let m = self.node_mass[i];
+            (m > 0.0).then(|| (self.node_sum[i] / m, m))
+        } else {
+            let f = &self.node_moments[i];
+            (f[5] > 0.0).then(|| (f[0] - f[3] * f[1] - f[4] * f[2], f[5]))
+        }
+    }
 }
 
 pub(super) fn cell_of(grid: &Grid, x: crate::Vec2) -> usize {
@@ -170,7 +188,7 @@ fn round_trip_linear<const W: usize>(
     }
 }
 
-/// A node's moments -> [mean q, mean dx, mean dy, slope x, slope y]: the
+/// A node's moments -> [mean q, mean dx, mean dy, slope x, slope y, sum w]: the
 /// slope solves C b = cov(d, q) on the directions where the weighted
 /// covariance C of the offsets has variance above `MIN_FIT_VARIANCE` (a
 /// pseudo-inverse by C's eigenvectors), zero along the others.
@@ -210,7 +228,7 @@ fn node_plane(n: &[f64; 9]) -> [f64; 9] {
             b[1] += along * uy;
         }
     }
-    [qm, mx, my, b[0], b[1], 0.0, 0.0, 0.0, 0.0]
+    [qm, mx, my, b[0], b[1], s0, 0.0, 0.0, 0.0]
 }
 
 /// The round trip of `q` into `s.averaged` with the nodal `fit`,

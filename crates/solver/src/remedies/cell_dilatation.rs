@@ -9,7 +9,7 @@
 //! the pressure change (`carry = false`).
 
 use super::averaging::{cell_of, set_j_booked, Uncarried};
-use super::{Descriptor, EnergyChange, GridStep, Remedy, Setup, Step, Supports};
+use super::{Descriptor, EnergyChange, GridStep, PressureField, Remedy, Setup, Step, Supports};
 use super::Check;
 use crate::config_error::ConfigError;
 use serde::{Deserialize, Serialize};
@@ -96,6 +96,13 @@ impl Remedy for CellDilatation {
 
     fn after_grid_update(&mut self, g: &mut GridStep) -> EnergyChange {
         self.uncarried.book(g)
+    }
+
+    fn pressure_field(&self) -> Option<PressureField<'_>> {
+        Some(PressureField::CellJ {
+            volume: &self.cell_volume,
+            volume0: &self.cell_volume0,
+        })
     }
 }
 

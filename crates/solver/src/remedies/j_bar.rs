@@ -17,7 +17,7 @@
 //! update that uses it).
 
 use super::averaging::{averaged, set_j_booked, Averager, Uncarried};
-use super::{Descriptor, EnergyChange, GridStep, Remedy, Setup, Step, Supports};
+use super::{Descriptor, EnergyChange, GridStep, PressureField, Remedy, Setup, Step, Supports};
 use crate::choices::JBarFit;
 use super::Check;
 use crate::config_error::ConfigError;
@@ -152,6 +152,10 @@ impl Remedy for JBar {
 
     fn after_grid_update(&mut self, g: &mut GridStep) -> EnergyChange {
         self.uncarried.book(g)
+    }
+
+    fn pressure_field(&self) -> Option<PressureField<'_>> {
+        Some(PressureField::NodalJ(&self.averager))
     }
 }
 

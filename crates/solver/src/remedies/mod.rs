@@ -11,6 +11,8 @@
 
 mod averaging;
 mod registry;
+
+pub use averaging::Averager;
 mod stress_work;
 
 pub use registry::Descriptor;
@@ -53,6 +55,37 @@ impl EnergyChange {
     pub fn total(&self) -> f64 {
         self.kinetic + self.stored + self.gravitational + self.work
     }
+}
+
+/// One remedy's energy change in the last step, with the parts of it that
+/// another term of the budget already holds (the monitor books the rest).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RemedyEnergy {
+    pub key: &'static str,
+    pub change: EnergyChange,
+    /// The kinetic change of its after-G2P hooks: the transfer loss (FLIP's
+    /// exact update against the particles' velocities) sees it too.
+    pub after_g2p_kinetic: f64,
+    /// The work of its point rule's extra stress: the stress stage adds it
+    /// to `Energy::dissipated` too.
+    pub point_work: f64,
+}
+
+/// A field a remedy builds the particles' pressure from, for the
+/// checkerboard measures (docs/physics.md section 4).
+#[derive(Clone, Copy)]
+pub enum PressureField<'a> {
+    /// Per padded node, the J the particles read their J back from (J-bar).
+    NodalJ(&'a Averager),
+    /// Per padded node, the pressure the particles read back (pressure
+    /// smoothing).
+    NodalPressure(&'a Averager),
+    /// Per cell of the box (`i + j * cells[0]`), the J every particle of
+    /// the cell takes (cell dilatation): total V and total V0.
+    CellJ {
+        volume: &'a [f64],
+        volume0: &'a [f64],
+    },
 }
 
 impl std::ops::AddAssign for EnergyChange {
@@ -188,6 +221,11 @@ pub trait Remedy: Send + Sync + RemedyClone {
     fn point_work(&self, _dissipated: f64) -> EnergyChange {
         EnergyChange::default()
     }
+    /// The field it builds the particles' pressure from, if it has one
+    /// (as of the last step).
+    fn pressure_field(&self) -> Option<PressureField<'_>> {
+        None
+    }
 }
 
 /// The most point rules one method may have: the stress stage sums each
@@ -235,7 +273,7 @@ impl Clone for Box<dyn Remedy> {
 #[derive(Clone, Default)]
 pub struct Remedies {
     pub(crate) list: Vec<Box<dyn Remedy>>,
-    pub(crate) energy: Vec<EnergyChange>,
+    pub(crate) energy: Vec<RemedyEnergy>,
     /// The point rules, gathered once, and the remedy each belongs to.
     pub(crate) points: Vec<Arc<dyn PointRule>>,
     point_owner: Vec<usize>,
@@ -254,7 +292,13 @@ impl Remedies {
             "more point rules than the stress stage books apart"
         );
         Remedies {
-            energy: vec![EnergyChange::default(); list.len()],
+            energy: list
+                .iter()
+                .map(|r| RemedyEnergy {
+                    key: r.key(),
+                    ..RemedyEnergy::default()
+                })
+                .collect(),
             list,
             points,
             point_owner,
@@ -266,7 +310,12 @@ impl Remedies {
     }
 
     pub(crate) fn begin_step(&mut self) {
-        self.energy.fill(EnergyChange::default());
+        for e in &mut self.energy {
+            *e = RemedyEnergy {
+                key: e.key,
+                ..RemedyEnergy::default()
+            };
+        }
     }
 
     pub(crate) fn fit_particles(&mut self, n: usize) {
@@ -277,15 +326,25 @@ impl Remedies {
 
     /// Each remedy's key and the energy it changed in the last step.
     pub fn energy(&self) -> impl Iterator<Item = (&'static str, EnergyChange)> + '_ {
+        self.energy.iter().map(|e| (e.key, e.change))
+    }
+
+    /// Each remedy's energy change in the last step, with the parts other
+    /// budget terms hold, in registry order.
+    pub fn energy_parts(&self) -> &[RemedyEnergy] {
+        &self.energy
+    }
+
+    /// Each remedy's pressure field, where it has one.
+    pub fn pressure_fields(&self) -> impl Iterator<Item = (&'static str, PressureField<'_>)> + '_ {
         self.list
             .iter()
-            .map(|r| r.key())
-            .zip(self.energy.iter().copied())
+            .filter_map(|r| Some((r.key(), r.pressure_field()?)))
     }
 
     pub(crate) fn after_grid_update(&mut self, g: &mut GridStep) {
         for (r, e) in self.list.iter_mut().zip(&mut self.energy) {
-            *e += r.after_grid_update(g);
+            e.change += r.after_grid_update(g);
         }
     }
 
@@ -299,20 +358,25 @@ impl Remedies {
 
     pub(crate) fn after_g2p(&mut self, s: &mut Step) {
         for (r, e) in self.list.iter_mut().zip(&mut self.energy) {
-            *e += r.after_g2p(s);
+            let change = r.after_g2p(s);
+            e.after_g2p_kinetic += change.kinetic;
+            e.change += change;
         }
     }
 
     pub(crate) fn before_stress(&mut self, s: &mut Step) {
         for (r, e) in self.list.iter_mut().zip(&mut self.energy) {
-            *e += r.before_stress(s);
+            e.change += r.before_stress(s);
         }
     }
 
     /// Each point rule's share of the stress stage's dissipated work.
     pub(crate) fn book_point_work(&mut self, work: &[f64]) {
         for (&owner, w) in self.point_owner.iter().zip(work) {
-            self.energy[owner] += self.list[owner].point_work(*w);
+            let change = self.list[owner].point_work(*w);
+            let e = &mut self.energy[owner];
+            e.point_work += change.total();
+            e.change += change;
         }
     }
 
@@ -322,14 +386,14 @@ impl Remedies {
         let mut j_changed = false;
         for (r, e) in self.list.iter_mut().zip(&mut self.energy) {
             let (change, changed) = r.after_stress(s);
-            *e += change;
+            e.change += change;
             j_changed |= changed;
         }
         if j_changed {
             reevaluate_eos(s.particles, s.materials);
         }
         for (r, e) in self.list.iter_mut().zip(&mut self.energy) {
-            *e += r.after_pressure(s);
+            e.change += r.after_pressure(s);
         }
     }
 }

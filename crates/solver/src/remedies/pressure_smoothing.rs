@@ -7,7 +7,7 @@
 
 use super::averaging::{averaged, Averager};
 use super::stress_work::StressWork;
-use super::{Descriptor, EnergyChange, GridStep, Remedy, Setup, Step, Supports};
+use super::{Descriptor, EnergyChange, GridStep, PressureField, Remedy, Setup, Step, Supports};
 use crate::choices::JBarFit;
 use crate::particles::Mat2;
 use serde::{Deserialize, Serialize};
@@ -87,5 +87,9 @@ impl Remedy for PressureSmoothing {
             work: self.work.book(g),
             ..EnergyChange::default()
         }
+    }
+
+    fn pressure_field(&self) -> Option<PressureField<'_>> {
+        Some(PressureField::NodalPressure(&self.averager))
     }
 }
