@@ -440,8 +440,8 @@ fn filter_stone_locks_without_anti_locking_and_not_with_it() {
     let fluid = |s: &Summary| s.phases[1].metrics.clone();
     assert_eq!(locked.metrics.n_kicks, 0, "{:?}", locked.events);
     assert_eq!(anti.metrics.n_kicks, 0, "{:?}", anti.events);
-    assert!(fluid(&locked).figure("checkerboard_late").unwrap() > 0.2);
-    assert!(fluid(&anti).figure("checkerboard_late").unwrap() < 0.05);
+    assert!(fluid(&locked).figure("checkerboard_means_late").unwrap() > 0.2);
+    assert!(fluid(&anti).figure("checkerboard_means_late").unwrap() < 0.05);
     let (h_locked, h_anti) = (
         fluid(&locked).figure("hydro_rel_rms_late").unwrap(),
         fluid(&anti).figure("hydro_rel_rms_late").unwrap(),
