@@ -19,6 +19,8 @@ use monitor::{Monitor, MonitorConfig};
 use solver::remedies::{cell_dilatation, j_bar, pressure_smoothing, volume_relaxation};
 use solver::*;
 
+mod common;
+
 const H: f64 = 0.01;
 const J0: f64 = 0.98;
 const EPS: f64 = 1e-3;
@@ -49,23 +51,7 @@ fn method(set: impl FnOnce(&mut Method)) -> Method {
 
 /// A 0.24 m box full of water at J0 with the mode planted, stepped once.
 fn planted(mode: Mode, method: Method) -> Solver {
-    let material = Material::tait(K);
-    let mut scene = Scene {
-        size: [0.24, 0.24],
-        cell: H,
-        ppc: 2,
-        gravity: 0.0,
-        materials: vec![material],
-        ..Scene::default()
-    };
-    scene.bodies = vec![Body {
-        rect: [0.0, 0.0, 0.24, 0.24],
-        material: String::new(),
-        velocity: [0.0, 0.0],
-        fraction: 1.0,
-        phase: None,
-        flow: None,
-    }];
+    let scene = common::water_box([0.24, 0.24], [0.0, 0.0, 0.24, 0.24], Material::tait(K), 0.0);
     let mut ps = solver::scene::seed(&scene);
     for p in 0..ps.len() {
         let x = ps.x[p] / H;
@@ -214,23 +200,13 @@ fn a_hydrostatic_layer_reads_below_a_hundredth_on_every_measure() {
         ),
     ];
     for (name, method) in methods {
-        let mut scene = Scene {
-            size: [0.2, 0.2],
-            cell: H,
-            ppc: 2,
-            gravity: 9.81,
-            initial: InitialState::Hydrostatic,
-            materials: vec![Material::tait(1.5e5)],
-            ..Scene::default()
-        };
-        scene.bodies = vec![Body {
-            rect: [0.0, 0.0, 0.2, 0.15],
-            material: String::new(),
-            velocity: [0.0, 0.0],
-            fraction: 1.0,
-            phase: None,
-            flow: None,
-        }];
+        let mut scene = common::water_box(
+            [0.2, 0.2],
+            [0.0, 0.0, 0.2, 0.15],
+            Material::tait(1.5e5),
+            9.81,
+        );
+        scene.initial = InitialState::Hydrostatic;
         // The seeding's exact hydrostatic J (no relaxation), one step of
         // 1 microsecond.
         let particles = solver::scene::seed(&scene);

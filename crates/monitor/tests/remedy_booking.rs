@@ -10,6 +10,8 @@ use solver::remedies::{
 };
 use solver::*;
 
+mod common;
+
 /// The modern baseline: quadratic B-splines, APIC, USL, dynamic dt.
 fn modern() -> Method {
     Method {
@@ -29,23 +31,8 @@ fn slot(key: &str) -> usize {
 /// gravity, its particles packed `squeeze` times closer than their V0 says
 /// (so the grid sees it denser than rho0), run for 0.05 s.
 fn crowded_block(squeeze: f64, method: Method) -> Monitor {
-    let mut scene = Scene {
-        size: [0.3, 0.3],
-        cell: 0.01,
-        ppc: 2,
-        gravity: 0.0,
-        t_end: 0.05,
-        materials: vec![Material::tait(2e4)],
-        ..Scene::default()
-    };
-    scene.bodies = vec![Body {
-        rect: [0.1, 0.1, 0.2, 0.2],
-        material: String::new(),
-        velocity: [0.0, 0.0],
-        fraction: 1.0,
-        phase: None,
-        flow: None,
-    }];
+    let mut scene = common::water_box([0.3, 0.3], [0.1, 0.1, 0.2, 0.2], Material::tait(2e4), 0.0);
+    scene.t_end = 0.05;
     let mut ps = solver::scene::seed(&scene);
     let centre = Vec2::new(0.15, 0.15);
     for x in ps.x.iter_mut() {

@@ -9,6 +9,27 @@ pub fn method(shape: ShapeKind, transfer: TransferKind) -> Method {
     m
 }
 
+/// A box of `size` (h = 1 cm, 2 x 2 per cell, zero stress) holding one
+/// body of `material` over `rect`.
+pub fn water_box(size: [f64; 2], rect: [f64; 4], material: Material, gravity: f64) -> Scene {
+    Scene {
+        size,
+        cell: 0.01,
+        ppc: 2,
+        gravity,
+        materials: vec![material],
+        bodies: vec![Body {
+            rect,
+            material: String::new(),
+            velocity: [0.0, 0.0],
+            fraction: 1.0,
+            phase: None,
+            flow: None,
+        }],
+        ..Scene::default()
+    }
+}
+
 pub fn tait(k: f64, viscosity: f64) -> Material {
     let mut m = Material::tait(k);
     m.viscosity = viscosity;
