@@ -249,8 +249,15 @@ def print_methods(fits, tank, excess, nu):
         e = sorted(excess.get(m, []))
         med = e[len(e) // 2] if e else None
         n, judged = f["nu_num"], damper_verdict(f["nu_num"], f.get("uncertainty"), nu)
+        fine_fit = fits.get((m, 0.005, K_REF), {})
+        fine_judged = damper_verdict(fine_fit.get("nu_num"), fine_fit.get("uncertainty"), nu)
         if n is None:
             verdict = "swings back: no decay rate" if mode1 else "-"
+        elif judged != "no" and judged.startswith("undecided") and fine_judged:
+            # The finer cell decides where h = 1 cm cannot (the issue's
+            # accuracy rule is at h = 0.5 cm).
+            verdict = (f"{judged}; at h = 0.5 cm: {fine_judged} "
+                       f"({fine_fit['nu_num'] / nu:.3f} ± {fine_fit['uncertainty'] / nu:.3f} nu)")
         elif judged != "no":
             verdict = judged
         elif fine.get("decay_ratio") is None:
