@@ -14,6 +14,9 @@ and prints markdown:
   same case with every `method.<remedy>` key removed), their ratio, the
   energy the remedies removed and added, and whether the booked closure
   is within FACTOR (1.5) times the remedy-free method's;
+- the three checkerboards of each case, late (the last simulated second)
+  and peak: the cell means of particle pressure (the old index) beside
+  the nodal and cell measures;
 - the events of each case whose cause is `injection`, with their kind
   (`energy_injection`: budget only, no flagged particle) and time.
 
@@ -22,6 +25,7 @@ otherwise its row says so. Standard library only.
 """
 import argparse
 import json
+import re
 from pathlib import Path
 
 # solver::remedies::REMEDY_KEYS.
@@ -41,8 +45,10 @@ def is_remedy(key):
 
 
 def scene_of(p):
-    if p.get("scene.initial") == "hydrostatic":
-        return "quiescent column"
+    box = p.get("scene.box")
+    if box and box[0] < 0.5:
+        at_rest = p.get("scene.initial") == "hydrostatic"
+        return "column at rest" if at_rest else "column from zero stress"
     return "dam break"
 
 
@@ -58,12 +64,10 @@ def method_of(p, without_remedies=False):
                         and not (without_remedies and is_remedy(k))))
 
 
-def label(p):
-    keys = [k for k in p if k.startswith("method.") and is_remedy(k)]
-    base = {k: p[k] for k in ("method.transfer", "method.shape", "method.force", "method.j_update",
-                              "method.xpic_order", "scene.ppc") if k in p}
-    remedies = sorted({k.split(".")[1] for k in keys})
-    return (" + ".join(remedies) or "none") + " on " + ", ".join(f"{k.split('.')[-1]}={v}" for k, v in base.items())
+def label(s):
+    """The method part of the case name (after the viscosity), else the case."""
+    m = re.search(r"_mu[0-9.]+_(.*)$", s["case"])
+    return m.group(1) if m else s["case"]
 
 
 def fmt(x, spec=".3g"):
@@ -88,7 +92,7 @@ def main():
         ref = base and base["metrics"]["figures"].get("budget_closure_max")
         ratio = closure / ref if closure is not None and ref else None
         rows.append((scene_of(p), p.get("materials.water.K"), p.get("materials.water.viscosity"),
-                     label(p), s, closure, unbooked, ref, ratio, f))
+                     label(s), s, closure, unbooked, ref, ratio, f))
     rows.sort(key=lambda r: (r[0], r[1] or 0, r[2] or 0, r[3]))
     print(f"| scene | K (Pa) | mu (Pa s) | method | status | closure, booked (J/m) | unbooked | "
           f"remedy-free method's | ratio | within {a.factor} | remedies removed | remedies added |")
@@ -98,6 +102,14 @@ def main():
         print(f"| {scene} | {fmt(k)} | {fmt(mu)} | {name} | {s['status']} | {fmt(closure)} | {fmt(unbooked)} "
               f"| {fmt(ref)} | {fmt(ratio, '.2f')} | {within} | {fmt(f.get('remedy_dissipated_total'))} "
               f"| {fmt(f.get('remedy_injected_total'))} |")
+    print("\n### Checkerboards: the cell means (old index) beside the nodal and cell measures\n")
+    print("| scene | K (Pa) | mu (Pa s) | method | cell means, late | nodal, late | cell, late "
+          "| cell means, peak | nodal, peak | cell, peak |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for scene, k, mu, name, s, *_rest in rows:
+        f = s["metrics"].get("figures", {})
+        cols = [f.get(f"checkerboard_{m}_{w}") for w in ("late", "peak") for m in ("means", "nodal", "cell")]
+        print(f"| {scene} | {fmt(k)} | {fmt(mu)} | {name} | " + " | ".join(fmt(c) for c in cols) + " |")
     print("\n### Injection events\n")
     print("| case | events with cause injection | of them energy_injection (budget only) | times (s) |")
     print("|---|---|---|---|")
@@ -106,7 +118,7 @@ def main():
         if not inj:
             continue
         budget = [e for e in inj if e.get("kind") == "energy_injection"]
-        times = ", ".join(f"{e.get('t_first', e.get('time', 0)):.3f}" for e in inj[:12])
+        times = ", ".join(f"{e['t']:.3f}" for e in inj[:12])
         print(f"| {s['case']} | {len(inj)} | {len(budget)} | {times}{' ...' if len(inj) > 12 else ''} |")
 
 
