@@ -62,9 +62,10 @@ fn pressure_of(m: &Material, j: f64) -> f64 {
 }
 
 impl FieldCheckerboard {
-    /// The nodal measure: the last nodal field of a remedy (registry order:
-    /// pressure smoothing acts after J-bar), else the particle projection.
-    pub fn nodal(&mut self, v: &StateView, scale: f64) -> Option<f64> {
+    /// The nodal measure over the nodes of a box of `cells`: the last nodal
+    /// field of a remedy (registry order: pressure smoothing acts after
+    /// J-bar), else the particle projection.
+    pub fn nodal(&mut self, v: &StateView, cells: [usize; 2], scale: f64) -> Option<f64> {
         let g = &v.grid;
         let full = FULL_NODE_SHARE * v.materials[0].rho0 * g.h * g.h;
         let nodal = v
@@ -74,10 +75,6 @@ impl FieldCheckerboard {
             .last()
             .map(|(_, f)| f);
         // Nodes of the box only (walls included): ghosts hold mirror data.
-        let cells = [
-            (v.scene.size[0] / g.h).round() as usize,
-            (v.scene.size[1] / g.h).round() as usize,
-        ];
         let nx = g.dims[0];
         let at = |i: usize, j: usize| (i + PAD) + (j + PAD) * nx;
         let dims = [cells[0] + 1, cells[1] + 1];
@@ -102,18 +99,17 @@ impl FieldCheckerboard {
         amplitude.map(|a| a / scale)
     }
 
-    /// The cell measure, for a method that carries a cell pressure.
-    pub fn cell(&self, v: &StateView, scale: f64) -> Option<f64> {
+    /// The cell measure over a box of `cells`, for a method that carries a
+    /// cell pressure.
+    pub fn cell(&self, v: &StateView, cells: [usize; 2], scale: f64) -> Option<f64> {
         let (volume, volume0) = v.remedies.pressure_fields().find_map(|(_, f)| match f {
             PressureField::CellJ { volume, volume0 } => Some((volume, volume0)),
             _ => None,
         })?;
         let h = v.grid.h;
-        let nx = (v.scene.size[0] / h).round() as usize;
-        let ny = volume0.len() / nx.max(1);
         let filled = CELL_FILLED_SHARE * h * h;
-        alternating_amplitude([nx, ny], |i, j| {
-            let c = i + j * nx;
+        alternating_amplitude(cells, |i, j| {
+            let c = i + j * cells[0];
             (volume0[c] >= filled).then(|| pressure_of(&v.materials[0], volume[c] / volume0[c]))
         })
         .map(|a| a / scale)

@@ -1162,13 +1162,12 @@ impl Monitor {
 
     /// Checkerboard, hydrostatic departure and surge front of the current state.
     pub fn field_metrics(&mut self, v: &StateView) -> FieldMetrics {
+        let scale = v.materials[0].rho0 * self.g_ref() * v.grid.h;
         let geom = &self.geom;
         self.field.accumulate(geom, v.x, v.pressure);
         let checkerboard_means = checkerboard::index(geom, &self.field);
-        let scale = v.materials[0].rho0 * self.g_ref() * v.grid.h;
-        let checkerboard_nodal = self.field_checkerboard.nodal(v, scale);
-        let checkerboard_cell = self.field_checkerboard.cell(v, scale);
-        let geom = &self.geom;
+        let checkerboard_nodal = self.field_checkerboard.nodal(v, geom.cells, scale);
+        let checkerboard_cell = self.field_checkerboard.cell(v, geom.cells, scale);
         let pressure_spread = checkerboard::intra_cell_spread(geom, &self.field, v.x, v.pressure);
         self.hydro.compute(geom, v.x, v.mass, v.accel);
         let dep = self.hydro.departure(geom, v.volume, v.pressure);
