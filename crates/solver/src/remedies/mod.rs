@@ -11,10 +11,9 @@
 
 mod averaging;
 mod registry;
-
-pub use averaging::Averager;
 mod stress_work;
 
+pub use averaging::Averager;
 pub use registry::Descriptor;
 
 use crate::choices::{ShapeKind, TransferKind};
