@@ -889,6 +889,14 @@ fn plain_part(key: &str, v: &Value) -> String {
             .collect::<Vec<_>>()
             .join("-"),
         ("gamma", _) => format!("g{}", as_f64(v)),
+        // A list of numbers (a box's size): `box0.8x0.6`, no brackets or
+        // spaces in a folder name.
+        (_, Value::Array(xs))
+            if !xs.is_empty() && xs.iter().all(|x| x.is_float() || x.is_integer()) =>
+        {
+            let parts: Vec<String> = xs.iter().map(|x| as_f64(x).to_string()).collect();
+            format!("{last}{}", parts.join("x"))
+        }
         (_, other) => format!("{last}{other}"),
     }
 }
@@ -1054,6 +1062,7 @@ mod tests {
             "noslip-floor"
         );
         assert_eq!(name_part("method", &toml("{ f_reset = true }")), "f_reset");
+        assert_eq!(name_part("scene.box", &toml("[0.8, 0.6]")), "box0.8x0.6");
     }
 
     #[test]
