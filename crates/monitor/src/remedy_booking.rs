@@ -22,7 +22,7 @@ pub struct Booked {
     pub injected: f64,
 }
 
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct RemedyBooking {
     /// Per registry slot; None for a remedy the method does not have.
     pub booked: [Option<Booked>; REMEDIES],
@@ -32,16 +32,6 @@ pub struct RemedyBooking {
     /// Signed sum of the point rules' work changes (in the dissipation with
     /// the opposite sign).
     point_work: f64,
-}
-
-impl Default for RemedyBooking {
-    fn default() -> Self {
-        RemedyBooking {
-            booked: [None; REMEDIES],
-            after_g2p_kinetic: 0.0,
-            point_work: 0.0,
-        }
-    }
 }
 
 impl RemedyBooking {
