@@ -47,6 +47,8 @@ pub struct StepReport {
     pub t: f64,
     pub dt: f64,
     pub e_kin: f64,
+    /// Kinetic energy of the APIC affine velocity (B-splines; else 0).
+    pub e_affine: f64,
     pub e_grav: f64,
     pub e_int: f64,
     pub d_visc: f64,
@@ -58,10 +60,12 @@ pub struct StepReport {
     pub injection_floor: f64,
     /// Transfer loss accumulated since t = 0: sum over steps and particles of
     /// 1/2 m (|v_prev + dt a_p|^2 - |v|^2), the kinetic energy the transfer
-    /// took from FLIP's exact update (PIC and APIC dissipate there), less
+    /// took from FLIP's exact update (PIC dissipates there); under B-spline
+    /// APIC the grid's measure, (E_kin + E_affine before P2G - the grid's
+    /// after it) + (the updated grid's - E_kin + E_affine after G2P). Less
     /// what the remedies' after-G2P hooks (the FLIP/PIC blend) took, which
     /// is booked to them. It is added to the total in every injection test,
-    /// except under APIC.
+    /// except under APIC with linear or uGIMP shapes.
     pub transfer_loss: f64,
     /// Every remedy's removals since t = 0 (its dissipation), and its
     /// additions (its injection, left visible to the injection test).
@@ -93,7 +97,8 @@ pub struct StepReport {
     /// Largest nodal advective number |v_i| dt / h over the active nodes (with
     /// linear shapes a particle can cross a free-slip wall only above 1).
     pub node_advection: f64,
-    /// Particle minus grid kinetic energy after P2G (FLIP ringing).
+    /// Particle minus grid kinetic energy after P2G (FLIP ringing; under
+    /// B-spline APIC, with the affine part, P2G's loss, never negative).
     pub ringing_energy: f64,
     pub n_outside: usize,
     pub n_nonfinite: usize,
@@ -116,6 +121,7 @@ impl StepReport {
             t: v.time,
             dt: v.dt,
             e_kin: v.energy.kinetic,
+            e_affine: v.energy.affine,
             e_grav: v.energy.gravitational,
             e_int: v.energy.stored,
             d_visc: v.energy.dissipated,
@@ -518,14 +524,27 @@ impl Monitor {
             0.0
         };
         self.flagged.retain(|c| !c.rules.is_empty());
-        if scan.transfer_loss.is_finite() {
-            self.transfer_loss += scan.transfer_loss;
+        // B-spline APIC: both transfers are projections once the affine
+        // velocity's energy is counted, so the loss is measured on the grid
+        // (particles before P2G minus the grid after it, the updated grid
+        // minus the particles after G2P), each part >= 0 away from walls.
+        let step_loss = match v.affine_inertia {
+            Some(_) => {
+                (v.ke_particles_p2g - v.ke_grid_p2g)
+                    + (v.ke_grid_updated - v.energy.kinetic_with_affine())
+            }
+            None => scan.transfer_loss,
+        };
+        if step_loss.is_finite() {
+            self.transfer_loss += step_loss;
         }
         // The transfer's dissipation must not hide a gain elsewhere. Under
-        // APIC the particle kinetic energy leaves out the affine velocity's,
-        // so energy moved into C would count as lost (a floor impact then
-        // reads as an injection): logged, not added.
-        let loss_counted = v.transfer != solver::TransferKind::Apic;
+        // APIC with linear or uGIMP shapes C is not a least-squares fit (its
+        // G2P can add energy) and D varies with the position: there the
+        // particles' kinetic energy leaves out the affine velocity's, energy
+        // moved into C would count as lost (a floor impact then reads as an
+        // injection), and the loss is logged, not added.
+        let loss_counted = v.transfer != solver::TransferKind::Apic || v.affine_inertia.is_some();
         let loss = if loss_counted {
             self.transfer_loss
         } else {
@@ -563,8 +582,10 @@ impl Monitor {
             self.stopped(v);
         }
         let e = &v.energy;
-        let energy_scale =
-            e.kinetic.abs() + e.gravitational.abs() + e.stored.abs() + e.dissipated.abs();
+        let energy_scale = e.kinetic_with_affine().abs()
+            + e.gravitational.abs()
+            + e.stored.abs()
+            + e.dissipated.abs();
         self.track_injected_energy(v, g, injection.total, scan.max_vertical_speed, energy_scale);
         let undefined = |x: f64| if budget_defined { x } else { f64::NAN };
         self.report = StepReport {

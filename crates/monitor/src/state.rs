@@ -8,7 +8,9 @@ use crate::Monitor;
 use bincode::Options;
 use solver::checkpoint::{unseal, CheckpointError, Reader, Writer};
 
-const MAGIC: &[u8; 8] = b"KICKMON8";
+// 9: B-spline APIC's transfer loss is measured on the grid and added (an
+// older checkpoint's sum is the particle measure, which was not).
+const MAGIC: &[u8; 8] = b"KICKMON9";
 
 /// The events' encoding: bincode (little-endian, varint integers, f64 bits as
 /// they are) through `Event`'s serde derive, so the checkpoint and the summary

@@ -1,11 +1,16 @@
-//! Energy accounting: kinetic, gravitational, stored (sum V0 U(J)) and the
-//! accumulated viscous dissipation.
+//! Energy accounting: kinetic (with APIC's affine part), gravitational,
+//! stored (sum V0 U(J)) and the accumulated viscous dissipation.
 
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Energy {
     pub kinetic: f64,
+    /// Kinetic energy of the APIC affine velocity, sum 1/2 m tr(C D C^T):
+    /// what the particles deposit on the grid beyond 1/2 m |v|^2. Counted
+    /// where D is constant (B-splines); 0 for every other transfer and shape.
+    #[serde(default)]
+    pub affine: f64,
     /// sum m g (y - y_floor).
     pub gravitational: f64,
     pub stored: f64,
@@ -14,9 +19,14 @@ pub struct Energy {
 }
 
 impl Energy {
-    /// Conserved total (kinetic + gravitational + stored + dissipated).
+    /// Conserved total (kinetic + affine + gravitational + stored + dissipated).
     pub fn total(&self) -> f64 {
-        self.kinetic + self.gravitational + self.stored + self.dissipated
+        self.kinetic + self.affine + self.gravitational + self.stored + self.dissipated
+    }
+
+    /// Particle kinetic energy with the affine part.
+    pub fn kinetic_with_affine(&self) -> f64 {
+        self.kinetic + self.affine
     }
 }
 

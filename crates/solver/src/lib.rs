@@ -19,6 +19,7 @@ pub mod deletion;
 pub mod energy;
 pub mod eos;
 pub mod flows;
+pub mod forensics;
 pub mod grid;
 mod init_hydrostatic;
 pub mod material;
@@ -131,6 +132,7 @@ pub struct Solver {
     signal_speed: f64,
     ke_particles_p2g: f64,
     ke_grid_p2g: f64,
+    ke_grid_updated: f64,
     times: StageTimes,
     grid_mass_p2g: f64,
     n_outside: usize,
@@ -212,6 +214,7 @@ impl Solver {
             ke_particles_p2g: 0.0,
             times: StageTimes::default(),
             ke_grid_p2g: 0.0,
+            ke_grid_updated: 0.0,
             grid_mass_p2g: 0.0,
             n_outside: 0,
             n_nonfinite: 0,
@@ -361,7 +364,7 @@ impl Solver {
         self.courant = self.signal_speed * dt / self.cfg.scene.cell;
         let ps = &mut self.particles;
         par::keep_warm(|| ps.v_prev.copy_from_slice(&ps.v));
-        self.ke_particles_p2g = self.energy.kinetic;
+        self.ke_particles_p2g = self.energy.kinetic_with_affine();
         self.remedies.begin_step();
         timing::lap(&mut self.times.other, &mut clock);
         stages::sort::sort(
@@ -380,6 +383,8 @@ impl Solver {
     /// stress under USL and MUSL), the clock, deletions and the measures.
     pub(crate) fn finish_step(&mut self) {
         let mut clock = std::time::Instant::now();
+        // What G2P reads: after the hooks and a mixture's coupling.
+        self.ke_grid_updated = stages::grid_update::updated_kinetic(&self.grid);
         stages::scheme::from_grid(self, &mut clock);
         self.step += 1;
         self.time += self.dt;
@@ -555,6 +560,7 @@ impl Solver {
     /// wall (keeping its J): what leaves is counted as drained, with its
     /// kinetic and stored energy.
     pub(crate) fn drain_particle(&mut self, p: usize, mass: f64, vol0: f64) {
+        let affine_inertia = self.affine_inertia();
         let ps = &mut self.particles;
         let j = if ps.vol0[p] > 0.0 {
             ps.vol[p] / ps.vol0[p]
@@ -568,6 +574,9 @@ impl Solver {
         };
         let given = ps.mass[p] - mass;
         self.energy.kinetic -= 0.5 * given * ps.v[p].norm_squared();
+        if let Some(d) = affine_inertia {
+            self.energy.affine -= 0.5 * given * d * ps.affine[p].norm_squared();
+        }
         self.energy.stored -= (1.0 - ratio) * ps.stored_energy[p];
         ps.stored_energy[p] *= ratio;
         self.losses.mass_drained += given;
@@ -620,17 +629,31 @@ impl Solver {
             hi: lo + Vec2::from(s.size),
             periodic: s.periodic,
         };
+        let affine_inertia = self.affine_inertia();
         let m = measure::measure(
             &self.particles,
             s.gravity,
             &bounds,
             self.dissipated,
+            affine_inertia,
             &mut self.measure_partials,
         );
         self.energy = m.energy;
         self.n_outside = m.n_outside;
         self.n_nonfinite = m.n_nonfinite;
         self.signal_speed = m.signal_speed;
+    }
+
+    /// APIC's D = d I (m^2) where it is constant (B-splines: h^2/4 quadratic,
+    /// h^2/3 cubic): the affine velocity's kinetic energy is then
+    /// 1/2 m d |C|^2, and both transfers are projections that cannot add
+    /// energy (docs/physics.md section 4). None for every other transfer.
+    pub fn affine_inertia(&self) -> Option<f64> {
+        if self.cfg.method.transfer != TransferKind::Apic {
+            return None;
+        }
+        let h = self.cfg.scene.cell;
+        self.shape.apic_inverse_inertia().map(|inv| h * h / inv)
     }
 
     /// Recomputes the signal speed after velocities were changed outside a step.

@@ -10,6 +10,7 @@ use crate::particles::{Particles, Vec2};
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Partial {
     kinetic: f64,
+    affine: f64,
     gravitational: f64,
     stored: f64,
     outside: usize,
@@ -31,11 +32,13 @@ pub struct Bounds {
     pub periodic: [bool; 2],
 }
 
+/// `affine_inertia`: APIC's D (m^2, D = d I) where it is constant, else None.
 pub fn measure(
     particles: &Particles,
     gravity: f64,
     bounds: &Bounds,
     dissipated: f64,
+    affine_inertia: Option<f64>,
     partials: &mut [Partial],
 ) -> Measured {
     let ps = particles;
@@ -44,6 +47,9 @@ pub fn measure(
     let item = |acc: &mut Partial, p: usize| {
         let (m, x, v) = (ps.mass[p], ps.x[p], ps.v[p]);
         acc.kinetic += 0.5 * m * v.norm_squared();
+        if let Some(d) = affine_inertia {
+            acc.affine += 0.5 * m * d * ps.affine[p].norm_squared();
+        }
         acc.gravitational += m * gravity * (x.y - floor);
         acc.stored += ps.stored_energy[p];
         let finite = x.iter().chain(v.iter()).all(|c| c.is_finite())
@@ -56,6 +62,7 @@ pub fn measure(
     };
     let combine = |total: &mut Partial, part: &Partial| {
         total.kinetic += part.kinetic;
+        total.affine += part.affine;
         total.gravitational += part.gravitational;
         total.stored += part.stored;
         total.outside += part.outside;
@@ -70,6 +77,7 @@ pub fn measure(
     Measured {
         energy: Energy {
             kinetic: total.kinetic,
+            affine: total.affine,
             gravitational: total.gravitational,
             stored: total.stored,
             dissipated,

@@ -35,8 +35,8 @@ pub struct StateView<'a> {
     pub materials: &'a [Material],
     /// The shape family (its critical Courant number judges time-step instability).
     pub shape: ShapeKind,
-    /// The transfer: under APIC the particles' kinetic energy leaves out the
-    /// affine velocity's, so the monitor does not add APIC's transfer loss.
+    /// The transfer (the monitor measures APIC's transfer loss on the grid
+    /// where `affine_inertia` is known, and does not add it elsewhere).
     pub transfer: TransferKind,
     /// How J follows F: under `Det`, J is det F bit for bit; under `Exp` they differ.
     pub j_update: JUpdate,
@@ -65,10 +65,17 @@ pub struct StateView<'a> {
     pub id: &'a [u32],
     pub grid: GridView<'a>,
     pub energy: Energy,
-    /// Particle kinetic energy at P2G of the last step.
+    /// Particle kinetic energy at P2G of the last step (with the affine part
+    /// where `affine_inertia` is known).
     pub ke_particles_p2g: f64,
     /// Grid kinetic energy right after P2G of the last step (real mass only).
     pub ke_grid_p2g: f64,
+    /// Grid kinetic energy of v^{n+1} as G2P read it (real mass only).
+    pub ke_grid_updated: f64,
+    /// APIC's D = d I where constant (B-splines; see `Solver::affine_inertia`):
+    /// the affine kinetic energy is in `energy.affine`, and the transfer
+    /// loss is measured on the grid (docs/physics.md section 4).
+    pub affine_inertia: Option<f64>,
     /// Total P2G nodal mass of the last step (ghost nodes included, before folding).
     pub grid_mass_p2g: f64,
     /// Effective Courant number max(c_p + |v_p|) dt / h at the start of the last step.
@@ -128,6 +135,8 @@ pub fn make(s: &Solver) -> StateView<'_> {
         energy: s.energy,
         ke_particles_p2g: s.ke_particles_p2g,
         ke_grid_p2g: s.ke_grid_p2g,
+        ke_grid_updated: s.ke_grid_updated,
+        affine_inertia: s.affine_inertia(),
         grid_mass_p2g: s.grid_mass_p2g,
         courant: s.courant,
         n_outside: s.n_outside,

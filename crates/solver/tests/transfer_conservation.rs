@@ -70,6 +70,42 @@ fn periodic_momentum_is_conserved_to_round_off() {
     }
 }
 
+/// With the affine velocity's energy counted, B-spline APIC's P2G and G2P
+/// are projections: neither adds kinetic energy (docs/physics.md section 4).
+#[test]
+fn apic_transfers_never_add_energy_once_the_affine_part_is_counted() {
+    for shape in [ShapeKind::Bspline2, ShapeKind::Bspline3] {
+        for scheme in common::SCHEMES {
+            let mut s = periodic_swirl(shape, TransferKind::Apic, scheme);
+            assert!(s.affine_inertia().is_some());
+            let (mut p2g_loss, mut g2p_loss, mut affine_max) = (0.0_f64, 0.0_f64, 0.0_f64);
+            for _ in 0..150 {
+                s.step().unwrap();
+                let v = s.view();
+                let scale = v.energy.kinetic_with_affine();
+                let p2g = v.ke_particles_p2g - v.ke_grid_p2g;
+                let g2p = v.ke_grid_updated - v.energy.kinetic_with_affine();
+                assert!(p2g >= -1e-12 * scale, "{shape:?} {scheme:?} P2G adds {p2g}");
+                assert!(g2p >= -1e-12 * scale, "{shape:?} {scheme:?} G2P adds {g2p}");
+                p2g_loss = p2g_loss.max(p2g / scale);
+                g2p_loss = g2p_loss.max(g2p / scale);
+                affine_max = affine_max.max(v.energy.affine / scale);
+            }
+            // Not passing by measuring nothing: the swirl fills C, and both
+            // transfers lose some of it.
+            assert!(
+                affine_max > 1e-3,
+                "{shape:?} {scheme:?} affine share {affine_max}"
+            );
+            assert!(p2g_loss > 1e-9 && g2p_loss > 1e-9, "{p2g_loss} {g2p_loss}");
+        }
+    }
+    // The gradient form's C (linear shapes, uGIMP) carries no counted energy.
+    let s = periodic_swirl(ShapeKind::Gimp, TransferKind::Apic, SchemeKind::Usl);
+    assert_eq!(s.affine_inertia(), None);
+    assert_eq!(s.energy().affine, 0.0);
+}
+
 #[test]
 fn grid_mass_equals_particle_mass_with_walls() {
     for shape in common::SHAPES {

@@ -105,6 +105,7 @@ impl TimeseriesFigure<'_> {
                 ylabel: axis_label("energy change", "e_kin", false),
                 lines: vec![
                     ("kinetic", col("e_kin")),
+                    ("affine (APIC)", col("e_affine")),
                     ("gravitational", rel("e_grav")),
                     ("stored", col("e_int")),
                     ("dissipated", col("d_visc")),

@@ -179,6 +179,14 @@ pub const COLUMNS: &[Column] = &[
         &[],
     ),
     step(
+        "e_affine",
+        "J/m",
+        "kinetic energy of the APIC affine velocity (B-splines; else 0)",
+        |r| r.e_affine,
+        Now,
+        &[],
+    ),
+    step(
         "e_grav",
         "J/m",
         "gravitational energy",

@@ -269,15 +269,7 @@ pub(crate) fn set_pair(
     gb.accel[n] += db / dt;
 }
 
-/// sum over the active nodes (ghosts included: they carry the real
-/// particles' mass that lands beyond a wall or a periodic edge) of
-/// m_raw |v^{n+1}|^2 / 2.
-pub(crate) fn grid_kinetic(g: &Grid) -> f64 {
-    g.active
-        .iter()
-        .map(|&n| 0.5 * g.mass_raw[n as usize] * g.vel_new[n as usize].norm_squared())
-        .sum()
-}
+pub(crate) use crate::stages::grid_update::updated_kinetic as grid_kinetic;
 
 /// Ghost nodes take their partners' corrected values again.
 pub(crate) fn refill(g: &mut Grid) {

@@ -375,6 +375,7 @@ impl Mixture {
         let (a, b) = (self.phases[0].energy(), self.phases[1].energy());
         Energy {
             kinetic: a.kinetic + b.kinetic,
+            affine: a.affine + b.affine,
             gravitational: a.gravitational + b.gravitational,
             stored: a.stored + b.stored,
             dissipated: a.dissipated + b.dissipated,

@@ -70,3 +70,13 @@ pub fn update(grid: &mut Grid, dt: f64) {
     grid.fill(&mut vel_new);
     grid.vel_new = vel_new;
 }
+
+/// sum over the active nodes (ghosts included: they carry the real
+/// particles' mass that lands beyond a wall or a periodic edge) of
+/// m_raw |v^{n+1}|^2 / 2.
+pub(crate) fn updated_kinetic(g: &Grid) -> f64 {
+    g.active
+        .iter()
+        .map(|&n| 0.5 * g.mass_raw[n as usize] * g.vel_new[n as usize].norm_squared())
+        .sum()
+}

@@ -35,6 +35,11 @@ impl Scratch {
         }
     }
 
+    /// v* of the last step per padded node (forensics).
+    pub(crate) fn v_star(&self) -> &[Vec2] {
+        &self.v_star
+    }
+
     /// Per-particle room for `n` particles (an inflow appends them); a
     /// scratch not in use (empty) stays empty.
     pub(crate) fn fit_particles(&mut self, n: usize) {

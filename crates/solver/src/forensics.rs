@@ -1,0 +1,291 @@
+//! Force forensics (`kick explain`): one step taken as `Solver::step` takes
+//! it, with chosen particles' velocity change split into what each stencil
+//! node and each stress-carrying particle gave it (docs/physics.md section
+//! 4c).
+//!
+//! G2P gives dv_p = sum_i N_ip (v_i^{n+1} - v_i^n) + jump, the jump being
+//! the transfer's own: (1 - alpha) sum_i N_ip (v_i^n - v_p) for a FLIP/PIC
+//! blend (PIC and APIC: alpha = 0, the affine term is in v_i^n), and
+//! sum_i N_ip (v*_i - v_p) under XPIC. Each node's increment is split into
+//! internal force, gravity and the rest (wall conditions, ghost images,
+//! grid hooks); the internal force into each particle's -V sigma grad N
+//! (pressure and deviatoric parts). What G2P does not give (after-G2P
+//! hooks, `[[perturb]]` impulses) is the particle's `rest`, zero to
+//! round-off for a method without them.
+
+use crate::grid::Grid;
+use crate::particles::{Mat2, Vec2};
+use crate::shapes::{with_width, Shape, Stencil};
+use crate::{ForceKind, QuadratureKind, Solver, StepError, TransferKind};
+use std::collections::HashMap;
+
+/// One stencil node of an explained particle.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NodePart {
+    /// Padded node index, and where it sits.
+    pub node: u32,
+    pub position: Vec2,
+    /// N_ip.
+    pub weight: f64,
+    /// Folded nodal mass, and its share of a full node rho0 h^2.
+    pub mass: f64,
+    pub mass_share: f64,
+    /// Folded nodal force (internal + gravity) and the node's velocity
+    /// change as G2P reads it.
+    pub force: Vec2,
+    pub dv_node: Vec2,
+    /// N dt (f / m - g): the internal force's part of dv_p.
+    pub internal: Vec2,
+    /// N dt g (0 at a massless node).
+    pub external: Vec2,
+    /// N (v^{n+1} - v^n) - N dt f / m: wall conditions, ghost images, hooks.
+    pub walls: Vec2,
+    /// The transfer's own jump through this node.
+    pub jump: Vec2,
+    /// N (v^{n+1} - v^n): FLIP's increment through this node (the sum of
+    /// the three above), against `interpolated`, N v^n.
+    pub flip_increment: Vec2,
+    pub interpolated: Vec2,
+}
+
+/// What one stress-carrying particle gave an explained particle through
+/// the latter's stencil nodes: sum_i N_ip dt f_iq / m_i, from its pressure
+/// and from the rest of its stress (deviatoric, and any viscous pressure
+/// such as bulk damping's).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StressPart {
+    pub particle: usize,
+    pub pressure: Vec2,
+    pub deviatoric: Vec2,
+}
+
+/// One particle's velocity change over one step, decomposed.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Explained {
+    pub particle: usize,
+    /// v_p(n) - v_p(n - 1).
+    pub dv: Vec2,
+    pub nodes: Vec<NodePart>,
+    pub stresses: Vec<StressPart>,
+    /// Internal force of the nodes not carried by `stresses` (ghost images
+    /// folded in; all of it under mixed quadrature).
+    pub internal_unattributed: Vec2,
+    /// dv minus every node's parts: after-G2P hooks, impulses, round-off.
+    pub rest: Vec2,
+}
+
+impl Explained {
+    pub fn internal(&self) -> Vec2 {
+        self.nodes.iter().map(|n| n.internal).sum()
+    }
+    pub fn external(&self) -> Vec2 {
+        self.nodes.iter().map(|n| n.external).sum()
+    }
+    pub fn walls(&self) -> Vec2 {
+        self.nodes.iter().map(|n| n.walls).sum()
+    }
+    pub fn jump(&self) -> Vec2 {
+        self.nodes.iter().map(|n| n.jump).sum()
+    }
+    /// The sum of the parts: dv to round-off (with `rest`, exactly).
+    pub fn parts_sum(&self) -> Vec2 {
+        self.nodes
+            .iter()
+            .map(|n| n.internal + n.external + n.walls + n.jump)
+            .sum()
+    }
+}
+
+/// The particle's stress at P2G: what its force used.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StressState {
+    pub pressure: f64,
+    pub deviatoric: Mat2,
+}
+
+impl Solver {
+    /// Takes one step as `step()` does, explaining the velocity change of
+    /// `particles` (indices). Single-phase only.
+    pub fn step_explained(&mut self, particles: &[usize]) -> Result<Vec<Explained>, StepError> {
+        let mut dt = self.next_dt();
+        let remaining = self.cfg.scene.t_end - self.time;
+        if remaining > 0.0 && dt > remaining {
+            dt = remaining;
+        }
+        self.begin_step(dt)?;
+        let v_old: Vec<Vec2> = particles.iter().map(|&p| self.particles.v[p]).collect();
+        let mut explained = with_width!(self.shape, W => self.explain_nodes::<W>(particles));
+        self.finish_step();
+        let xpic = self.cfg.method.transfer == TransferKind::Xpic;
+        for (e, v0) in explained.iter_mut().zip(v_old) {
+            if xpic {
+                let star = self.xpic.v_star();
+                for n in &mut e.nodes {
+                    n.jump = n.weight * (star[n.node as usize] - v0);
+                }
+            }
+            e.dv = self.particles.v[e.particle] - v0;
+            e.rest = e.dv - e.parts_sum();
+        }
+        Ok(explained)
+    }
+
+    fn explain_nodes<const W: usize>(&self, particles: &[usize]) -> Vec<Explained> {
+        let (grid, ps, dt) = (&self.grid, &self.particles, self.dt);
+        let g = self.gravity;
+        let full = self.cfg.first_rho0() * grid.h * grid.h;
+        let alpha = match self.cfg.method.transfer {
+            TransferKind::Flip => self.remedies.flip_fraction(dt, self.cfg.method.flip_alpha),
+            TransferKind::Xpic => 1.0,
+            TransferKind::Pic | TransferKind::Apic => 0.0,
+        };
+        // Which explained particle's node slots each padded node feeds.
+        let mut feeds: HashMap<u32, Vec<(usize, usize)>> = HashMap::new();
+        let mut out: Vec<Explained> = Vec::with_capacity(particles.len());
+        for (k, &p) in particles.iter().enumerate() {
+            let st = &self.stencils[p];
+            let weights = node_weights::<W>(&self.shape, st, grid);
+            let vp = ps.v[p];
+            let mut nodes = Vec::with_capacity(W * W);
+            for (slot, &(node, w, _)) in weights.iter().enumerate() {
+                let n = node as usize;
+                let m = grid.mass[n];
+                let dv_node = grid.vel_new[n] - grid.vel[n];
+                let (internal, external, walls) = if m > 0.0 {
+                    let by_force = dt * grid.force[n] / m;
+                    (
+                        w * (by_force - dt * g),
+                        w * dt * g,
+                        w * (dv_node - by_force),
+                    )
+                } else {
+                    (Vec2::zeros(), Vec2::zeros(), w * dv_node)
+                };
+                nodes.push(NodePart {
+                    node,
+                    position: grid.position(n),
+                    weight: w,
+                    mass: m,
+                    mass_share: m / full,
+                    force: grid.force[n],
+                    dv_node,
+                    internal,
+                    external,
+                    walls,
+                    jump: (1.0 - alpha) * w * (grid.vel[n] - vp),
+                    flip_increment: w * dv_node,
+                    interpolated: w * grid.vel[n],
+                });
+                feeds.entry(node).or_default().push((k, slot));
+            }
+            out.push(Explained {
+                particle: p,
+                nodes,
+                ..Explained::default()
+            });
+        }
+        self.attribute_stresses::<W>(&feeds, &mut out);
+        out
+    }
+
+    /// Splits the nodes' internal force among the particles whose stress
+    /// made it (gradient force, particle quadrature; otherwise all of it is
+    /// unattributed).
+    fn attribute_stresses<const W: usize>(
+        &self,
+        feeds: &HashMap<u32, Vec<(usize, usize)>>,
+        out: &mut [Explained],
+    ) {
+        let (grid, ps, dt) = (&self.grid, &self.particles, self.dt);
+        let mls = match self.cfg.method.force {
+            ForceKind::Mls => self.shape.apic_inverse_inertia(),
+            ForceKind::Gradient => None,
+        };
+        let particle_forces = self.cfg.method.quadrature != QuadratureKind::Mixed;
+        let mut attributed = vec![Vec2::zeros(); out.len()];
+        if particle_forces {
+            let mut parts: Vec<HashMap<usize, StressPart>> = vec![HashMap::new(); out.len()];
+            for q in 0..ps.len() {
+                let st = &self.stencils[q];
+                let grads = node_force_gradients::<W>(&self.shape, st, grid, mls);
+                let vol = ps.vol[q];
+                let pressure = -ps.pressure[q] * Mat2::identity();
+                let deviatoric = ps.stress[q] - pressure;
+                for &(node, grad) in &grads {
+                    let Some(slots) = feeds.get(&node) else {
+                        continue;
+                    };
+                    let m = grid.mass[node as usize];
+                    if m <= 0.0 {
+                        continue;
+                    }
+                    // f_iq = -V sigma grad N (grad in 1/m), split by stress part.
+                    let f_p = -vol * (pressure * grad);
+                    let f_d = -vol * (deviatoric * grad);
+                    for &(k, slot) in slots {
+                        let w = out[k].nodes[slot].weight * dt / m;
+                        let e = parts[k].entry(q).or_insert(StressPart {
+                            particle: q,
+                            ..StressPart::default()
+                        });
+                        e.pressure += w * f_p;
+                        e.deviatoric += w * f_d;
+                        attributed[k] += w * (f_p + f_d);
+                    }
+                }
+            }
+            for (e, p) in out.iter_mut().zip(parts) {
+                let mut list: Vec<StressPart> = p.into_values().collect();
+                list.sort_by_key(|s| s.particle);
+                e.stresses = list;
+            }
+        }
+        for (e, a) in out.iter_mut().zip(attributed) {
+            e.internal_unattributed = e.internal() - a;
+        }
+    }
+}
+
+/// (node, N_ip, grad N_ip) over a particle's stencil.
+fn node_weights<const W: usize>(shape: &Shape, st: &Stencil, grid: &Grid) -> Vec<(u32, f64, Vec2)> {
+    let (wx, dwx) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+    let (wy, dwy) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
+    let inv_h = 1.0 / grid.h;
+    let mut out = Vec::with_capacity(W * W);
+    for c in 0..W {
+        for a in 0..W {
+            let node = st.node + (a + c * grid.dims[0]) as u32;
+            let grad = Vec2::new(dwx[a] * wy[c], wx[a] * dwy[c]) * inv_h;
+            out.push((node, wx[a] * wy[c], grad));
+        }
+    }
+    out
+}
+
+/// (node, g) with f_iq = -V_q sigma_q g: grad N_iq for the gradient force,
+/// MLS's D^-1 (x_i - x_q) N_iq for the MLS force.
+fn node_force_gradients<const W: usize>(
+    shape: &Shape,
+    st: &Stencil,
+    grid: &Grid,
+    mls: Option<f64>,
+) -> Vec<(u32, Vec2)> {
+    let Some(inertia) = mls else {
+        return node_weights::<W>(shape, st, grid)
+            .into_iter()
+            .map(|(n, _, g)| (n, g))
+            .collect();
+    };
+    let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+    let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
+    let inv_h = 1.0 / grid.h;
+    let mut out = Vec::with_capacity(W * W);
+    for c in 0..W {
+        for a in 0..W {
+            let node = st.node + (a + c * grid.dims[0]) as u32;
+            let d = Vec2::new(a as f64 - st.frac[0], c as f64 - st.frac[1]);
+            out.push((node, wx[a] * wy[c] * inertia * inv_h * d));
+        }
+    }
+    out
+}
