@@ -15,6 +15,7 @@ pub mod events;
 pub mod front;
 pub mod geometry;
 pub mod hydrostatic;
+pub mod mechanisms;
 pub mod particle_history;
 pub mod remedy_booking;
 pub mod rest_field;

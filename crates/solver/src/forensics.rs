@@ -63,7 +63,8 @@ pub struct StressPart {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Explained {
     pub particle: usize,
-    /// v_p(n) - v_p(n - 1).
+    /// v_p(n - 1), and v_p(n) - v_p(n - 1).
+    pub v_before: Vec2,
     pub dv: Vec2,
     pub nodes: Vec<NodePart>,
     pub stresses: Vec<StressPart>,
@@ -96,24 +97,64 @@ impl Explained {
     }
 }
 
-/// The particle's stress at P2G: what its force used.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct StressState {
-    pub pressure: f64,
-    pub deviatoric: Mat2,
+/// An explained step: the particles' decompositions, and every particle's
+/// state as this step's P2G used it (what the mechanisms' criteria read).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ExplainedStep {
+    pub explained: Vec<Explained>,
+    /// Per particle at P2G: position, pressure and J of the stress the force used.
+    pub x: Vec<Vec2>,
+    pub pressure: Vec<f64>,
+    pub j: Vec<f64>,
+    /// Per particle at P2G: the volume and V0.
+    pub volume: Vec<f64>,
+    pub volume0: Vec<f64>,
+    pub id: Vec<u32>,
+    pub dt: f64,
+    /// Time at the end of the step.
+    pub time: f64,
 }
 
 impl Solver {
+    /// Sets particle `p`'s J (F scaled isotropically, V = J V0): a defect
+    /// planted between steps, for the mechanisms' test scenes. Its stress
+    /// follows at its next stress update.
+    pub fn plant_j(&mut self, p: usize, j: f64) {
+        let ps = &mut self.particles;
+        ps.f[p] *= (j / ps.j[p]).sqrt();
+        ps.j[p] = j;
+        ps.vol[p] = j * ps.vol0[p];
+    }
+
+    /// Moves particle `p` to `x` with velocity `v` between steps (the next
+    /// step's sort finds its new stencil).
+    pub fn plant_motion(&mut self, p: usize, x: Vec2, v: Vec2) {
+        self.particles.x[p] = x;
+        self.particles.v[p] = v;
+        self.refresh_signal_speed();
+    }
+
     /// Takes one step as `step()` does, explaining the velocity change of
     /// `particles` (indices). Single-phase only.
-    pub fn step_explained(&mut self, particles: &[usize]) -> Result<Vec<Explained>, StepError> {
+    pub fn step_explained(&mut self, particles: &[usize]) -> Result<ExplainedStep, StepError> {
         let mut dt = self.next_dt();
         let remaining = self.cfg.scene.t_end - self.time;
         if remaining > 0.0 && dt > remaining {
             dt = remaining;
         }
         self.begin_step(dt)?;
-        let v_old: Vec<Vec2> = particles.iter().map(|&p| self.particles.v[p]).collect();
+        let ps = &self.particles;
+        let v_old: Vec<Vec2> = particles.iter().map(|&p| ps.v[p]).collect();
+        let mut step = ExplainedStep {
+            x: ps.x.clone(),
+            pressure: ps.pressure.clone(),
+            j: ps.j.clone(),
+            volume: ps.vol.clone(),
+            volume0: ps.vol0.clone(),
+            id: ps.id.clone(),
+            dt,
+            ..ExplainedStep::default()
+        };
         let mut explained = with_width!(self.shape, W => self.explain_nodes::<W>(particles));
         self.finish_step();
         let xpic = self.cfg.method.transfer == TransferKind::Xpic;
@@ -124,10 +165,13 @@ impl Solver {
                     n.jump = n.weight * (star[n.node as usize] - v0);
                 }
             }
+            e.v_before = v0;
             e.dv = self.particles.v[e.particle] - v0;
             e.rest = e.dv - e.parts_sum();
         }
-        Ok(explained)
+        step.explained = explained;
+        step.time = self.time;
+        Ok(step)
     }
 
     fn explain_nodes<const W: usize>(&self, particles: &[usize]) -> Vec<Explained> {

@@ -61,7 +61,7 @@ fn the_parts_add_up_to_the_velocity_change() {
         }
         let n = s.particle_count();
         let chosen: Vec<usize> = (0..n).step_by(13).collect();
-        let explained = s.step_explained(&chosen).unwrap();
+        let explained = s.step_explained(&chosen).unwrap().explained;
         let mut interior_seen = 0;
         for e in &explained {
             let sc = scale(e);
@@ -124,7 +124,7 @@ fn wall_conditions_show_up_as_walls_not_as_force() {
     let lowest = (0..s.particle_count())
         .min_by(|&a, &b| s.view().x[a].y.total_cmp(&s.view().x[b].y))
         .unwrap();
-    let e = &s.step_explained(&[lowest]).unwrap()[0];
+    let e = &s.step_explained(&[lowest]).unwrap().explained[0];
     // Gravity pulls down, the floor's condition pushes back up.
     assert!(e.external().y < 0.0);
     assert!(e.walls().y > 0.0, "walls {}", e.walls());

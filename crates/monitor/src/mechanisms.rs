@@ -1,0 +1,270 @@
+//! The mechanisms of a kick (docs/physics.md section 4c), measured on the
+//! solver's force forensics (`solver::forensics`) over an event's onset
+//! window.
+//!
+//! Shares: share_X = sum (c_X . dv) / sum |dv|^2, the sums over the
+//! window's steps and the event's particles, c_X the part of a particle's
+//! velocity change that meets criterion X. The parts of the full split
+//! (internal force, gravity, walls, transfer jump, rest) add up to dv, so
+//! their shares add up to 1; the mechanisms M1-M3 are subsets of them and
+//! may overlap.
+//!
+//! - M1, small-mass node: the internal force, walls and jump of the nodes
+//!   lighter than `SMALL_NODE_SHARE` of a full node rho0 h^2 (gravity is
+//!   the same at every node and is left out).
+//! - M2, cell crossing: the stress parts of the particles whose cell at
+//!   this step's P2G is not their cell at the previous step's (their
+//!   gradients jumped; linear shapes jump, uGIMP's do not).
+//! - M3, stress outlier: the stress parts of the particles whose pressure
+//!   is more than `OUTLIER_SIGMAS` robust sigmas (1.4826 MAD, at least
+//!   `OUTLIER_FLOOR` rho0 g h) from the median of the other particles in
+//!   the 3 x 3 cells around theirs.
+//! - M4, ringing (a flag with its value): the event particles' drift from
+//!   the grid-interpolated velocity, sum |v_p - sum N v_i| / sum |v_p|.
+//! - M5, time step (a flag with its value): the event's Courant number and
+//!   nodal advective number, as the event logged them.
+
+use solver::forensics::ExplainedStep;
+use solver::Vec2;
+use std::collections::HashMap;
+
+/// M1: a node lighter than this share of rho0 h^2.
+pub const SMALL_NODE_SHARE: f64 = 0.1;
+/// M3: robust sigmas from the neighbours' median.
+pub const OUTLIER_SIGMAS: f64 = 5.0;
+/// M3: the robust sigma's floor, in rho0 g h (a uniform field has MAD 0).
+pub const OUTLIER_FLOOR: f64 = 0.1;
+
+/// Shares of the velocity change (see the module doc).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Shares {
+    pub internal: f64,
+    pub external: f64,
+    pub walls: f64,
+    pub jump: f64,
+    pub rest: f64,
+    pub small_mass_node: f64,
+    pub cell_crossing: f64,
+    pub stress_outlier: f64,
+}
+
+impl Shares {
+    /// The full split's shares: 1 to round-off.
+    pub fn split_sum(&self) -> f64 {
+        self.internal + self.external + self.walls + self.jump + self.rest
+    }
+
+    /// The mechanism among M1-M3 with the largest share.
+    pub fn leading(&self) -> (&'static str, f64) {
+        [
+            ("M1 small-mass node", self.small_mass_node),
+            ("M2 cell crossing", self.cell_crossing),
+            ("M3 stress outlier", self.stress_outlier),
+        ]
+        .into_iter()
+        .fold(
+            ("none", f64::NEG_INFINITY),
+            |a, b| if b.1 > a.1 { b } else { a },
+        )
+    }
+}
+
+/// One step's c . dv per part, summed over the event's particles, with sum |dv|^2.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct StepParts {
+    pub time: f64,
+    pub dv2: f64,
+    pub projected: Shares,
+    /// sum |v_p - sum N v_i| / sum |v_p| over the particles (M4), v_p
+    /// and v_i at the step's start (P2G).
+    pub drift: f64,
+    /// The largest |rest| / (dv's and the parts' sizes): round-off unless
+    /// after-G2P hooks or impulses act (the decomposition's closure).
+    pub rest_max: f64,
+    /// Contributing particles that crossed a cell line, and outliers.
+    pub crossers: usize,
+    pub outliers: usize,
+    /// The lightest stencil node's share of a full node.
+    pub min_node_share: f64,
+}
+
+/// Accumulates shares over the steps of a window.
+#[derive(Clone, Debug, Default)]
+pub struct Mechanisms {
+    origin: Vec2,
+    h: f64,
+    /// rho0 g h: the outlier floor's unit.
+    pressure_unit: f64,
+    /// Cell at the previous step's P2G, by particle id.
+    previous_cell: HashMap<u32, (i64, i64)>,
+    sum: Shares,
+    dv2: f64,
+}
+
+impl Mechanisms {
+    pub fn new(origin: Vec2, h: f64, rho0: f64, gravity: f64) -> Self {
+        let g = if gravity > 0.0 { gravity } else { 9.81 };
+        Mechanisms {
+            origin,
+            h,
+            pressure_unit: rho0 * g * h,
+            ..Mechanisms::default()
+        }
+    }
+
+    fn cell(&self, x: Vec2) -> (i64, i64) {
+        let r = (x - self.origin) / self.h;
+        (r.x.floor() as i64, r.y.floor() as i64)
+    }
+
+    /// Remembers this step's cells without counting it (the step before
+    /// the window: its cells are what M2 compares the first step with).
+    pub fn prime(&mut self, step: &ExplainedStep) {
+        self.remember_cells(step);
+    }
+
+    fn remember_cells(&mut self, step: &ExplainedStep) {
+        self.previous_cell.clear();
+        for (k, &id) in step.id.iter().enumerate() {
+            let c = self.cell(step.x[k]);
+            self.previous_cell.insert(id, c);
+        }
+    }
+
+    /// Counts one step of the window; its parts.
+    pub fn add(&mut self, step: &ExplainedStep) -> StepParts {
+        let cells: Vec<(i64, i64)> = step.x.iter().map(|&x| self.cell(x)).collect();
+        let crossed = |q: usize| {
+            self.previous_cell
+                .get(&step.id[q])
+                .is_some_and(|&c| c != cells[q])
+        };
+        let mut bins: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+        for (q, &c) in cells.iter().enumerate() {
+            bins.entry(c).or_default().push(q);
+        }
+        let mut outlier_cache: HashMap<usize, bool> = HashMap::new();
+        let mut is_outlier = |q: usize| {
+            *outlier_cache
+                .entry(q)
+                .or_insert_with(|| self.outlier(q, &cells, &bins, &step.pressure))
+        };
+        let mut out = StepParts {
+            time: step.time,
+            min_node_share: f64::INFINITY,
+            ..StepParts::default()
+        };
+        let (mut crossers, mut outliers) = (vec![], vec![]);
+        let (mut drift_sum, mut speed_sum) = (0.0, 0.0);
+        for e in &step.explained {
+            let dv = e.dv;
+            out.dv2 += dv.norm_squared();
+            let p = &mut out.projected;
+            p.internal += e.internal().dot(&dv);
+            p.external += e.external().dot(&dv);
+            p.walls += e.walls().dot(&dv);
+            p.jump += e.jump().dot(&dv);
+            p.rest += e.rest.dot(&dv);
+            for n in &e.nodes {
+                out.min_node_share = out.min_node_share.min(n.mass_share);
+                if n.mass_share < SMALL_NODE_SHARE {
+                    p.small_mass_node += (n.internal + n.walls + n.jump).dot(&dv);
+                }
+            }
+            for s in &e.stresses {
+                let c = (s.pressure + s.deviatoric).dot(&dv);
+                if crossed(s.particle) {
+                    p.cell_crossing += c;
+                    crossers.push(s.particle);
+                }
+                if is_outlier(s.particle) {
+                    p.stress_outlier += c;
+                    outliers.push(s.particle);
+                }
+            }
+            let interpolated: Vec2 = e.nodes.iter().map(|n| n.interpolated).sum();
+            drift_sum += (e.v_before - interpolated).norm();
+            speed_sum += e.v_before.norm();
+            let size = e.dv.norm()
+                + e.nodes
+                    .iter()
+                    .map(|n| n.internal.norm() + n.external.norm() + n.walls.norm() + n.jump.norm())
+                    .sum::<f64>();
+            if size > 0.0 {
+                out.rest_max = out.rest_max.max(e.rest.norm() / size);
+            }
+        }
+        crossers.sort_unstable();
+        crossers.dedup();
+        outliers.sort_unstable();
+        outliers.dedup();
+        out.crossers = crossers.len();
+        out.outliers = outliers.len();
+        if speed_sum > 0.0 {
+            out.drift = drift_sum / speed_sum;
+        }
+        self.add_parts(&out);
+        self.remember_cells(step);
+        out
+    }
+
+    fn add_parts(&mut self, s: &StepParts) {
+        let (a, b) = (&mut self.sum, &s.projected);
+        a.internal += b.internal;
+        a.external += b.external;
+        a.walls += b.walls;
+        a.jump += b.jump;
+        a.rest += b.rest;
+        a.small_mass_node += b.small_mass_node;
+        a.cell_crossing += b.cell_crossing;
+        a.stress_outlier += b.stress_outlier;
+        self.dv2 += s.dv2;
+    }
+
+    /// The window's shares so far.
+    pub fn shares(&self) -> Shares {
+        let d = if self.dv2 > 0.0 { 1.0 / self.dv2 } else { 0.0 };
+        let s = &self.sum;
+        Shares {
+            internal: s.internal * d,
+            external: s.external * d,
+            walls: s.walls * d,
+            jump: s.jump * d,
+            rest: s.rest * d,
+            small_mass_node: s.small_mass_node * d,
+            cell_crossing: s.cell_crossing * d,
+            stress_outlier: s.stress_outlier * d,
+        }
+    }
+
+    fn outlier(
+        &self,
+        q: usize,
+        cells: &[(i64, i64)],
+        bins: &HashMap<(i64, i64), Vec<usize>>,
+        pressure: &[f64],
+    ) -> bool {
+        let (ci, cj) = cells[q];
+        let mut near: Vec<f64> = vec![];
+        for dj in -1..=1 {
+            for di in -1..=1 {
+                if let Some(list) = bins.get(&(ci + di, cj + dj)) {
+                    near.extend(list.iter().filter(|&&k| k != q).map(|&k| pressure[k]));
+                }
+            }
+        }
+        if near.len() < 3 || !pressure[q].is_finite() {
+            return false;
+        }
+        let median = lower_median(&mut near);
+        let mut dev: Vec<f64> = near.iter().map(|p| (p - median).abs()).collect();
+        let mad = lower_median(&mut dev);
+        let sigma = (1.4826 * mad).max(OUTLIER_FLOOR * self.pressure_unit);
+        (pressure[q] - median).abs() > OUTLIER_SIGMAS * sigma
+    }
+}
+
+fn lower_median(v: &mut [f64]) -> f64 {
+    let k = (v.len() - 1) / 2;
+    *v.select_nth_unstable_by(k, |a, b| a.total_cmp(b)).1
+}
