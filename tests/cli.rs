@@ -927,3 +927,100 @@ dv = [1.0, 0.0]
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("corrupted"), "{}", stderr(&o));
 }
+
+#[test]
+fn explain_splits_an_injected_kick_and_replays_single_changes() {
+    let out = scratch("explain");
+    // The reproduce test's push: 1 m/s into the water at step 300.
+    let study = out.join("push.toml");
+    std::fs::write(
+        &study,
+        r#"
+[scene]
+t_end = 0.06
+[[scene.body]]
+rect = [0.0, 0.0, 0.2, 0.4]
+material = "water"
+[materials.water]
+K = 1.5e5
+eos = "tait"
+[method]
+shape = "bspline2"
+transfer = "apic"
+[output]
+checkpoint_every = 100
+[[perturb]]
+step = 300
+region = [0.06, 0.1, 0.09, 0.13]
+dv = [1.0, 0.0]
+"#,
+    )
+    .unwrap();
+    let o = kick(&[
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let dir = out.join("push");
+    let s = summary(&dir);
+    let event = s
+        .events
+        .iter()
+        .find(|e| e.first_step == 300)
+        .unwrap_or_else(|| panic!("the push is logged: {:?}", s.events));
+    let id = event.id.to_string();
+    let o = kick(&[
+        "explain",
+        dir.to_str().unwrap(),
+        "--event",
+        &id,
+        "--counterfactual",
+    ]);
+    assert!(
+        o.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        stderr(&o)
+    );
+    let folder = dir.join("explain").join(format!("event_{id}"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("explain.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["matched"], true, "{json}");
+    // The parts close to round-off, and the push is the impulse.
+    assert!(json["closure_rest_max"].as_f64().unwrap() < 1e-9, "{json}");
+    assert_eq!(json["largest_part"]["part"], "impulse", "{json}");
+    assert!(json["shares"]["impulse"].as_f64().unwrap() > 0.99, "{json}");
+    let sum: f64 = ["internal", "external", "walls", "jump", "impulse", "rest"]
+        .iter()
+        .map(|k| json["shares"][k].as_f64().unwrap())
+        .sum();
+    assert!((sum - 1.0).abs() < 1e-9, "shares sum to {sum}");
+    // The control row reproduces the event and its injection.
+    let rows = json["counterfactual"].as_array().unwrap();
+    let control = &rows[0];
+    assert_eq!(control["change"], "unchanged");
+    assert_eq!(control["event_happens"], true);
+    let injected = control["injected"].as_f64().unwrap();
+    assert!(
+        (injected - event.energy_injected).abs() <= 1e-9 * event.energy_injected,
+        "{injected} vs {}",
+        event.energy_injected
+    );
+    let half = rows.iter().find(|r| r["change"] == "half dt").unwrap();
+    assert!(half["steps"].as_u64().unwrap() > control["steps"].as_u64().unwrap());
+    assert_eq!(rows.len(), 9, "{rows:?}");
+    for f in [
+        "explain_steps.csv",
+        "explain_steps.parquet",
+        "explain_cells.png",
+    ] {
+        assert!(folder.join(f).exists(), "{f}");
+    }
+    // An unknown event: a clear error, exit 2.
+    let o = kick(&["explain", dir.to_str().unwrap(), "--event", "999"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("no event 999"), "{}", stderr(&o));
+}

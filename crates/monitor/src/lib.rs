@@ -531,8 +531,9 @@ impl Monitor {
         // minus the particles after G2P), each part >= 0 away from walls.
         let step_loss = match v.affine_inertia {
             Some(_) => {
+                // An impulse is no transfer: it stays an injection.
                 (v.ke_particles_p2g - v.ke_grid_p2g)
-                    + (v.ke_grid_updated - v.energy.kinetic_with_affine())
+                    + (v.ke_grid_updated - (v.energy.kinetic_with_affine() - v.impulse_kinetic))
             }
             None => scan.transfer_loss,
         };

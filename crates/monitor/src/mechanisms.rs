@@ -42,6 +42,8 @@ pub struct Shares {
     pub external: f64,
     pub walls: f64,
     pub jump: f64,
+    /// `[[perturb]]` impulses.
+    pub impulse: f64,
     pub rest: f64,
     pub small_mass_node: f64,
     pub cell_crossing: f64,
@@ -51,7 +53,24 @@ pub struct Shares {
 impl Shares {
     /// The full split's shares: 1 to round-off.
     pub fn split_sum(&self) -> f64 {
-        self.internal + self.external + self.walls + self.jump + self.rest
+        self.internal + self.external + self.walls + self.jump + self.impulse + self.rest
+    }
+
+    /// The part of the full split with the largest share.
+    pub fn largest_part(&self) -> (&'static str, f64) {
+        [
+            ("internal force", self.internal),
+            ("gravity", self.external),
+            ("walls", self.walls),
+            ("transfer jump", self.jump),
+            ("impulse", self.impulse),
+            ("rest (after-G2P hooks)", self.rest),
+        ]
+        .into_iter()
+        .fold(
+            ("none", f64::NEG_INFINITY),
+            |a, b| if b.1 > a.1 { b } else { a },
+        )
     }
 
     /// The mechanism among M1-M3 with the largest share.
@@ -157,6 +176,9 @@ impl Mechanisms {
         let (mut crossers, mut outliers) = (vec![], vec![]);
         let (mut drift_sum, mut speed_sum) = (0.0, 0.0);
         for e in &step.explained {
+            if !e.dv.iter().all(|c| c.is_finite()) {
+                continue; // deleted in the step
+            }
             let dv = e.dv;
             out.dv2 += dv.norm_squared();
             let p = &mut out.projected;
@@ -164,6 +186,7 @@ impl Mechanisms {
             p.external += e.external().dot(&dv);
             p.walls += e.walls().dot(&dv);
             p.jump += e.jump().dot(&dv);
+            p.impulse += e.impulse.dot(&dv);
             p.rest += e.rest.dot(&dv);
             for n in &e.nodes {
                 out.min_node_share = out.min_node_share.min(n.mass_share);
@@ -214,6 +237,7 @@ impl Mechanisms {
         a.external += b.external;
         a.walls += b.walls;
         a.jump += b.jump;
+        a.impulse += b.impulse;
         a.rest += b.rest;
         a.small_mass_node += b.small_mass_node;
         a.cell_crossing += b.cell_crossing;
@@ -230,6 +254,7 @@ impl Mechanisms {
             external: s.external * d,
             walls: s.walls * d,
             jump: s.jump * d,
+            impulse: s.impulse * d,
             rest: s.rest * d,
             small_mass_node: s.small_mass_node * d,
             cell_crossing: s.cell_crossing * d,

@@ -71,7 +71,11 @@ pub struct Explained {
     /// Internal force of the nodes not carried by `stresses` (ghost images
     /// folded in; all of it under mixed quadrature).
     pub internal_unattributed: Vec2,
-    /// dv minus every node's parts: after-G2P hooks, impulses, round-off.
+    /// The `[[perturb]]` impulse it got this step.
+    pub impulse: Vec2,
+    /// dv minus every node's parts and the impulse: after-G2P hooks (the
+    /// null-space filter, shifting's velocity part), round-off. NaN when
+    /// the particle was deleted in the step.
     pub rest: Vec2,
 }
 
@@ -90,10 +94,12 @@ impl Explained {
     }
     /// The sum of the parts: dv to round-off (with `rest`, exactly).
     pub fn parts_sum(&self) -> Vec2 {
-        self.nodes
-            .iter()
-            .map(|n| n.internal + n.external + n.walls + n.jump)
-            .sum()
+        self.impulse
+            + self
+                .nodes
+                .iter()
+                .map(|n| n.internal + n.external + n.walls + n.jump)
+                .sum::<Vec2>()
     }
 }
 
@@ -145,6 +151,7 @@ impl Solver {
         self.begin_step(dt)?;
         let ps = &self.particles;
         let v_old: Vec<Vec2> = particles.iter().map(|&p| ps.v[p]).collect();
+        let ids: Vec<u32> = particles.iter().map(|&p| ps.id[p]).collect();
         let mut step = ExplainedStep {
             x: ps.x.clone(),
             pressure: ps.pressure.clone(),
@@ -158,7 +165,8 @@ impl Solver {
         let mut explained = with_width!(self.shape, W => self.explain_nodes::<W>(particles));
         self.finish_step();
         let xpic = self.cfg.method.transfer == TransferKind::Xpic;
-        for (e, v0) in explained.iter_mut().zip(v_old) {
+        let deleted = self.particles.len() != step.x.len();
+        for ((e, v0), id) in explained.iter_mut().zip(v_old).zip(ids) {
             if xpic {
                 let star = self.xpic.v_star();
                 for n in &mut e.nodes {
@@ -166,12 +174,40 @@ impl Solver {
                 }
             }
             e.v_before = v0;
-            e.dv = self.particles.v[e.particle] - v0;
+            // A deletion in the step shifts the indices after it.
+            let now = if deleted {
+                self.particles.id.iter().position(|&i| i == id)
+            } else {
+                Some(e.particle)
+            };
+            let Some(now) = now else {
+                e.dv = Vec2::repeat(f64::NAN);
+                e.rest = e.dv;
+                continue;
+            };
+            e.impulse = self.impulse_on(now);
+            e.dv = self.particles.v[now] - v0;
             e.rest = e.dv - e.parts_sum();
         }
         step.explained = explained;
         step.time = self.time;
         Ok(step)
+    }
+
+    /// The `[[perturb]]` impulse of the step just taken on particle `p`
+    /// (as `apply_perturbations` chose it: by its position after G2P).
+    fn impulse_on(&self, p: usize) -> Vec2 {
+        let x = self.particles.x[p];
+        self.cfg
+            .perturb
+            .iter()
+            .filter(|pert| pert.step == self.step)
+            .filter(|pert| {
+                let [x0, y0, x1, y1] = pert.region;
+                x.x >= x0 && x.x <= x1 && x.y >= y0 && x.y <= y1
+            })
+            .map(|pert| Vec2::from(pert.dv))
+            .sum()
     }
 
     fn explain_nodes<const W: usize>(&self, particles: &[usize]) -> Vec<Explained> {

@@ -133,6 +133,8 @@ pub struct Solver {
     ke_particles_p2g: f64,
     ke_grid_p2g: f64,
     ke_grid_updated: f64,
+    /// Kinetic energy the `[[perturb]]` impulses of the last step added.
+    impulse_kinetic: f64,
     times: StageTimes,
     grid_mass_p2g: f64,
     n_outside: usize,
@@ -215,6 +217,7 @@ impl Solver {
             times: StageTimes::default(),
             ke_grid_p2g: 0.0,
             ke_grid_updated: 0.0,
+            impulse_kinetic: 0.0,
             grid_mass_p2g: 0.0,
             n_outside: 0,
             n_nonfinite: 0,
@@ -365,6 +368,7 @@ impl Solver {
         let ps = &mut self.particles;
         par::keep_warm(|| ps.v_prev.copy_from_slice(&ps.v));
         self.ke_particles_p2g = self.energy.kinetic_with_affine();
+        self.impulse_kinetic = 0.0;
         self.remedies.begin_step();
         timing::lap(&mut self.times.other, &mut clock);
         stages::sort::sort(
@@ -494,6 +498,11 @@ impl Solver {
         };
         self.remedies = self.cfg.build_remedies(&self.grid, n);
         self.fit_scratch(n);
+        if let Some(dt) = self.cfg.method.dt_value {
+            self.dt_fixed = dt;
+        }
+        // The energy as the new method counts it (APIC's affine part).
+        self.measure();
         Ok(())
     }
 
@@ -673,10 +682,14 @@ impl Solver {
             // An impulse: it drives the particle, so it is part of its force-driven acceleration.
             let da = dv / self.dt;
             let ps = &mut self.particles;
-            for ((x, v), a) in ps.x.iter().zip(ps.v.iter_mut()).zip(ps.accel.iter_mut()) {
+            for p in 0..ps.len() {
+                let x = ps.x[p];
                 if x.x >= x0 && x.x <= x1 && x.y >= y0 && x.y <= y1 {
-                    *v += dv;
-                    *a += da;
+                    let v = ps.v[p];
+                    self.impulse_kinetic +=
+                        0.5 * ps.mass[p] * ((v + dv).norm_squared() - v.norm_squared());
+                    ps.v[p] = v + dv;
+                    ps.accel[p] += da;
                 }
             }
         }

@@ -76,6 +76,8 @@ pub struct StateView<'a> {
     /// the affine kinetic energy is in `energy.affine`, and the transfer
     /// loss is measured on the grid (docs/physics.md section 4).
     pub affine_inertia: Option<f64>,
+    /// Kinetic energy the `[[perturb]]` impulses of the last step added.
+    pub impulse_kinetic: f64,
     /// Total P2G nodal mass of the last step (ghost nodes included, before folding).
     pub grid_mass_p2g: f64,
     /// Effective Courant number max(c_p + |v_p|) dt / h at the start of the last step.
@@ -137,6 +139,7 @@ pub fn make(s: &Solver) -> StateView<'_> {
         ke_grid_p2g: s.ke_grid_p2g,
         ke_grid_updated: s.ke_grid_updated,
         affine_inertia: s.affine_inertia(),
+        impulse_kinetic: s.impulse_kinetic,
         grid_mass_p2g: s.grid_mass_p2g,
         courant: s.courant,
         n_outside: s.n_outside,

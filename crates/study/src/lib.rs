@@ -4,6 +4,8 @@
 
 pub mod bench;
 pub mod case_checkpoint;
+pub mod explain;
+pub mod explain_picture;
 pub mod labels;
 pub mod matrix;
 pub mod metrics;

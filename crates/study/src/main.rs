@@ -1,6 +1,6 @@
 //! `kick`: runs studies of the MPM kinematic anomaly.
 
-use study::{bench, matrix, report, reproduce, run_case, study_file};
+use study::{bench, explain, matrix, report, reproduce, run_case, study_file};
 
 use clap::{Args, Parser, Subcommand};
 use solver::{ShapeKind, TransferKind};
@@ -22,6 +22,10 @@ enum Command {
     Matrix(MatrixArgs),
     /// Replay a logged event from the checkpoint before it and check it happens again.
     Reproduce(ReproduceArgs),
+    /// Why event K kicked: its velocity change split per node, stress and
+    /// transfer over the onset window, the mechanisms' shares, and (with
+    /// --counterfactual) single changes replayed from the same checkpoint.
+    Explain(ExplainArgs),
     /// Write OUT/report/index.html (figures as PNG and SVG) for a case or matrix folder.
     Report(ReportArgs),
     /// List the expanded cases of a study and their parameters.
@@ -106,6 +110,24 @@ struct ReproduceArgs {
 }
 
 #[derive(Args)]
+struct ExplainArgs {
+    /// A case folder written by `kick run` or `kick matrix`.
+    case_dir: PathBuf,
+    /// Event id (see summary.json).
+    #[arg(long)]
+    event: u32,
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Output folder (default CASE_DIR/explain/event_K).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Also replay once per single change (PIC, FLIP 0.99, half dt, minimum
+    /// nodal mass, J-bar, pressure smoothing, XPIC on/off, shifting).
+    #[arg(long)]
+    counterfactual: bool,
+}
+
+#[derive(Args)]
 struct ReportArgs {
     /// A case folder (summary.json) or a matrix folder (summary.parquet).
     dir: PathBuf,
@@ -165,6 +187,7 @@ fn main() -> ExitCode {
         Command::Run(a) => run_command(a),
         Command::Matrix(a) => matrix_command(a),
         Command::Reproduce(a) => reproduce_command(a),
+        Command::Explain(a) => explain_command(a),
         Command::Report(a) => report_command(a),
         Command::List(a) => list_command(a),
         Command::Bench(a) => bench_command(a),
@@ -318,6 +341,39 @@ fn reproduce_command(args: ReproduceArgs) -> ExitCode {
         Ok(o) => {
             println!("{}", o.message);
             println!("dense output in {}", o.out.display());
+            if o.matched {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::FAILURE
+            }
+        }
+        Err(e) => bad_input(&e.0),
+    }
+}
+
+fn explain_command(args: ExplainArgs) -> ExitCode {
+    let ExplainArgs {
+        case_dir,
+        event,
+        threads,
+        out,
+        counterfactual,
+    } = args;
+    if threads == Some(0) {
+        return bad_input("--threads: 0 is out of range (allowed >= 1)");
+    }
+    let opts = explain::ExplainOptions {
+        threads,
+        out,
+        counterfactual,
+    };
+    match explain::explain(&case_dir, event, &opts) {
+        Ok(o) => {
+            println!("{}", o.message);
+            println!(
+                "explain.json, explain_steps and explain_cells in {}",
+                o.out.display()
+            );
             if o.matched {
                 ExitCode::SUCCESS
             } else {

@@ -211,6 +211,11 @@ impl<'p, S: Stepper> Runner<'p, S> {
     }
 
     /// Attaches a probe; probes are called in the order they were attached.
+    /// The stepper being run.
+    pub fn stepper(&self) -> &S {
+        &self.stepper
+    }
+
     pub fn attach(&mut self, probe: impl Probe<S> + 'p) -> &mut Self {
         self.probes.push(Box::new(probe));
         self

@@ -1,0 +1,750 @@
+//! `kick explain`: why an event kicked. Replays from the checkpoint before
+//! the event, bit for bit as `kick reproduce` does, taking the steps from
+//! `quiet_seconds` before onset to the event's last step with the solver's
+//! force forensics (`solver::forensics`), and measures the mechanisms
+//! (`monitor::mechanisms`, docs/physics.md section 4c) over the onset
+//! window (`merge_seconds` before the event's first step to its last).
+//! With `--counterfactual` it restarts from the same checkpoint once per
+//! single change, applied from the onset window's start.
+
+use crate::explain_picture;
+use crate::output_files::write_atomic;
+use crate::probes::replay::{Found, Replay as ReplayChecks};
+use crate::run_case::{watches, with_threads};
+use crate::runner::{Probe, Rows, Run, RunOptions, Runner, Stepper, Watch};
+use crate::study_file::{self, Case};
+use crate::summary::Summary;
+use crate::tables;
+use monitor::mechanisms::{Mechanisms, Shares, StepParts};
+use monitor::{CellRange, Event};
+use serde::Serialize;
+use serde_json::json;
+use solver::forensics::ExplainedStep;
+use solver::{CheckpointError, Method, Solver, Vec2};
+use std::path::{Path, PathBuf};
+
+pub struct ExplainOptions {
+    pub threads: Option<usize>,
+    pub out: Option<PathBuf>,
+    pub counterfactual: bool,
+}
+
+/// Bad input (exit 2): missing or corrupted files, unknown event, mixtures.
+#[derive(Debug)]
+pub struct ExplainError(pub String);
+
+pub struct Outcome {
+    pub matched: bool,
+    pub message: String,
+    pub out: PathBuf,
+}
+
+/// One explained step's row of the table.
+#[derive(Clone, Debug, Serialize)]
+pub struct StepRow {
+    pub step: u64,
+    pub time: f64,
+    pub dt: f64,
+    /// In the onset window (else: the quiet time before it, M4's window).
+    pub onset: bool,
+    pub parts: StepParts,
+}
+
+/// What the explained replay recorded.
+#[derive(Default)]
+struct Record {
+    rows: Vec<StepRow>,
+    /// Ids of the particles explained.
+    ids: Vec<u32>,
+    /// The explained step at the onset window's start, and at the event's first step.
+    before: Option<ExplainedStep>,
+    onset: Option<ExplainedStep>,
+}
+
+/// The window's times and steps.
+#[derive(Clone, Copy, Debug, Serialize)]
+struct Window {
+    explain_from: f64,
+    onset_from: f64,
+    first_step: u64,
+    last_step: u64,
+    last_t: f64,
+}
+
+/// A solver whose steps in the window are explained.
+struct Explaining<'a> {
+    solver: Solver,
+    window: Window,
+    cells: CellRange,
+    mechanisms: Mechanisms,
+    primed: bool,
+    record: &'a mut Record,
+}
+
+impl Explaining<'_> {
+    fn indices(&mut self) -> Vec<usize> {
+        let v = self.solver.view();
+        if self.record.ids.is_empty() {
+            // An energy event names no particle: those in its cells.
+            let (h, o) = (v.grid.h, Vec2::from(v.scene.origin));
+            let c = self.cells;
+            for (p, x) in v.x.iter().enumerate() {
+                let r = (x - o) / h;
+                let (i, j) = (r.x.floor(), r.y.floor());
+                if i >= c.i_min as f64
+                    && i <= c.i_max as f64
+                    && j >= c.j_min as f64
+                    && j <= c.j_max as f64
+                {
+                    self.record.ids.push(v.id[p]);
+                }
+            }
+        }
+        let ids = &self.record.ids;
+        (0..v.id.len())
+            .filter(|&p| ids.binary_search(&v.id[p]).is_ok())
+            .collect()
+    }
+}
+
+impl Stepper for Explaining<'_> {
+    fn advance(&mut self) -> Result<(), String> {
+        let step = self.solver.step_count() + 1;
+        let ends_at = self.solver.time() + self.solver.next_dt();
+        if ends_at < self.window.explain_from || step > self.window.last_step {
+            return Stepper::advance(&mut self.solver);
+        }
+        let particles = self.indices();
+        let explained = self
+            .solver
+            .step_explained(&particles)
+            .map_err(|e| format!("step {step}: {e}"))?;
+        let onset = explained.time >= self.window.onset_from;
+        if onset && self.record.before.is_none() {
+            self.record.before = Some(explained.clone());
+        }
+        if step == self.window.first_step {
+            self.record.onset = Some(explained.clone());
+        }
+        if !self.primed {
+            self.mechanisms.prime(&explained);
+            self.primed = true;
+            return Ok(());
+        }
+        let parts = self.mechanisms.add(&explained);
+        self.record.rows.push(StepRow {
+            step,
+            time: explained.time,
+            dt: explained.dt,
+            onset,
+            parts,
+        });
+        Ok(())
+    }
+    fn finished(&self) -> bool {
+        self.solver.finished()
+    }
+    fn step_count(&self) -> u64 {
+        self.solver.step_count()
+    }
+    fn time(&self) -> f64 {
+        self.solver.time()
+    }
+    fn state_hash(&self) -> u64 {
+        self.solver.state_hash()
+    }
+    fn phase_count(&self) -> usize {
+        1
+    }
+    fn phase(&self, _k: usize) -> &Solver {
+        &self.solver
+    }
+    fn phase_name(&self, _k: usize) -> Option<&'static str> {
+        None
+    }
+    fn primary_phase(&self) -> usize {
+        0
+    }
+    fn timeseries_stem(&self, _k: usize) -> String {
+        "timeseries".into()
+    }
+    fn save(&self, watches: &[Watch]) -> Vec<u8> {
+        Stepper::save(&self.solver, watches)
+    }
+    fn load(&mut self, bytes: &[u8], watches: &mut [Watch]) -> Result<(), CheckpointError> {
+        Stepper::load(&mut self.solver, bytes, watches)
+    }
+}
+
+/// The logged event, its case and its checkpoint's bytes.
+struct Loaded {
+    study_path: PathBuf,
+    logged: Event,
+    case: Case,
+    checkpoint: Vec<u8>,
+    checkpoint_name: String,
+}
+
+fn load(case_dir: &Path, id: u32) -> Result<Loaded, ExplainError> {
+    let summary_path = case_dir.join("summary.json");
+    let events = Summary::read(case_dir).map_err(ExplainError)?.events;
+    let Some(logged) = events.iter().find(|e| e.id == id).cloned() else {
+        let ids: Vec<String> = events.iter().map(|e| e.id.to_string()).collect();
+        return Err(ExplainError(format!(
+            "{}: no event {id} (events: {})",
+            summary_path.display(),
+            if ids.is_empty() {
+                "none".into()
+            } else {
+                ids.join(", ")
+            }
+        )));
+    };
+    let Some(checkpoint_name) = logged.checkpoint.clone() else {
+        return Err(ExplainError(format!(
+            "{}: event {id} has no checkpoint (the case ran with output.checkpoint_every = 0)",
+            summary_path.display()
+        )));
+    };
+    let study_path = case_dir.join("case.toml");
+    let study = study_file::load(&study_path, &[]).map_err(|e| ExplainError(e.to_string()))?;
+    let case = study.cases[0].clone();
+    if case.mixture.is_some() {
+        return Err(ExplainError(format!(
+            "{}: kick explain takes single-phase cases (this one is a mixture)",
+            study_path.display()
+        )));
+    }
+    let ckpt_path = case_dir.join(&checkpoint_name);
+    let checkpoint = std::fs::read(&ckpt_path)
+        .map_err(|e| ExplainError(format!("{}: cannot read: {e}", ckpt_path.display())))?;
+    Ok(Loaded {
+        study_path,
+        logged,
+        case,
+        checkpoint,
+        checkpoint_name,
+    })
+}
+
+pub fn explain(case_dir: &Path, id: u32, opts: &ExplainOptions) -> Result<Outcome, ExplainError> {
+    let loaded = load(case_dir, id)?;
+    let out = opts
+        .out
+        .clone()
+        .unwrap_or_else(|| case_dir.join("explain").join(format!("event_{id}")));
+    let logged = &loaded.logged;
+    let mcfg = &loaded.case.monitor;
+    let window = Window {
+        explain_from: logged.t - mcfg.quiet_seconds,
+        onset_from: logged.t - mcfg.merge_seconds,
+        first_step: logged.first_step,
+        last_step: logged.last_step,
+        last_t: logged.last_t,
+    };
+    let at = |e: String| ExplainError(format!("{}: {e}", out.display()));
+    let mut record = Record {
+        ids: {
+            let mut ids = logged.particles.clone();
+            ids.sort_unstable();
+            ids
+        },
+        ..Record::default()
+    };
+    let found = with_threads(opts.threads, || {
+        explained_replay(&loaded, window, &out, &mut record)
+    })
+    .map_err(|e| at(e.to_string()))?
+    .map_err(|e| {
+        ExplainError(format!(
+            "{}: {e}",
+            case_dir.join(&loaded.checkpoint_name).display()
+        ))
+    })?;
+    let counterfactual = if opts.counterfactual {
+        with_threads(opts.threads, || Ok(counterfactuals(&loaded, window)))
+            .map_err(|e| at(e.to_string()))?
+    } else {
+        vec![]
+    };
+    finish(
+        case_dir,
+        &out,
+        &loaded,
+        window,
+        &record,
+        found,
+        &counterfactual,
+    )
+    .map_err(|e| at(e.to_string()))
+}
+
+fn explained_replay(
+    loaded: &Loaded,
+    window: Window,
+    out: &Path,
+    record: &mut Record,
+) -> std::io::Result<Result<Found, String>> {
+    let case = &loaded.case;
+    let solver = match Solver::new(case.solver.clone()) {
+        Ok(s) => s,
+        Err(e) => return Ok(Err(format!("setup: {e}"))),
+    };
+    let mut watches = watches(&solver, case);
+    let scene = &case.solver.scene;
+    let mut stepper = Explaining {
+        mechanisms: Mechanisms::new(
+            Vec2::from(scene.origin),
+            scene.cell,
+            case.solver.first_rho0(),
+            scene.gravity,
+        ),
+        solver,
+        window,
+        cells: loaded.logged.cells,
+        primed: false,
+        record,
+    };
+    if let Err(e) = stepper.load(&loaded.checkpoint, &mut watches) {
+        return Ok(Err(e.to_string()));
+    }
+    let start = stepper.step_count();
+    if start >= window.first_step {
+        return Ok(Err(format!(
+            "taken at step {start}, not before event {} (step {})",
+            loaded.logged.id, window.first_step
+        )));
+    }
+    let mut run_opts = RunOptions::new(Some(out.to_path_buf()), Rows::every_step());
+    run_opts.csv = true;
+    run_opts.until_step = Some(window.last_step);
+    let mut found = Found::default();
+    let mut runner = Runner::new(stepper, watches, run_opts);
+    runner.attach(ReplayChecks {
+        files_from: u64::MAX,
+        files: out.join("particles"),
+        event: &loaded.logged,
+        phase: 0,
+        found: &mut found,
+    });
+    runner.run()?;
+    drop(runner);
+    Ok(Ok(found))
+}
+
+/// The mechanisms' shares over the rows of the onset window.
+fn window_shares(rows: &[StepRow]) -> Shares {
+    let mut sum = Shares::default();
+    let mut dv2 = 0.0;
+    for r in rows.iter().filter(|r| r.onset) {
+        let p = &r.parts.projected;
+        sum.internal += p.internal;
+        sum.external += p.external;
+        sum.walls += p.walls;
+        sum.jump += p.jump;
+        sum.impulse += p.impulse;
+        sum.rest += p.rest;
+        sum.small_mass_node += p.small_mass_node;
+        sum.cell_crossing += p.cell_crossing;
+        sum.stress_outlier += p.stress_outlier;
+        dv2 += r.parts.dv2;
+    }
+    let d = if dv2 > 0.0 { 1.0 / dv2 } else { 0.0 };
+    Shares {
+        internal: sum.internal * d,
+        external: sum.external * d,
+        walls: sum.walls * d,
+        jump: sum.jump * d,
+        impulse: sum.impulse * d,
+        rest: sum.rest * d,
+        small_mass_node: sum.small_mass_node * d,
+        cell_crossing: sum.cell_crossing * d,
+        stress_outlier: sum.stress_outlier * d,
+    }
+}
+
+/// One single change of the counterfactual replay.
+#[derive(Clone, Debug, Serialize)]
+pub struct CounterfactualRow {
+    pub change: String,
+    /// Why it could not be made (then nothing below was measured).
+    pub refused: Option<String>,
+    /// Largest window injection (J/m) of the budget the detector watches,
+    /// over the onset window, against the event's floor.
+    pub injected: f64,
+    pub floor: f64,
+    /// An event of the same kind opened in the window over the event's cells.
+    pub event_happens: bool,
+    pub steps: u64,
+}
+
+const HALF_DT: &str = "half dt";
+
+/// The default list: (name, study-file overrides of `[method]`).
+fn changes(method: &Method) -> Vec<(String, Vec<String>)> {
+    let xpic = if method.transfer == solver::TransferKind::Xpic {
+        (
+            "xpic off".to_string(),
+            vec!["method.transfer=\"flip\"".to_string()],
+        )
+    } else {
+        (
+            "xpic on".to_string(),
+            vec![
+                "method.transfer=\"xpic\"".into(),
+                "method.xpic_order=5".into(),
+            ],
+        )
+    };
+    vec![
+        ("unchanged".into(), vec![]),
+        ("pic".into(), vec!["method.transfer=\"pic\"".into()]),
+        (
+            "flip 0.99".into(),
+            vec![
+                "method.transfer=\"flip\"".into(),
+                "method.flip_alpha=0.99".into(),
+            ],
+        ),
+        // Halved from the solver's own step when the change is made.
+        (HALF_DT.into(), vec![]),
+        (
+            "min node mass 0.01".into(),
+            vec!["method.min_node_mass={ share = 0.01 }".into()],
+        ),
+        ("j-bar".into(), vec!["method.j_bar=true".into()]),
+        (
+            "pressure smoothing".into(),
+            vec!["method.pressure_smoothing=true".into()],
+        ),
+        xpic,
+        (
+            "shifting".into(),
+            vec!["method.shifting={ time = 0.02 }".into()],
+        ),
+    ]
+}
+
+/// A solver that changes its method once, at the onset window's start,
+/// and ends after the event's last time.
+struct Switching {
+    solver: Solver,
+    at: f64,
+    until: f64,
+    method: Option<Method>,
+    halve_dt: bool,
+    refused: Option<String>,
+}
+
+impl Stepper for Switching {
+    fn advance(&mut self) -> Result<(), String> {
+        let s = &mut self.solver;
+        if s.time() + s.next_dt() >= self.at {
+            if std::mem::take(&mut self.halve_dt) {
+                let mut m = s.config().method.clone();
+                match m.dt {
+                    solver::DtMode::Fixed => m.dt_value = Some(s.next_dt() / 2.0),
+                    solver::DtMode::Dynamic => m.cfl /= 2.0,
+                }
+                self.method = Some(m);
+            }
+            if let Some(m) = self.method.take() {
+                if let Err(e) = s.set_method(m) {
+                    self.refused = Some(e.to_string());
+                    return Err(format!("refused: {e}"));
+                }
+            }
+        }
+        Stepper::advance(s)
+    }
+    fn finished(&self) -> bool {
+        self.solver.finished() || self.solver.time() >= self.until
+    }
+    fn step_count(&self) -> u64 {
+        self.solver.step_count()
+    }
+    fn time(&self) -> f64 {
+        self.solver.time()
+    }
+    fn state_hash(&self) -> u64 {
+        self.solver.state_hash()
+    }
+    fn phase_count(&self) -> usize {
+        1
+    }
+    fn phase(&self, _k: usize) -> &Solver {
+        &self.solver
+    }
+    fn phase_name(&self, _k: usize) -> Option<&'static str> {
+        None
+    }
+    fn primary_phase(&self) -> usize {
+        0
+    }
+    fn timeseries_stem(&self, _k: usize) -> String {
+        "timeseries".into()
+    }
+    fn save(&self, watches: &[Watch]) -> Vec<u8> {
+        Stepper::save(&self.solver, watches)
+    }
+    fn load(&mut self, bytes: &[u8], watches: &mut [Watch]) -> Result<(), CheckpointError> {
+        Stepper::load(&mut self.solver, bytes, watches)
+    }
+}
+
+/// What a counterfactual run did over the onset window: the running
+/// minimum of the budget the detector watches, the largest rise above it,
+/// and whether the event opened again.
+struct Measured {
+    min: f64,
+    injected: f64,
+    happens: bool,
+}
+
+struct WindowInjection<'a> {
+    from: f64,
+    until: f64,
+    logged: &'a Event,
+    measured: &'a mut Measured,
+}
+
+impl<S: Stepper> Probe<S> for WindowInjection<'_> {
+    fn after_step(&mut self, run: &Run<S>, opened: &[u32]) -> std::io::Result<()> {
+        let t = run.stepper.time();
+        if t < self.from || t > self.until + 1e-12 {
+            return Ok(());
+        }
+        let monitor = &run.watches[0].monitor;
+        let r = monitor.report();
+        // The detector's total up to a constant.
+        let watched = r.budget_drift + r.remedy_injected;
+        let m = &mut *self.measured;
+        if watched.is_finite() {
+            m.min = m.min.min(watched);
+            m.injected = m.injected.max(watched - m.min);
+        }
+        for id in opened {
+            if let Some(e) = monitor.events().iter().find(|e| e.id == *id) {
+                if e.kind == self.logged.kind && overlaps(e.cells, self.logged.cells) {
+                    m.happens = true;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn overlaps(a: CellRange, b: CellRange) -> bool {
+    a.i_min <= b.i_max && b.i_min <= a.i_max && a.j_min <= b.j_max && b.j_min <= a.j_max
+}
+
+fn counterfactuals(loaded: &Loaded, window: Window) -> Vec<CounterfactualRow> {
+    changes(&loaded.case.solver.method)
+        .into_iter()
+        .map(|(change, overrides)| counterfactual(loaded, window, change, &overrides))
+        .collect()
+}
+
+fn counterfactual(
+    loaded: &Loaded,
+    window: Window,
+    change: String,
+    overrides: &[String],
+) -> CounterfactualRow {
+    let floor = loaded.logged.evidence.energy_floor;
+    let refused = |why: String| CounterfactualRow {
+        change: change.clone(),
+        refused: Some(why),
+        injected: f64::NAN,
+        floor,
+        event_happens: false,
+        steps: 0,
+    };
+    let method = if overrides.is_empty() {
+        None
+    } else {
+        match changed_method(&loaded.study_path, overrides) {
+            Ok(m) => Some(m),
+            Err(e) => return refused(e),
+        }
+    };
+    let case = &loaded.case;
+    let solver = match Solver::new(case.solver.clone()) {
+        Ok(s) => s,
+        Err(e) => return refused(format!("setup: {e}")),
+    };
+    let mut watches = watches(&solver, case);
+    let mut stepper = Switching {
+        solver,
+        at: window.onset_from,
+        until: window.last_t,
+        method,
+        halve_dt: change == HALF_DT,
+        refused: None,
+    };
+    if let Err(e) = stepper.load(&loaded.checkpoint, &mut watches) {
+        return refused(e.to_string());
+    }
+    let start = stepper.step_count();
+    let mut measured = Measured {
+        min: f64::INFINITY,
+        injected: 0.0,
+        happens: false,
+    };
+    let mut runner = Runner::new(stepper, watches, RunOptions::new(None, Rows::every_step()));
+    runner.attach(WindowInjection {
+        from: window.onset_from,
+        until: window.last_t,
+        logged: &loaded.logged,
+        measured: &mut measured,
+    });
+    let ran = runner.run();
+    let steps = runner.stepper().step_count().saturating_sub(start);
+    let why_refused = runner.stepper().refused.clone();
+    drop(runner);
+    if let Some(why) = why_refused {
+        return refused(why);
+    }
+    if let Err(e) = ran {
+        return refused(e.to_string());
+    }
+    CounterfactualRow {
+        change,
+        refused: None,
+        injected: measured.injected,
+        floor,
+        event_happens: measured.happens,
+        steps,
+    }
+}
+
+/// The case's method with `overrides` applied to its study file.
+fn changed_method(study_path: &Path, overrides: &[String]) -> Result<Method, String> {
+    let study = study_file::load(study_path, overrides).map_err(|e| e.to_string())?;
+    Ok(study.cases[0].solver.method.clone())
+}
+
+fn finish(
+    case_dir: &Path,
+    out: &Path,
+    loaded: &Loaded,
+    window: Window,
+    record: &Record,
+    found: Found,
+    counterfactual: &[CounterfactualRow],
+) -> std::io::Result<Outcome> {
+    let logged = &loaded.logged;
+    let matched = found.hash_at_first.as_deref() == logged.state_hash.as_deref()
+        && found
+            .replayed
+            .as_ref()
+            .is_some_and(|e| e.first_step == logged.first_step);
+    let shares = window_shares(&record.rows);
+    let before: Vec<&StepRow> = record.rows.iter().filter(|r| !r.onset).collect();
+    let drift = if before.is_empty() {
+        f64::NAN
+    } else {
+        before.iter().map(|r| r.parts.drift).sum::<f64>() / before.len() as f64
+    };
+    let rest_max = record
+        .rows
+        .iter()
+        .map(|r| r.parts.rest_max)
+        .fold(0.0, f64::max);
+    let (leading, leading_share) = shares.leading();
+    let (largest, largest_share) = shares.largest_part();
+    let ev = &logged.evidence;
+    let record_json = json!({
+        "case_dir": case_dir.display().to_string(),
+        "event": logged.id,
+        "checkpoint": loaded.checkpoint_name,
+        "replayed_state_hash": found.hash_at_first,
+        "logged_state_hash": logged.state_hash,
+        "matched": matched,
+        "window": window,
+        "particles": record.ids,
+        "steps_explained": record.rows.len(),
+        "closure_rest_max": rest_max,
+        "shares": shares,
+        "leading": {"mechanism": leading, "share": leading_share},
+        "largest_part": {"part": largest, "share": largest_share},
+        "m4_ringing": {
+            "drift_over_speed": drift,
+            "steps": before.len(),
+            "window_s": window.onset_from - window.explain_from,
+        },
+        "m5_time_step": {
+            "courant_before": ev.courant_before,
+            "advection_before": ev.advection_before,
+            "critical_courant": ev.critical_courant,
+        },
+        "criteria": {
+            "small_node_share": monitor::mechanisms::SMALL_NODE_SHARE,
+            "outlier_sigmas": monitor::mechanisms::OUTLIER_SIGMAS,
+            "outlier_floor_rho0_g_h": monitor::mechanisms::OUTLIER_FLOOR,
+        },
+        "counterfactual": counterfactual,
+    });
+    std::fs::create_dir_all(out)?;
+    write_atomic(
+        &out.join("explain.json"),
+        serde_json::to_string_pretty(&record_json)?.as_bytes(),
+    )?;
+    write_steps(&record.rows, out)?;
+    if let (Some(b), Some(o)) = (&record.before, &record.onset) {
+        let h = loaded.case.solver.scene.cell;
+        explain_picture::write(b, o, h, out).map_err(std::io::Error::other)?;
+    }
+    let message = format!(
+        "event {}: {} (hash {}); largest part {largest} {:.3}; leading mechanism {leading} {:.3}; closure {:.1e}",
+        logged.id,
+        if matched { "replayed" } else { "DIVERGED" },
+        found.hash_at_first.as_deref().unwrap_or("-"),
+        largest_share,
+        leading_share,
+        rest_max
+    );
+    Ok(Outcome {
+        matched,
+        message,
+        out: out.to_path_buf(),
+    })
+}
+
+fn write_steps(rows: &[StepRow], out: &Path) -> std::io::Result<()> {
+    let col = |f: &dyn Fn(&StepRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
+    let share = |f: &dyn Fn(&Shares) -> f64| {
+        rows.iter()
+            .map(|r| {
+                if r.parts.dv2 > 0.0 {
+                    f(&r.parts.projected) / r.parts.dv2
+                } else {
+                    0.0
+                }
+            })
+            .collect::<Vec<f64>>()
+    };
+    let columns: Vec<(&str, Vec<f64>)> = vec![
+        ("step", col(&|r| r.step as f64)),
+        ("t", col(&|r| r.time)),
+        ("dt", col(&|r| r.dt)),
+        ("onset", col(&|r| r.onset as u8 as f64)),
+        ("dv2", col(&|r| r.parts.dv2)),
+        ("share_internal", share(&|s| s.internal)),
+        ("share_external", share(&|s| s.external)),
+        ("share_walls", share(&|s| s.walls)),
+        ("share_jump", share(&|s| s.jump)),
+        ("share_impulse", share(&|s| s.impulse)),
+        ("share_rest", share(&|s| s.rest)),
+        ("share_m1_small_mass_node", share(&|s| s.small_mass_node)),
+        ("share_m2_cell_crossing", share(&|s| s.cell_crossing)),
+        ("share_m3_stress_outlier", share(&|s| s.stress_outlier)),
+        ("m4_drift", col(&|r| r.parts.drift)),
+        ("rest_max", col(&|r| r.parts.rest_max)),
+        ("crossers", col(&|r| r.parts.crossers as f64)),
+        ("outliers", col(&|r| r.parts.outliers as f64)),
+        ("min_node_share", col(&|r| r.parts.min_node_share)),
+    ];
+    let refs: Vec<(&str, &[f64])> = columns.iter().map(|(n, v)| (*n, v.as_slice())).collect();
+    tables::write_columns(&refs, out, "explain_steps", true)
+}
