@@ -95,6 +95,7 @@ pub fn case_report(dir: &Path) -> Res<PathBuf> {
     }
     metrics_section(&c, &mut page);
     events_section(&c, &mut page);
+    explained_section(&c, &mut page);
     timeseries_section(&c, &mut page)?;
     particles_section(&c, &mut page)?;
     for e in events
@@ -285,6 +286,47 @@ fn events_section(c: &CaseInputs, page: &mut Page) {
 }
 
 /// A unit enum as summary.json spells it.
+/// The events `kick explain` wrote a folder for (CASE_DIR/explain/event_K):
+/// their largest part, leading mechanism and picture, linked.
+fn explained_section(c: &CaseInputs, page: &mut Page) {
+    let mut found: Vec<(u32, serde_json::Value)> = vec![];
+    for e in &c.summary.events {
+        let file = c
+            .dir
+            .join("explain")
+            .join(format!("event_{}", e.id))
+            .join("explain.json");
+        let json = std::fs::read_to_string(&file)
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+        if let Some(j) = json {
+            found.push((e.id, j));
+        }
+    }
+    if found.is_empty() {
+        return;
+    }
+    page.h2("Explained events (kick explain)");
+    for (id, j) in found {
+        let folder = format!("../explain/event_{id}");
+        let part = &j["largest_part"];
+        let lead = &j["leading"];
+        page.p(&format!(
+            "Event {id}: largest part {} ({:.3}); leading mechanism {} ({:.3}); {}.",
+            escape(part["part"].as_str().unwrap_or("-")),
+            part["share"].as_f64().unwrap_or(f64::NAN),
+            escape(lead["mechanism"].as_str().unwrap_or("-")),
+            lead["share"].as_f64().unwrap_or(f64::NAN),
+            crate::report_html::link(Some(&format!("{folder}/explain.json")), "explain.json"),
+        ));
+        page.image(
+            &format!("{folder}/explain_cells.png"),
+            &format!("event {id}: stencil nodes and contributing particles"),
+            "At the onset window's start and at the event's first step: nodes by mass share (red: light), net nodal forces, contributing particles by pressure, the event's ringed",
+        );
+    }
+}
+
 fn serde_name<T: serde::Serialize + std::fmt::Debug>(v: &T) -> String {
     match serde_json::to_value(v) {
         Ok(serde_json::Value::String(s)) => s,
