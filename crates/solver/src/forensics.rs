@@ -13,6 +13,9 @@
 //! hooks, `[[perturb]]` impulses) is the particle's `rest`, zero to
 //! round-off for a method without them.
 
+// The stencil loops walk the 1D weights of both axes by node offset.
+#![allow(clippy::needless_range_loop)]
+
 use crate::grid::Grid;
 use crate::particles::{Mat2, Vec2};
 use crate::shapes::{with_width, Shape, Stencil};
