@@ -369,8 +369,8 @@ pub struct CounterfactualRow {
     pub change: String,
     /// Why it could not be made (then nothing below was measured).
     pub refused: Option<String>,
-    /// Largest window injection (J/m) of the budget the detector watches,
-    /// over the onset window, against the event's floor.
+    /// Largest rise (J/m) over the onset window of the total the injection
+    /// test watches above its running minimum there, against the event's floor.
     pub injected: f64,
     pub floor: f64,
     /// An event of the same kind opened in the window over the event's cells.
@@ -516,8 +516,7 @@ impl<S: Stepper> Probe<S> for WindowInjection<'_> {
         }
         let monitor = &run.watches[0].monitor;
         let r = monitor.report();
-        // The detector's total up to a constant.
-        let watched = r.budget_drift + r.remedy_injected;
+        let watched = r.detector_total;
         let m = &mut *self.measured;
         if watched.is_finite() {
             m.min = m.min.min(watched);
