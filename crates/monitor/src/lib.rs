@@ -381,6 +381,9 @@ pub struct Monitor {
     prev_time: f64,
     /// Particle ids per slot as of the last observation (deletions compact the history).
     ids: Vec<u32>,
+    /// Set by a restore: the next observation takes the solver's ids as the
+    /// restored histories' (not saved: the solver's checkpoint holds them).
+    adopt_ids: bool,
     /// Mass at t = 0, deleted particles included.
     initial_mass: f64,
     /// Transfer loss accumulated since t = 0 (see `StepReport::transfer_loss`).
@@ -452,6 +455,7 @@ impl Monitor {
             critical_courant: critical_courant(v.shape),
             prev_time: v.time,
             ids: v.id.to_vec(),
+            adopt_ids: false,
             initial_mass: v.mass.iter().sum::<f64>() + v.losses.mass(),
             transfer_loss: 0.0,
             booking: RemedyBooking::default(),
@@ -509,6 +513,11 @@ impl Monitor {
     pub fn observe(&mut self, v: &StateView) -> &StepReport {
         let g = self.g_ref();
         let dt = v.dt.max(1e-300);
+        if std::mem::take(&mut self.adopt_ids) && v.id.len() == self.history.ke_recent.len() {
+            // Restored from a checkpoint taken after deletions.
+            self.ids.clear();
+            self.ids.extend_from_slice(v.id);
+        }
         if v.id.len() != self.ids.len() || v.id.last() != self.ids.last() {
             // The solver deleted particles, or some entered through an
             // inflow wall: keep the history of the others.

@@ -107,21 +107,30 @@ impl Monitor {
     /// Restores what `save_state` wrote; the monitor must be built for the same scene and config.
     pub fn restore_state(&mut self, bytes: &[u8]) -> Result<(), CheckpointError> {
         let mut r = Reader(unseal(bytes, MAGIC)?);
-        for (stored, expected) in [
-            (r.u64()?, self.history.ke_recent.len()),
-            (r.u64()?, self.event_mark.len()),
-        ] {
-            if stored != expected as u64 {
-                return Err(CheckpointError::ParticleCount {
-                    stored,
-                    expected: expected as u64,
-                });
-            }
+        // Particles deleted before the checkpoint leave fewer histories
+        // than the scene seeded: the next observation takes the restored
+        // solver's ids as they are (without compacting again).
+        let n = r.u64()?;
+        let ids = self.event_mark.len() as u64;
+        if n > ids {
+            return Err(CheckpointError::ParticleCount {
+                stored: n,
+                expected: ids,
+            });
+        }
+        let marks = r.u64()?;
+        if marks != ids {
+            return Err(CheckpointError::ParticleCount {
+                stored: marks,
+                expected: ids,
+            });
         }
         self.accel_step = None;
         for a in self.history.arrays_mut() {
+            a.resize(n as usize, 0.0);
             r.f64s(a)?;
         }
+        self.adopt_ids = true;
         r.u32s(&mut self.event_mark)?;
         self.prev_time = r.f64()?;
         let minimum = r.f64()?;

@@ -75,6 +75,28 @@ fn column_pushes_restart_with_an_event_open() {
 }
 
 #[test]
+fn a_restart_after_deletions_continues_exactly() {
+    // One particle moved out of the box is deleted at the first step: the
+    // checkpoint at step 20 holds one history fewer than the scene seeded.
+    let mut cfg = SolverConfig {
+        scene: Scene::dam_break(Material::tait(1.5e5)),
+        method: Method::baseline(),
+        perturb: vec![],
+    };
+    cfg.scene.on_escape = OnLoss::Delete;
+    let mut s = Solver::new(cfg.clone()).unwrap();
+    let n = s.particle_count();
+    s.plant_motion(7, Vec2::new(-0.004, 0.1), Vec2::zeros());
+    let start = s.checkpoint();
+    let m = assert_restart_is_exact(cfg.clone(), Some(&start), 20, 80);
+    let mut s = Solver::new(cfg).unwrap();
+    s.restore(&start).unwrap();
+    s.step().unwrap();
+    assert_eq!(s.particle_count(), n - 1, "the particle was deleted");
+    assert_eq!(m.report().step, 80);
+}
+
+#[test]
 fn real_kick_restarts_with_deformed_events_up_to_the_blow_out() {
     let mut mat = Material::new(1.5e4);
     mat.eos = EosKind::Power;

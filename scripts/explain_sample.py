@@ -1,0 +1,112 @@
+#!/usr/bin/env python3
+"""Explain a stratified sample of a matrix's injection kicks (issue 46).
+
+    python3 scripts/explain_sample.py MATRIX_DIR [--n 30] [--kick PATH] [--jobs 2] [--table-only]
+
+Picks kicks of cause `injection` from every case's summary.json, stratified
+by K (`materials.water.K`) and by time: collapse (t < 0.15 s), impact
+(0.15-0.6 s) and late (t >= 0.6 s), taking one per stratum in turn
+(deterministic: cases and events in name and id order), then runs
+`kick explain CASE --event K --threads 1` for each (skipping those already
+explained) and prints a table of each event's shares and the means per time
+stratum.
+"""
+import argparse
+import glob
+import json
+import os
+import statistics
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+
+
+def stratum(t):
+    return "collapse" if t < 0.15 else ("impact" if t < 0.6 else "late")
+
+
+def pick(matrix, n):
+    strata = {}
+    for d in sorted(glob.glob(os.path.join(matrix, "*", "summary.json"))):
+        s = json.load(open(d))
+        k = s["params"].get("materials.water.K")
+        for e in sorted(s["events"], key=lambda e: e["id"]):
+            if e["cause"] == "injection" and e.get("checkpoint"):
+                strata.setdefault((k, stratum(e["t"])), []).append((os.path.dirname(d), e))
+    keys = sorted(strata, key=lambda k: (k[0], ["collapse", "impact", "late"].index(k[1])))
+    chosen, round_ = [], 0
+    while len(chosen) < n and any(round_ < len(strata[k]) for k in keys):
+        for k in keys:
+            if round_ < len(strata[k]) and len(chosen) < n:
+                # Spread over the stratum rather than its first events.
+                lst = strata[k]
+                step = max(1, len(lst) // 4)
+                chosen.append((k, *lst[(round_ * step) % len(lst)]))
+        round_ += 1
+    # The same event twice (small strata wrap): keep one.
+    seen, out = set(), []
+    for k, case, e in chosen:
+        if (case, e["id"]) not in seen:
+            seen.add((case, e["id"]))
+            out.append((k, case, e))
+    return out, {k: len(v) for k, v in strata.items()}
+
+
+def explain(kick, case, event):
+    out = os.path.join(case, "explain", f"event_{event}", "explain.json")
+    if not os.path.exists(out):
+        subprocess.run([kick, "explain", case, "--event", str(event), "--threads", "1"],
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return json.load(open(out)) if os.path.exists(out) else None
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("matrix")
+    ap.add_argument("--n", type=int, default=30)
+    ap.add_argument("--kick", default="target/release/kick")
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--table-only", action="store_true")
+    a = ap.parse_args()
+    chosen, sizes = pick(a.matrix, a.n)
+    print(f"injection kicks per (K, time) stratum: {sizes}", file=sys.stderr)
+    if a.table_only:
+        results = [explain_done(case, e["id"]) for _, case, e in chosen]
+    else:
+        with ThreadPoolExecutor(a.jobs) as ex:
+            results = list(ex.map(lambda c: explain(a.kick, c[1], c[2]["id"]), chosen))
+    keys = ["internal", "external", "walls", "jump", "small_mass_node", "cell_crossing", "stress_outlier"]
+    print("| case | event | K (Pa) | t (s) | stratum | matched | closure | largest part | internal | jump | M1 small-mass | M2 crossing | M3 outlier | M4 drift | M5 Courant |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    by = {}
+    for (k, case, e), j in zip(chosen, results):
+        if j is None:
+            print(f"| {os.path.basename(case)} | {e['id']} | {k[0]:g} | {e['t']:.3f} | {k[1]} | not explained | | | | | | | | | |")
+            continue
+        sh = j["shares"]
+        by.setdefault(k[1], []).append(sh)
+        print(f"| {os.path.basename(case)} | {e['id']} | {k[0]:g} | {e['t']:.3f} | {k[1]} | {j['matched']} | {j['closure_rest_max']:.1e} | "
+              f"{j['largest_part']['part']} | {sh['internal']:.2f} | {sh['jump']:.2f} | {sh['small_mass_node']:.2f} | "
+              f"{sh['cell_crossing']:.2f} | {sh['stress_outlier']:.2f} | {j['m4_ringing']['drift_over_speed']:.2f} | "
+              f"{j['m5_time_step']['courant_before']:.2f} |")
+    print()
+    print("| stratum | events | " + " | ".join(f"{k} (median [min, max])" for k in keys) + " |")
+    print("|---|---|" + "---|" * len(keys))
+    for s in ["collapse", "impact", "late"]:
+        lst = by.get(s, [])
+        if not lst:
+            continue
+        cells = []
+        for k in keys:
+            v = [x[k] for x in lst]
+            cells.append(f"{statistics.median(v):.2f} [{min(v):.2f}, {max(v):.2f}]")
+        print(f"| {s} | {len(lst)} | " + " | ".join(cells) + " |")
+
+
+def explain_done(case, event):
+    out = os.path.join(case, "explain", f"event_{event}", "explain.json")
+    return json.load(open(out)) if os.path.exists(out) else None
+
+
+if __name__ == "__main__":
+    main()
