@@ -827,17 +827,13 @@ ensemble = 2
     }
 }
 
-#[test]
-fn reproduce_replays_an_injected_kick_bit_for_bit_on_one_thread() {
-    let out = scratch("reproduce");
-    // A 1 m/s push into the water at step 300, in a run on 2 threads with
-    // checkpoints every 100 steps (so the replay starts at step 200).
+/// A 1 m/s push into a quadratic B-spline APIC column at step 300, with
+/// checkpoints every 100 steps: the study file, written into `out`.
+fn push_study(out: &std::path::Path, t_end: f64) -> std::path::PathBuf {
     let study = out.join("push.toml");
-    std::fs::write(
-        &study,
-        r#"
+    let text = r#"
 [scene]
-t_end = 0.08
+t_end = T_END
 [[scene.body]]
 rect = [0.0, 0.0, 0.2, 0.4]
 material = "water"
@@ -853,9 +849,17 @@ checkpoint_every = 100
 step = 300
 region = [0.06, 0.1, 0.09, 0.13]
 dv = [1.0, 0.0]
-"#,
-    )
-    .unwrap();
+"#;
+    std::fs::write(&study, text.replace("T_END", &t_end.to_string())).unwrap();
+    study
+}
+
+#[test]
+fn reproduce_replays_an_injected_kick_bit_for_bit_on_one_thread() {
+    let out = scratch("reproduce");
+    // A 1 m/s push into the water at step 300, in a run on 2 threads with
+    // checkpoints every 100 steps (so the replay starts at step 200).
+    let study = push_study(&out, 0.08);
     let o = kick(&[
         "run",
         study.to_str().unwrap(),
@@ -932,30 +936,7 @@ dv = [1.0, 0.0]
 fn explain_splits_an_injected_kick_and_replays_single_changes() {
     let out = scratch("explain");
     // The reproduce test's push: 1 m/s into the water at step 300.
-    let study = out.join("push.toml");
-    std::fs::write(
-        &study,
-        r#"
-[scene]
-t_end = 0.06
-[[scene.body]]
-rect = [0.0, 0.0, 0.2, 0.4]
-material = "water"
-[materials.water]
-K = 1.5e5
-eos = "tait"
-[method]
-shape = "bspline2"
-transfer = "apic"
-[output]
-checkpoint_every = 100
-[[perturb]]
-step = 300
-region = [0.06, 0.1, 0.09, 0.13]
-dv = [1.0, 0.0]
-"#,
-    )
-    .unwrap();
+    let study = push_study(&out, 0.06);
     let o = kick(&[
         "run",
         study.to_str().unwrap(),

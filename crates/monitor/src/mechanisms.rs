@@ -56,6 +56,36 @@ impl Shares {
         self.internal + self.external + self.walls + self.jump + self.impulse + self.rest
     }
 
+    /// Adds another sum of projections part by part.
+    pub fn add(&mut self, b: &Shares) {
+        self.internal += b.internal;
+        self.external += b.external;
+        self.walls += b.walls;
+        self.jump += b.jump;
+        self.impulse += b.impulse;
+        self.rest += b.rest;
+        self.small_mass_node += b.small_mass_node;
+        self.cell_crossing += b.cell_crossing;
+        self.stress_outlier += b.stress_outlier;
+    }
+
+    /// Sums of projections c . dv over sum |dv|^2: the shares (0 when
+    /// nothing moved).
+    pub fn over(&self, dv2: f64) -> Shares {
+        let d = if dv2 > 0.0 { 1.0 / dv2 } else { 0.0 };
+        Shares {
+            internal: self.internal * d,
+            external: self.external * d,
+            walls: self.walls * d,
+            jump: self.jump * d,
+            impulse: self.impulse * d,
+            rest: self.rest * d,
+            small_mass_node: self.small_mass_node * d,
+            cell_crossing: self.cell_crossing * d,
+            stress_outlier: self.stress_outlier * d,
+        }
+    }
+
     /// The part of the full split with the largest share.
     pub fn largest_part(&self) -> (&'static str, f64) {
         [
@@ -232,34 +262,13 @@ impl Mechanisms {
     }
 
     fn add_parts(&mut self, s: &StepParts) {
-        let (a, b) = (&mut self.sum, &s.projected);
-        a.internal += b.internal;
-        a.external += b.external;
-        a.walls += b.walls;
-        a.jump += b.jump;
-        a.impulse += b.impulse;
-        a.rest += b.rest;
-        a.small_mass_node += b.small_mass_node;
-        a.cell_crossing += b.cell_crossing;
-        a.stress_outlier += b.stress_outlier;
+        self.sum.add(&s.projected);
         self.dv2 += s.dv2;
     }
 
     /// The window's shares so far.
     pub fn shares(&self) -> Shares {
-        let d = if self.dv2 > 0.0 { 1.0 / self.dv2 } else { 0.0 };
-        let s = &self.sum;
-        Shares {
-            internal: s.internal * d,
-            external: s.external * d,
-            walls: s.walls * d,
-            jump: s.jump * d,
-            impulse: s.impulse * d,
-            rest: s.rest * d,
-            small_mass_node: s.small_mass_node * d,
-            cell_crossing: s.cell_crossing * d,
-            stress_outlier: s.stress_outlier * d,
-        }
+        self.sum.over(self.dv2)
     }
 
     fn outlier(

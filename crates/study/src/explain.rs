@@ -71,6 +71,42 @@ struct Window {
     last_t: f64,
 }
 
+/// The `Stepper` methods a wrapper of one `solver` hands to it.
+macro_rules! solver_stepper {
+    () => {
+        fn step_count(&self) -> u64 {
+            self.solver.step_count()
+        }
+        fn time(&self) -> f64 {
+            self.solver.time()
+        }
+        fn state_hash(&self) -> u64 {
+            self.solver.state_hash()
+        }
+        fn phase_count(&self) -> usize {
+            1
+        }
+        fn phase(&self, _k: usize) -> &Solver {
+            &self.solver
+        }
+        fn phase_name(&self, _k: usize) -> Option<&'static str> {
+            None
+        }
+        fn primary_phase(&self) -> usize {
+            0
+        }
+        fn timeseries_stem(&self, _k: usize) -> String {
+            "timeseries".into()
+        }
+        fn save(&self, watches: &[Watch]) -> Vec<u8> {
+            Stepper::save(&self.solver, watches)
+        }
+        fn load(&mut self, bytes: &[u8], watches: &mut [Watch]) -> Result<(), CheckpointError> {
+            Stepper::load(&mut self.solver, bytes, watches)
+        }
+    };
+}
+
 /// A solver whose steps in the window are explained.
 struct Explaining<'a> {
     solver: Solver,
@@ -144,36 +180,7 @@ impl Stepper for Explaining<'_> {
     fn finished(&self) -> bool {
         self.solver.finished()
     }
-    fn step_count(&self) -> u64 {
-        self.solver.step_count()
-    }
-    fn time(&self) -> f64 {
-        self.solver.time()
-    }
-    fn state_hash(&self) -> u64 {
-        self.solver.state_hash()
-    }
-    fn phase_count(&self) -> usize {
-        1
-    }
-    fn phase(&self, _k: usize) -> &Solver {
-        &self.solver
-    }
-    fn phase_name(&self, _k: usize) -> Option<&'static str> {
-        None
-    }
-    fn primary_phase(&self) -> usize {
-        0
-    }
-    fn timeseries_stem(&self, _k: usize) -> String {
-        "timeseries".into()
-    }
-    fn save(&self, watches: &[Watch]) -> Vec<u8> {
-        Stepper::save(&self.solver, watches)
-    }
-    fn load(&mut self, bytes: &[u8], watches: &mut [Watch]) -> Result<(), CheckpointError> {
-        Stepper::load(&mut self.solver, bytes, watches)
-    }
+    solver_stepper!();
 }
 
 /// The logged event, its case and its checkpoint's bytes.
@@ -337,30 +344,10 @@ fn window_shares(rows: &[StepRow]) -> Shares {
     let mut sum = Shares::default();
     let mut dv2 = 0.0;
     for r in rows.iter().filter(|r| r.onset) {
-        let p = &r.parts.projected;
-        sum.internal += p.internal;
-        sum.external += p.external;
-        sum.walls += p.walls;
-        sum.jump += p.jump;
-        sum.impulse += p.impulse;
-        sum.rest += p.rest;
-        sum.small_mass_node += p.small_mass_node;
-        sum.cell_crossing += p.cell_crossing;
-        sum.stress_outlier += p.stress_outlier;
+        sum.add(&r.parts.projected);
         dv2 += r.parts.dv2;
     }
-    let d = if dv2 > 0.0 { 1.0 / dv2 } else { 0.0 };
-    Shares {
-        internal: sum.internal * d,
-        external: sum.external * d,
-        walls: sum.walls * d,
-        jump: sum.jump * d,
-        impulse: sum.impulse * d,
-        rest: sum.rest * d,
-        small_mass_node: sum.small_mass_node * d,
-        cell_crossing: sum.cell_crossing * d,
-        stress_outlier: sum.stress_outlier * d,
-    }
+    sum.over(dv2)
 }
 
 /// One single change of the counterfactual replay.
@@ -460,36 +447,7 @@ impl Stepper for Switching {
     fn finished(&self) -> bool {
         self.solver.finished() || self.solver.time() >= self.until
     }
-    fn step_count(&self) -> u64 {
-        self.solver.step_count()
-    }
-    fn time(&self) -> f64 {
-        self.solver.time()
-    }
-    fn state_hash(&self) -> u64 {
-        self.solver.state_hash()
-    }
-    fn phase_count(&self) -> usize {
-        1
-    }
-    fn phase(&self, _k: usize) -> &Solver {
-        &self.solver
-    }
-    fn phase_name(&self, _k: usize) -> Option<&'static str> {
-        None
-    }
-    fn primary_phase(&self) -> usize {
-        0
-    }
-    fn timeseries_stem(&self, _k: usize) -> String {
-        "timeseries".into()
-    }
-    fn save(&self, watches: &[Watch]) -> Vec<u8> {
-        Stepper::save(&self.solver, watches)
-    }
-    fn load(&mut self, bytes: &[u8], watches: &mut [Watch]) -> Result<(), CheckpointError> {
-        Stepper::load(&mut self.solver, bytes, watches)
-    }
+    solver_stepper!();
 }
 
 /// What a counterfactual run did over the onset window: the running
