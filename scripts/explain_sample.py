@@ -85,10 +85,12 @@ def main():
             continue
         sh = j["shares"]
         by.setdefault(k[1], []).append(sh)
+        # JSON writes NaN (no step before the onset window) as null.
+        f2 = lambda x: "-" if x is None else f"{x:.2f}"
         print(f"| {os.path.basename(case)} | {e['id']} | {k[0]:g} | {e['t']:.3f} | {k[1]} | {j['matched']} | {j['closure_rest_max']:.1e} | "
-              f"{j['largest_part']['part']} | {sh['internal']:.2f} | {sh['jump']:.2f} | {sh['small_mass_node']:.2f} | "
-              f"{sh['cell_crossing']:.2f} | {sh['stress_outlier']:.2f} | {j['m4_ringing']['drift_over_speed']:.2f} | "
-              f"{j['m5_time_step']['courant_before']:.2f} |")
+              f"{j['largest_part']['part']} | {f2(sh['internal'])} | {f2(sh['jump'])} | {f2(sh['small_mass_node'])} | "
+              f"{f2(sh['cell_crossing'])} | {f2(sh['stress_outlier'])} | {f2(j['m4_ringing']['drift_over_speed'])} | "
+              f"{f2(j['m5_time_step']['courant_before'])} |")
     print()
     print("| stratum | events | " + " | ".join(f"{k} (median [min, max])" for k in keys) + " |")
     print("|---|---|" + "---|" * len(keys))
