@@ -264,6 +264,14 @@ pub struct Perturb {
     pub dv: [f64; 2],
 }
 
+impl Perturb {
+    /// Whether a particle at `x` gets the push (the region's edges included).
+    pub fn covers(&self, x: crate::Vec2) -> bool {
+        let [x0, y0, x1, y1] = self.region;
+        x.x >= x0 && x.x <= x1 && x.y >= y0 && x.y <= y1
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SolverConfig {
     pub scene: Scene,

@@ -146,11 +146,7 @@ impl Solver {
     /// Takes one step as `step()` does, explaining the velocity change of
     /// `particles` (indices). Single-phase only.
     pub fn step_explained(&mut self, particles: &[usize]) -> Result<ExplainedStep, StepError> {
-        let mut dt = self.next_dt();
-        let remaining = self.cfg.scene.t_end - self.time;
-        if remaining > 0.0 && dt > remaining {
-            dt = remaining;
-        }
+        let dt = self.step_dt();
         self.begin_step(dt)?;
         let ps = &self.particles;
         let v_old: Vec<Vec2> = particles.iter().map(|&p| ps.v[p]).collect();
@@ -204,11 +200,7 @@ impl Solver {
         self.cfg
             .perturb
             .iter()
-            .filter(|pert| pert.step == self.step)
-            .filter(|pert| {
-                let [x0, y0, x1, y1] = pert.region;
-                x.x >= x0 && x.x <= x1 && x.y >= y0 && x.y <= y1
-            })
+            .filter(|pert| pert.step == self.step && pert.covers(x))
             .map(|pert| Vec2::from(pert.dv))
             .sum()
     }
@@ -227,10 +219,10 @@ impl Solver {
         let mut out: Vec<Explained> = Vec::with_capacity(particles.len());
         for (k, &p) in particles.iter().enumerate() {
             let st = &self.stencils[p];
-            let weights = node_weights::<W>(&self.shape, st, grid);
+            let weights = stencil_nodes::<W>(&self.shape, st, grid);
             let vp = ps.v[p];
             let mut nodes = Vec::with_capacity(W * W);
-            for (slot, &(node, w, _)) in weights.iter().enumerate() {
+            for (slot, &(node, w, _, _)) in weights.iter().enumerate() {
                 let n = node as usize;
                 let m = grid.mass[n];
                 let dv_node = grid.vel_new[n] - grid.vel[n];
@@ -329,8 +321,12 @@ impl Solver {
     }
 }
 
-/// (node, N_ip, grad N_ip) over a particle's stencil.
-fn node_weights<const W: usize>(shape: &Shape, st: &Stencil, grid: &Grid) -> Vec<(u32, f64, Vec2)> {
+/// (node, N_ip, grad N_ip, (x_i - x_p) / h) over a particle's stencil.
+fn stencil_nodes<const W: usize>(
+    shape: &Shape,
+    st: &Stencil,
+    grid: &Grid,
+) -> Vec<(u32, f64, Vec2, Vec2)> {
     let (wx, dwx) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
     let (wy, dwy) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
     let inv_h = 1.0 / grid.h;
@@ -339,7 +335,8 @@ fn node_weights<const W: usize>(shape: &Shape, st: &Stencil, grid: &Grid) -> Vec
         for a in 0..W {
             let node = st.node + (a + c * grid.dims[0]) as u32;
             let grad = Vec2::new(dwx[a] * wy[c], wx[a] * dwy[c]) * inv_h;
-            out.push((node, wx[a] * wy[c], grad));
+            let offset = Vec2::new(a as f64 - st.frac[0], c as f64 - st.frac[1]);
+            out.push((node, wx[a] * wy[c], grad, offset));
         }
     }
     out
@@ -353,22 +350,12 @@ fn node_force_gradients<const W: usize>(
     grid: &Grid,
     mls: Option<f64>,
 ) -> Vec<(u32, Vec2)> {
-    let Some(inertia) = mls else {
-        return node_weights::<W>(shape, st, grid)
-            .into_iter()
-            .map(|(n, _, g)| (n, g))
-            .collect();
-    };
-    let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-    let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
     let inv_h = 1.0 / grid.h;
-    let mut out = Vec::with_capacity(W * W);
-    for c in 0..W {
-        for a in 0..W {
-            let node = st.node + (a + c * grid.dims[0]) as u32;
-            let d = Vec2::new(a as f64 - st.frac[0], c as f64 - st.frac[1]);
-            out.push((node, wx[a] * wy[c] * inertia * inv_h * d));
-        }
-    }
-    out
+    stencil_nodes::<W>(shape, st, grid)
+        .into_iter()
+        .map(|(node, w, grad, offset)| match mls {
+            Some(inertia) => (node, w * inertia * inv_h * offset),
+            None => (node, grad),
+        })
+        .collect()
 }

@@ -340,12 +340,18 @@ impl Solver {
 
     /// Takes one explicit step (clamped so as to land on t_end exactly).
     pub fn step(&mut self) -> Result<(), StepError> {
-        let mut dt = self.next_dt();
+        self.step_with_dt(self.step_dt())
+    }
+
+    /// The next step's size, clamped so as to land on t_end exactly.
+    pub(crate) fn step_dt(&self) -> f64 {
+        let dt = self.next_dt();
         let remaining = self.cfg.scene.t_end - self.time;
         if remaining > 0.0 && dt > remaining {
-            dt = remaining;
+            remaining
+        } else {
+            dt
         }
-        self.step_with_dt(dt)
     }
 
     /// Takes one step of a given size (relaxation and tests).
@@ -677,14 +683,12 @@ impl Solver {
             if pert.step != step {
                 continue;
             }
-            let [x0, y0, x1, y1] = pert.region;
             let dv = Vec2::from(pert.dv);
             // An impulse: it drives the particle, so it is part of its force-driven acceleration.
             let da = dv / self.dt;
             let ps = &mut self.particles;
             for p in 0..ps.len() {
-                let x = ps.x[p];
-                if x.x >= x0 && x.x <= x1 && x.y >= y0 && x.y <= y1 {
+                if pert.covers(ps.x[p]) {
                     let v = ps.v[p];
                     self.impulse_kinetic +=
                         0.5 * ps.mass[p] * ((v + dv).norm_squared() - v.norm_squared());

@@ -121,17 +121,13 @@ impl Explaining<'_> {
     fn indices(&mut self) -> Vec<usize> {
         let v = self.solver.view();
         if self.record.ids.is_empty() {
-            // An energy event names no particle: those in its cells.
-            let (h, o) = (v.grid.h, Vec2::from(v.scene.origin));
+            // An energy event names no particle: those in its cells, by
+            // the monitor's own cell rule.
+            let geometry = monitor::Geometry::from_scene(v.scene);
             let c = self.cells;
-            for (p, x) in v.x.iter().enumerate() {
-                let r = (x - o) / h;
-                let (i, j) = (r.x.floor(), r.y.floor());
-                if i >= c.i_min as f64
-                    && i <= c.i_max as f64
-                    && j >= c.j_min as f64
-                    && j <= c.j_max as f64
-                {
+            for (p, &x) in v.x.iter().enumerate() {
+                let (i, j) = geometry.cell_of(x);
+                if (c.i_min..=c.i_max).contains(&i) && (c.j_min..=c.j_max).contains(&j) {
                     self.record.ids.push(v.id[p]);
                 }
             }
