@@ -54,7 +54,8 @@ pub struct MonitorConfig {
     /// multiple of the explicit-stepping noise floor.
     pub injection_floor_factor: f64,
     pub injection_seconds: f64,
-    /// Blow-out: a particle faster than this multiple of sqrt(2 g H_box).
+    /// Blow-out: a particle faster than this multiple of sqrt(2 g H_box), or
+    /// of the bodies' largest initial speed when that is larger.
     pub escape_speed_factor: f64,
 }
 

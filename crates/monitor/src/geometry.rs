@@ -16,6 +16,9 @@ pub struct Geometry {
     /// Initial column height H (tallest body) and width a (widest body).
     pub column_height: f64,
     pub column_width: f64,
+    /// The bodies' largest uniform speed |velocity| at t = 0 (m/s): a body
+    /// thrown at U (the ringing test's drift) is not escaping at U.
+    pub body_speed: f64,
 }
 
 impl Geometry {
@@ -41,6 +44,11 @@ impl Geometry {
             material: scene.materials.first().cloned(),
             column_height: height,
             column_width: width,
+            body_speed: scene
+                .bodies
+                .iter()
+                .map(|b| b.velocity[0].hypot(b.velocity[1]))
+                .fold(0.0, f64::max),
         }
     }
 

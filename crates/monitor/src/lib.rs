@@ -19,6 +19,7 @@ pub mod mechanisms;
 pub mod particle_history;
 pub mod remedy_booking;
 pub mod rest_field;
+pub mod ringing_growth;
 mod state;
 pub mod step_history;
 
@@ -801,7 +802,8 @@ impl Monitor {
             ));
         }
         // Under on_escape = "delete" a fast particle is left to leave the box.
-        let escape = self.cfg.escape_speed_factor * (2.0 * g * self.geom.size.y).sqrt();
+        let fall = (2.0 * g * self.geom.size.y).sqrt();
+        let escape = self.cfg.escape_speed_factor * fall.max(self.geom.body_speed);
         if v.scene.on_escape == solver::OnLoss::Stop && max_speed > escape {
             let reason = format!(
                 "a particle reached {max_speed:.3} m/s, beyond the escape speed {escape:.3} m/s"

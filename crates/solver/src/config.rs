@@ -460,6 +460,11 @@ impl SolverConfig {
             if let Some(flow) = &b.flow {
                 let key = format!("scene.body[{i}].flow");
                 flow.check(b.rect, s.periodic, s.gravity, &key)?;
+                check(
+                    flow.drift_scale(b.velocity) > 0.0,
+                    &format!("scene.body[{i}].velocity"),
+                    "must be nonzero under a grid_seed flow (its seed is a share of it)",
+                )?;
             }
         }
         if s.initial == InitialState::HydrostaticGate {

@@ -26,6 +26,13 @@ pub enum Flow {
     /// a; u = -a omega cosh(k y) sin(k x) / sinh(k d),
     /// v = a omega sinh(k y) cos(k x) / sinh(k d).
     StandingWave { amplitude: f64, mode: u32 },
+    /// Brackbill's ringing test (docs/physics.md section 7b): a seed on the
+    /// body's uniform `velocity` U, of speed `share` |U|, mode m waves
+    /// across a square body (k = 2 pi m / L, near the grid scale when L / m
+    /// is a few cells): u' = (sin kx + sin ky, sin kx - sin ky) / 2, both
+    /// compressive and rotational. Periodic on both axes; a uniform flow
+    /// alone is an exact discrete steady state and seeds only round-off.
+    GridSeed { share: f64, mode: u32 },
 }
 
 impl Flow {
@@ -37,6 +44,7 @@ impl Flow {
                 mode as f64 * PI / w
             }
             Flow::ShearWave { .. } => 2.0 * PI / h,
+            Flow::GridSeed { mode, .. } => 2.0 * PI * mode as f64 / w,
         }
     }
 
@@ -51,6 +59,17 @@ impl Flow {
             Flow::TaylorGreen { amplitude, .. }
             | Flow::ShearWave { amplitude }
             | Flow::StandingWave { amplitude, .. } => amplitude,
+            Flow::GridSeed { share, .. } => share,
+        }
+    }
+
+    /// The factor the flow's speed scale is multiplied by on a body moving
+    /// at `drift`: |U| for the grid seed (its speed is a share of the
+    /// drift), 1 for the others (their amplitude is a speed).
+    pub fn drift_scale(&self, drift: [f64; 2]) -> f64 {
+        match self {
+            Flow::GridSeed { .. } => drift[0].hypot(drift[1]),
+            _ => 1.0,
         }
     }
 
@@ -86,6 +105,10 @@ impl Flow {
                 -(k * dy).cosh() * (k * dx).sin(),
                 (k * dy).sinh() * (k * dx).cos(),
             ),
+            Flow::GridSeed { .. } => {
+                let (sx, sy) = ((k * dx).sin(), (k * dy).sin());
+                Vec2::new(0.5 * (sx + sy), 0.5 * (sx - sy))
+            }
         }
     }
 
@@ -106,6 +129,10 @@ impl Flow {
                 let (sh, ch) = ((k * dy).sinh(), (k * dy).cosh());
                 Mat2::new(-ak * ch * cx, -ak * sh * sx, -ak * sh * sx, ak * ch * cx)
             }
+            Flow::GridSeed { .. } => {
+                let h = 0.5 * ak;
+                Mat2::new(h * cx, h * cy, h * cx, -h * cy)
+            }
         }
     }
 
@@ -124,8 +151,8 @@ impl Flow {
 
     /// The flow is defined on this body of a scene with these periodic
     /// axes and gravity: a finite positive amplitude, a mode of at least 1,
-    /// a square body for Taylor-Green, both axes periodic for the shear
-    /// wave, gravity for the standing wave.
+    /// a square body for Taylor-Green and the grid seed, both axes periodic
+    /// for the shear wave and the grid seed, gravity for the standing wave.
     pub fn check(
         &self,
         rect: [f64; 4],
@@ -139,17 +166,27 @@ impl Flow {
         };
         let a = self.amplitude();
         if !(a.is_finite() && a > 0.0) {
-            return Err(bad("amplitude", "must be finite and > 0"));
+            let field = match self {
+                Flow::GridSeed { .. } => "share",
+                _ => "amplitude",
+            };
+            return Err(bad(field, "must be finite and > 0"));
         }
         let (w, h) = (rect[2] - rect[0], rect[3] - rect[1]);
         match *self {
-            Flow::TaylorGreen { mode, .. } | Flow::StandingWave { mode, .. } if mode == 0 => {
+            Flow::TaylorGreen { mode, .. }
+            | Flow::StandingWave { mode, .. }
+            | Flow::GridSeed { mode, .. }
+                if mode == 0 =>
+            {
                 Err(bad("mode", "must be >= 1"))
             }
-            Flow::TaylorGreen { .. } if (w - h).abs() > 1e-9 * w.max(h) => Err(bad(
-                "kind",
-                "taylor_green needs a square body (width = height)",
-            )),
+            Flow::TaylorGreen { .. } | Flow::GridSeed { .. } if (w - h).abs() > 1e-9 * w.max(h) => {
+                Err(bad("kind", "needs a square body (width = height)"))
+            }
+            Flow::GridSeed { .. } if periodic != [true, true] => {
+                Err(bad("kind", "grid_seed needs scene.periodic = [true, true]"))
+            }
             Flow::ShearWave { .. } if periodic != [true, true] => Err(bad(
                 "kind",
                 "shear_wave needs scene.periodic = [true, true]",
@@ -254,6 +291,13 @@ mod tests {
                 },
                 tank,
             ),
+            (
+                Flow::GridSeed {
+                    share: 0.01,
+                    mode: 3,
+                },
+                BOX,
+            ),
         ];
         let e = 1e-7;
         for (f, rect) in flows {
@@ -295,5 +339,18 @@ mod tests {
             bad.check(BOX, [true, true], 0.0, key).unwrap_err().key,
             "scene.body[0].flow.amplitude"
         );
+        let seed = |share| Flow::GridSeed { share, mode: 3 };
+        assert!(seed(1e-4).check(BOX, [true, true], 0.0, key).is_ok());
+        assert!(seed(1e-4).check(BOX, [true, false], 0.0, key).is_err());
+        assert!(seed(1e-4).check(wide, [true, true], 0.0, key).is_err());
+        assert_eq!(
+            seed(0.0)
+                .check(BOX, [true, true], 0.0, key)
+                .unwrap_err()
+                .key,
+            "scene.body[0].flow.share"
+        );
+        assert_eq!(seed(1e-4).drift_scale([3.0, 4.0]), 5.0);
+        assert_eq!(tg(1).drift_scale([3.0, 4.0]), 1.0);
     }
 }

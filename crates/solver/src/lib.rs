@@ -266,8 +266,9 @@ impl Solver {
                     continue;
                 }
                 let x = ps.x[q];
-                ps.v[q] += flow.velocity(x, r, s.gravity);
-                ps.affine[q] = flow.gradient(x, r, s.gravity);
+                let scale = flow.drift_scale(body.velocity);
+                ps.v[q] += scale * flow.velocity(x, r, s.gravity);
+                ps.affine[q] = scale * flow.gradient(x, r, s.gravity);
                 let dp = flow.pressure(x, r, mat.rho0);
                 if dp != 0.0 {
                     let p = ps.pressure[q] + dp;

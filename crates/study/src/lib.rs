@@ -26,6 +26,7 @@ pub mod report_matrix;
 pub mod report_matrix_verdict;
 pub mod report_mixture;
 pub mod report_refinement;
+pub mod report_ringing;
 pub mod report_speed;
 pub mod report_stability;
 pub mod report_verdict;

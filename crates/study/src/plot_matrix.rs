@@ -43,9 +43,10 @@ pub struct HeatmapFigure {
 impl Figure for HeatmapFigure {
     fn size(&self) -> (u32, u32) {
         let w = 140 + 110 * self.x_cats.len().max(1) as u32;
+        let (cols, rows) = self.grid();
         (
-            self.panels.len().max(1) as u32 * w + 180,
-            170 + 60 * self.y_cats.len().max(1) as u32,
+            cols * w + 180,
+            40 + rows * (130 + 60 * self.y_cats.len().max(1) as u32),
         )
     }
 
@@ -53,7 +54,8 @@ impl Figure for HeatmapFigure {
         let root = root.titled(&self.title, (SANS, 20)).map_err(err)?;
         let (w, _) = root.dim_in_pixel();
         let (plots, key) = root.split_horizontally(w.saturating_sub(170));
-        let areas = plots.split_evenly((1, self.panels.len().max(1)));
+        let (cols, rows) = self.grid();
+        let areas = plots.split_evenly((rows as usize, cols as usize));
         for (panel, area) in self.panels.iter().zip(areas.iter()) {
             self.draw_panel(panel, area)?;
         }
@@ -73,7 +75,17 @@ impl Figure for HeatmapFigure {
     }
 }
 
+/// Panels side by side up to this many, then the next row.
+const PANELS_PER_ROW: usize = 4;
+
 impl HeatmapFigure {
+    /// Columns and rows of panels.
+    fn grid(&self) -> (u32, u32) {
+        let n = self.panels.len().max(1);
+        let cols = n.min(PANELS_PER_ROW);
+        (cols as u32, n.div_ceil(cols) as u32)
+    }
+
     /// One panel: the categories on both axes and a labelled square per cell.
     fn draw_panel<DB: DrawingBackend>(
         &self,

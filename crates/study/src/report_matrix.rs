@@ -1,7 +1,8 @@
 //! The matrix report page: every case's page first (so the matrix page can
 //! link them), then the sections of `MATRIX_SECTIONS` in order: the verdict,
 //! the bug report's behaviours, the methods, refinement, the mixtures,
-//! outcome and late-hydrostatic heatmaps, the stability map, speed against
+//! outcome and late-hydrostatic heatmaps, the stability map, the ringing
+//! map, speed against
 //! accuracy, the ensembles and the case table. The rows are read once
 //! (`report_data::Matrix`, from each case's summary.json found through
 //! summary.parquet's `case_dir`) and every section renders from them.
@@ -13,7 +14,7 @@ use crate::report_data::Matrix;
 use crate::report_html::Page;
 use crate::{
     report_ablation, report_behaviours, report_cases, report_heatmaps, report_matrix_verdict,
-    report_mixture, report_refinement, report_speed, report_stability,
+    report_mixture, report_refinement, report_ringing, report_speed, report_stability,
 };
 use std::path::{Path, PathBuf};
 
@@ -68,6 +69,11 @@ pub const MATRIX_SECTIONS: &[Section] = &[
         name: "stability",
         needs_axes: true,
         write: report_stability::stability_map,
+    },
+    Section {
+        name: "ringing",
+        needs_axes: true,
+        write: report_ringing::ringing_map,
     },
     Section {
         name: "speed_accuracy",
@@ -139,6 +145,7 @@ mod tests {
                 "mixture",
                 "heatmaps",
                 "stability",
+                "ringing",
                 "speed_accuracy",
                 "ensembles",
                 "cases"
@@ -157,7 +164,8 @@ mod tests {
                 "refinement",
                 "mixture",
                 "heatmaps",
-                "stability"
+                "stability",
+                "ringing"
             ]
         );
     }

@@ -309,6 +309,54 @@ pub const METRICS: &[(&str, &str, &str)] = &[
         "initial flow's largest return after the fit",
         "of its amplitude",
     ),
+    (
+        "checks.ringing.flow_courant",
+        "ringing test's U dt / h",
+        "1",
+    ),
+    (
+        "checks.ringing.sound_courant",
+        "ringing test's c dt / h",
+        "1",
+    ),
+    ("checks.ringing.share", "ringing seed's speed", "of |U|"),
+    (
+        "checks.ringing.wavelength_cells",
+        "ringing seed's wavelength",
+        "cells",
+    ),
+    (
+        "checks.ringing.e0",
+        "ringing seed's kinetic energy E'",
+        "J/m",
+    ),
+    (
+        "checks.ringing.drift_energy",
+        "drift's kinetic energy",
+        "J/m",
+    ),
+    (
+        "checks.ringing.rate_per_step",
+        "growth rate of E' (fit over the window's second half)",
+        "1/step",
+    ),
+    (
+        "checks.ringing.rate_per_second",
+        "growth rate of E' (fit over the window's second half)",
+        "1/s",
+    ),
+    ("checks.ringing.fit_from_step", "ringing fit from", "step"),
+    ("checks.ringing.fit_to_step", "ringing fit to", "step"),
+    (
+        "checks.ringing.window_end",
+        "why the ringing fit's window ended",
+        "-",
+    ),
+    (
+        "checks.ringing.ratio_end",
+        "E' at the window's end",
+        "of E'(0)",
+    ),
     ("checks.slosh.k", "standing wave's wavenumber k", "1/m"),
     (
         "checks.slosh.period_theory_s",
@@ -459,6 +507,7 @@ mod tests {
         m.set_check(&mixture_conservation::MixtureFigures::default());
         m.set_check(&crate::probes::mode_decay::ModeDecayFigures::default());
         m.set_check(&crate::probes::slosh::SloshFigures::default());
+        m.set_check(&crate::probes::ringing::RingingFigures::default());
         let all = m.flattened();
         for key in all.keys() {
             let listed = METRICS.iter().filter(|(k, _, _)| k == key).count();

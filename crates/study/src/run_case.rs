@@ -9,6 +9,7 @@ use crate::probes::checkpoint_ring::CheckpointRing;
 use crate::probes::event_frames::EventFrames;
 use crate::probes::mode_decay::ModeDecay;
 use crate::probes::particle_files::ParticleFiles;
+use crate::probes::ringing::Ringing;
 use crate::probes::slosh::Slosh;
 use crate::probes::surge_front::SurgeFront;
 use crate::run_mixture;
@@ -113,6 +114,9 @@ fn simulate(case: &Case, dir: &Path, opts: &CaseOptions) -> std::io::Result<Simu
             }
             if let Some(slosh) = Slosh::new(&case.solver.scene, dir.to_path_buf(), opts.csv) {
                 runner.attach(slosh);
+            }
+            if let Some(ringing) = Ringing::new(&case.solver.scene, dir.to_path_buf(), opts.csv) {
+                runner.attach(ringing);
             }
             runner.run()
         }

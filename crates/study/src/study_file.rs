@@ -862,19 +862,31 @@ fn plain_part(key: &str, v: &Value) -> String {
                 Some("taylor_green") => "tg",
                 Some("shear_wave") => "shear",
                 Some("standing_wave") => "wave",
+                Some("grid_seed") => "seed",
                 _ => "flow",
+            };
+            // The grid seed's share tells a halved seed from the full one.
+            let kind = match t.get("share") {
+                Some(share) => format!("{kind}{}", as_f64(share)),
+                None => kind.to_string(),
             };
             match t.get("mode") {
                 Some(m) => format!("{kind}-m{}", as_f64(m)),
-                None => kind.into(),
+                None => kind,
             }
         }
-        // Bodies that differ by their flows, by those.
+        // Bodies that differ by their flows, by those, each after its
+        // uniform velocity when it has one (`U1x0_seed-m5`).
         ("body", Value::Array(bodies)) if bodies.iter().all(|b| b.get("flow").is_some()) => {
             let flows: Vec<String> = bodies
                 .iter()
-                .filter_map(|b| b.get("flow"))
-                .map(|f| plain_part("flow", f))
+                .filter_map(|b| {
+                    let flow = plain_part("flow", b.get("flow")?);
+                    Some(match b.get("velocity") {
+                        Some(u) => format!("{}_{flow}", plain_part("U", u)),
+                        None => flow,
+                    })
+                })
                 .collect();
             flows.join("+")
         }
@@ -1055,6 +1067,13 @@ mod tests {
                 &toml("[{ rect = [0.0, 0.0, 0.2, 0.2], flow = { kind = \"taylor_green\", amplitude = 0.01, mode = 2 } }]")
             ),
             "tg-m2"
+        );
+        assert_eq!(
+            name_part(
+                "scene.body",
+                &toml("[{ rect = [0.0, 0.0, 0.2, 0.2], velocity = [0.5, 0.0], flow = { kind = \"grid_seed\", share = 1e-4, mode = 5 } }]")
+            ),
+            "U0.5x0_seed0.0001-m5"
         );
         assert_eq!(name_part("scene.no_slip", &toml("[]")), "slip");
         assert_eq!(
