@@ -10,7 +10,9 @@ use solver::checkpoint::{unseal, CheckpointError, Reader, Writer};
 
 // 9: B-spline APIC's transfer loss is measured on the grid and added (an
 // older checkpoint's sum is the particle measure, which was not).
-const MAGIC: &[u8; 8] = b"KICKMON9";
+// A (10): an eleventh remedy (Uintah's artificial viscosity) lengthens the
+// per-remedy booking.
+const MAGIC: &[u8; 8] = b"KICKMONA";
 
 /// The events' encoding: bincode (little-endian, varint integers, f64 bits as
 /// they are) through `Event`'s serde derive, so the checkpoint and the summary

@@ -68,6 +68,13 @@ pub enum DtMode {
     Fixed,
     /// CFL step recomputed every step.
     Dynamic,
+    /// Uintah's: dt = CFL min over the axes of h / max_p(c_p + |v_p,axis|),
+    /// with c_p the tangent wave speed after the stress update and v_p the
+    /// velocity the particle had at the start of the step, computed at the
+    /// end of a step for the next; the first step takes c = sqrt(K / rho0)
+    /// (the bulk modulus, not the tangent's gamma K).
+    #[serde(rename = "per_axis")]
+    PerAxis,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -77,6 +84,10 @@ pub enum JUpdate {
     Det,
     /// J <- J exp(dt tr L): stays positive.
     Exp,
+    /// Uintah's: F <- (I + dt L / n)^n F with n = min(max(1, 2 floor(|L| dt)),
+    /// 10000) (|L| the Frobenius norm), J = det F: the plain update while
+    /// |L| dt < 1, substeps beyond.
+    Substeps,
 }
 
 /// How `method.j_bar` reconstructs J on the grid before interpolating it

@@ -104,6 +104,11 @@ pub struct Scene {
     /// Fraction of the initial mass that deleted particles may take before
     /// the run counts as blown up (the harness's convention, not Uintah's).
     pub lost_mass_limit: f64,
+    /// A particle whose J exceeds this counts as degenerate, like an
+    /// inverted one (`on_inversion`): Uintah's Water model deletes J > 1e5.
+    /// None: no upper limit.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_j: Option<f64>,
     /// Walls with zero tangential grid velocity (the others are free-slip
     /// symmetry planes), e.g. `no_slip = ["floor"]`.
     pub no_slip: Vec<Wall>,
@@ -131,6 +136,7 @@ impl Default for Scene {
             on_escape: OnLoss::Stop,
             on_inversion: OnLoss::Stop,
             lost_mass_limit: 0.1,
+            max_j: None,
             no_slip: vec![],
             bodies: vec![],
             materials: vec![],
@@ -410,6 +416,9 @@ impl SolverConfig {
         within(s.gravity, 0.0, 1e4, "scene.gravity")?;
         within(s.jitter, 0.0, 1e-3, "scene.jitter")?;
         within(s.lost_mass_limit, 1e-9, 1.0, "scene.lost_mass_limit")?;
+        if let Some(j) = s.max_j {
+            within(j, 1.0 + 1e-9, 1e300, "scene.max_j")?;
+        }
         for w in &s.no_slip {
             check(
                 !s.periodic[w.axis()],

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 pub enum CullReason {
     /// Outside the box on a non-periodic axis.
     Escaped,
-    /// J <= 0 or det F <= 0.
+    /// J <= 0 or det F <= 0, or J above `scene.max_j`.
     Inverted,
     /// Flowed out through an open side (a drained wall).
     Drained,
@@ -73,6 +73,8 @@ pub struct CullRules {
     open: [[bool; 2]; 2],
     /// det F is checked apart from J (the exp J update keeps J > 0).
     det_apart: bool,
+    /// J beyond which a particle counts as degenerate (`scene.max_j`).
+    max_j: f64,
     lo: Vec2,
     hi: Vec2,
     periodic: [bool; 2],
@@ -89,6 +91,7 @@ impl CullRules {
             inversion,
             open,
             det_apart: j_update == JUpdate::Exp,
+            max_j: scene.max_j.unwrap_or(f64::INFINITY),
             lo,
             hi: lo + Vec2::from(scene.size),
             periodic: scene.periodic,
@@ -98,7 +101,10 @@ impl CullRules {
     fn reason(&self, ps: &Particles, p: usize) -> Option<CullReason> {
         // Inversion first, as the monitor judges it: an inverted particle
         // often leaves the box in the same step.
-        if self.inversion && (ps.j[p] <= 0.0 || (self.det_apart && ps.f[p].determinant() <= 0.0)) {
+        let j = ps.j[p];
+        let degenerate =
+            j <= 0.0 || j > self.max_j || (self.det_apart && ps.f[p].determinant() <= 0.0);
+        if self.inversion && degenerate {
             return Some(CullReason::Inverted);
         }
         let x = ps.x[p];

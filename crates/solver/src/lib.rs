@@ -130,6 +130,8 @@ pub struct Solver {
     courant: f64,
     /// max_p(c_p + |v_p|) as of the last `measure`.
     signal_speed: f64,
+    /// Uintah's per-axis signal speed for the next step (`DtMode::PerAxis`).
+    axis_signal_speed: f64,
     ke_particles_p2g: f64,
     ke_grid_p2g: f64,
     ke_grid_updated: f64,
@@ -213,6 +215,7 @@ impl Solver {
             energy: Energy::default(),
             courant: 0.0,
             signal_speed: 0.0,
+            axis_signal_speed: 0.0,
             ke_particles_p2g: 0.0,
             times: StageTimes::default(),
             ke_grid_p2g: 0.0,
@@ -303,7 +306,11 @@ impl Solver {
         if let Some(dt) = self.cfg.method.dt_value {
             return dt;
         }
-        timestep::cfl_step(self.cfg.method.cfl, self.cfg.scene.cell, self.signal_speed)
+        let speed = match self.cfg.method.dt {
+            DtMode::PerAxis => self.axis_signal_speed,
+            DtMode::Fixed | DtMode::Dynamic => self.signal_speed,
+        };
+        timestep::cfl_step(self.cfg.method.cfl, self.cfg.scene.cell, speed)
     }
 
     pub fn config(&self) -> &SolverConfig {
@@ -322,7 +329,7 @@ impl Solver {
     pub fn next_dt(&self) -> f64 {
         match self.cfg.method.dt {
             DtMode::Fixed => self.dt_fixed,
-            DtMode::Dynamic => self.cfl_dt(),
+            DtMode::Dynamic | DtMode::PerAxis => self.cfl_dt(),
         }
     }
 
@@ -658,6 +665,23 @@ impl Solver {
         self.n_outside = m.n_outside;
         self.n_nonfinite = m.n_nonfinite;
         self.signal_speed = m.signal_speed;
+        self.axis_signal_speed = if self.step == 0 {
+            self.initial_axis_signal_speed()
+        } else {
+            m.axis_signal_speed
+        };
+    }
+
+    /// Uintah's first step: c = sqrt(K / rho0) of each particle's material
+    /// (without the tangent's gamma) plus its largest velocity component.
+    fn initial_axis_signal_speed(&self) -> f64 {
+        let (ps, materials) = (&self.particles, &self.cfg.scene.materials);
+        (0..ps.len())
+            .map(|p| {
+                let m = &materials[ps.material[p] as usize];
+                (m.k / m.rho0).sqrt() + ps.v[p].x.abs().max(ps.v[p].y.abs())
+            })
+            .fold(0.0, f64::max)
     }
 
     /// APIC's D = d I (m^2) where it is constant (B-splines: h^2/4 quadratic,
@@ -675,6 +699,11 @@ impl Solver {
     /// Recomputes the signal speed after velocities were changed outside a step.
     fn refresh_signal_speed(&mut self) {
         self.signal_speed = timestep::max_signal_speed(&self.particles);
+        self.axis_signal_speed = if self.step == 0 {
+            self.initial_axis_signal_speed()
+        } else {
+            timestep::max_axis_signal_speed(&self.particles)
+        };
     }
 
     /// Adds the perturbations scheduled for the step being taken (after G2P).

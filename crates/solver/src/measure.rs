@@ -1,6 +1,7 @@
 //! End-of-step figures in one pass over the particles: the energies, the
 //! blow-out counters, and the signal speed max(c + |v|) the next CFL step
-//! needs (velocities and cached wave speeds do not change until then).
+//! needs (velocities and cached wave speeds do not change until then), and
+//! Uintah's per-axis one from the step-start velocity.
 
 use crate::energy::Energy;
 use crate::par;
@@ -16,6 +17,7 @@ pub struct Partial {
     outside: usize,
     nonfinite: usize,
     signal_speed: f64,
+    axis_signal_speed: f64,
 }
 
 pub struct Measured {
@@ -23,6 +25,9 @@ pub struct Measured {
     pub n_outside: usize,
     pub n_nonfinite: usize,
     pub signal_speed: f64,
+    /// max_p(c_p + the largest |component| of the step-start velocity):
+    /// Uintah's per-axis signal speed (`DtMode::PerAxis`).
+    pub axis_signal_speed: f64,
 }
 
 /// The box walls a particle may not cross (periodic axes excepted).
@@ -59,6 +64,10 @@ pub fn measure(
         acc.outside += out as usize;
         acc.nonfinite += !finite as usize;
         acc.signal_speed = acc.signal_speed.max(ps.wave_speed[p] + v.norm());
+        let old = ps.v_prev[p];
+        acc.axis_signal_speed = acc
+            .axis_signal_speed
+            .max(ps.wave_speed[p] + old.x.abs().max(old.y.abs()));
     };
     let combine = |total: &mut Partial, part: &Partial| {
         total.kinetic += part.kinetic;
@@ -68,9 +77,11 @@ pub fn measure(
         total.outside += part.outside;
         total.nonfinite += part.nonfinite;
         total.signal_speed = total.signal_speed.max(part.signal_speed);
+        total.axis_signal_speed = total.axis_signal_speed.max(part.axis_signal_speed);
     };
     let init = Partial {
         signal_speed: f64::NEG_INFINITY,
+        axis_signal_speed: f64::NEG_INFINITY,
         ..Partial::default()
     };
     let total = par::fold(ps.len(), partials, init, item, combine);
@@ -85,5 +96,6 @@ pub fn measure(
         n_outside: total.outside,
         n_nonfinite: total.nonfinite,
         signal_speed: total.signal_speed,
+        axis_signal_speed: total.axis_signal_speed,
     }
 }

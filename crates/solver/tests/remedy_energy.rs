@@ -10,8 +10,9 @@
 mod common;
 
 use solver::remedies::{
-    bulk_damping, cell_dilatation, f_reset, j_bar, min_node_mass, null_space_filter, pic_damping,
-    pressure_smoothing, shifting, volume_relaxation, RemedySettings,
+    artificial_viscosity, bulk_damping, cell_dilatation, f_reset, j_bar, min_node_mass,
+    null_space_filter, pic_damping, pressure_smoothing, shifting, volume_relaxation,
+    RemedySettings,
 };
 use solver::shapes::Shape;
 use solver::*;
@@ -256,6 +257,25 @@ fn bulk_damping_reports_its_work_as_the_extra_dissipation() {
     let recomputed = -(a.energy().dissipated - b.energy().dissipated);
     assert!(recomputed < 0.0);
     agree("bulk_damping", e.work, recomputed, a.energy().total(), 1e-6);
+}
+
+#[test]
+fn artificial_viscosity_reports_its_work_as_the_extra_dissipation() {
+    let on = with(|r| r.artificial_viscosity = Some(artificial_viscosity::Settings::default()));
+    let (mut a, mut b) = pair(on.clone(), on, base());
+    a.step().unwrap();
+    b.step().unwrap();
+    let e = reported(&a, "artificial_viscosity");
+    assert_eq!((e.kinetic, e.stored, e.gravitational), (0.0, 0.0, 0.0));
+    let recomputed = -(a.energy().dissipated - b.energy().dissipated);
+    assert!(recomputed < 0.0);
+    agree(
+        "artificial_viscosity",
+        e.work,
+        recomputed,
+        a.energy().total(),
+        1e-6,
+    );
 }
 
 #[test]

@@ -427,7 +427,7 @@ impl Stepper for Switching {
                 let mut m = s.config().method.clone();
                 match m.dt {
                     solver::DtMode::Fixed => m.dt_value = Some(s.next_dt() / 2.0),
-                    solver::DtMode::Dynamic => m.cfl /= 2.0,
+                    solver::DtMode::Dynamic | solver::DtMode::PerAxis => m.cfl /= 2.0,
                 }
                 self.method = Some(m);
             }

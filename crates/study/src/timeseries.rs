@@ -282,6 +282,8 @@ pub const COLUMNS: &[Column] = &[
     booked!(8, null_space_filter, injected),
     booked!(9, shifting, dissipated),
     booked!(9, shifting, injected),
+    booked!(10, artificial_viscosity, dissipated),
+    booked!(10, artificial_viscosity, injected),
     step(
         "budget_drift",
         "J/m",

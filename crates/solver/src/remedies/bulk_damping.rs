@@ -58,7 +58,14 @@ struct BulkDamping {
 
 impl PointRule for BulkDamping {
     #[inline]
-    fn extra_stress(&self, m: &Material, wave_speed: f64, h: f64, d: &Mat2) -> Option<(Mat2, f64)> {
+    fn extra_stress(
+        &self,
+        m: &Material,
+        wave_speed: f64,
+        _j: f64,
+        h: f64,
+        d: &Mat2,
+    ) -> Option<(Mat2, f64)> {
         let zeta = self.b * m.rho0 * wave_speed * h;
         Some(viscosity::bulk(zeta, d))
     }

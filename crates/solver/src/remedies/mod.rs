@@ -35,6 +35,7 @@ registry::registry! {
     pressure_smoothing,
     null_space_filter,
     shifting,
+    artificial_viscosity,
 }
 
 /// The energy a hook changed in the step it acted on (J per metre of
@@ -243,6 +244,7 @@ pub trait PointRule: Send + Sync {
         &self,
         _material: &Material,
         _wave_speed: f64,
+        _j: f64,
         _h: f64,
         _d: &Mat2,
     ) -> Option<(Mat2, f64)> {

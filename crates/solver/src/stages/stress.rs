@@ -149,6 +149,10 @@ fn run<const W: usize>(
                     let det = f_new.determinant();
                     let (f_next, j_next) = match j_update {
                         JUpdate::Det => (f_new, det),
+                        JUpdate::Substeps => {
+                            let f_sub = substepped(l, dt, f[k]);
+                            (f_sub, f_sub.determinant())
+                        }
                         JUpdate::Exp => {
                             let jn = j[k] * (dt * l.trace()).exp();
                             // Rescale F's volumetric part so that det F = J still holds.
@@ -173,7 +177,8 @@ fn run<const W: usize>(
                     acc += visc.power * vol[k] * dt;
                     for (r, rule) in rules.iter().enumerate() {
                         // The wave speed is the previous step's (the EOS runs below).
-                        if let Some((s, power)) = rule.extra_stress(m, wave[k], grid.h, &d) {
+                        if let Some((s, power)) = rule.extra_stress(m, wave[k], j_next, grid.h, &d)
+                        {
                             stress[k] += s;
                             acc += power * vol[k] * dt;
                             if let Some(w) = rule_acc.get_mut(r) {
@@ -226,6 +231,15 @@ fn run<const W: usize>(
         *w = parts.iter().map(|p| p[1 + r]).sum();
     }
     (parts.iter().map(|p| p[0]).sum(), rule_work)
+}
+
+/// Uintah's F update: (I + dt L / n)^n F with n = min(max(1, 2 floor(|L|
+/// dt)), 10000), |L| the Frobenius norm: the plain update while |L| dt < 1.
+#[inline]
+pub fn substepped(l: Mat2, dt: f64, f: Mat2) -> Mat2 {
+    let n = (2.0 * (l.norm() * dt).floor()).clamp(1.0, 10000.0) as usize;
+    let step = Mat2::identity() + (dt / n as f64) * l;
+    (0..n).fold(f, |acc, _| step * acc)
 }
 
 /// The EOS particle by particle when several materials are present.
