@@ -24,6 +24,7 @@ pub mod report_heatmaps;
 pub mod report_html;
 pub mod report_matrix;
 pub mod report_matrix_verdict;
+pub mod report_mechanisms;
 pub mod report_mixture;
 pub mod report_refinement;
 pub mod report_ringing;

@@ -1,8 +1,8 @@
 //! The matrix report page: every case's page first (so the matrix page can
 //! link them), then the sections of `MATRIX_SECTIONS` in order: the verdict,
 //! the bug report's behaviours, the methods, refinement, the mixtures,
-//! outcome and late-hydrostatic heatmaps, the stability map, the ringing
-//! map, speed against
+//! outcome and late-hydrostatic heatmaps, the stability map, the explained
+//! events by mechanism, the ringing map, speed against
 //! accuracy, the ensembles and the case table. The rows are read once
 //! (`report_data::Matrix`, from each case's summary.json found through
 //! summary.parquet's `case_dir`) and every section renders from them.
@@ -14,7 +14,8 @@ use crate::report_data::Matrix;
 use crate::report_html::Page;
 use crate::{
     report_ablation, report_behaviours, report_cases, report_heatmaps, report_matrix_verdict,
-    report_mixture, report_refinement, report_ringing, report_speed, report_stability,
+    report_mechanisms, report_mixture, report_refinement, report_ringing, report_speed,
+    report_stability,
 };
 use std::path::{Path, PathBuf};
 
@@ -69,6 +70,11 @@ pub const MATRIX_SECTIONS: &[Section] = &[
         name: "stability",
         needs_axes: true,
         write: report_stability::stability_map,
+    },
+    Section {
+        name: "mechanisms",
+        needs_axes: false,
+        write: report_mechanisms::mechanism_table,
     },
     Section {
         name: "ringing",
@@ -145,6 +151,7 @@ mod tests {
                 "mixture",
                 "heatmaps",
                 "stability",
+                "mechanisms",
                 "ringing",
                 "speed_accuracy",
                 "ensembles",
