@@ -2,8 +2,12 @@
 """Explain a stratified sample of a matrix's injection kicks (issue 46).
 
     python3 scripts/explain_sample.py MATRIX_DIR [--n 30] [--kick PATH] [--jobs 2] [--table-only]
+        [--causes injection,inversion] [--counterfactual] [--max-window-steps N]
 
-Picks kicks of cause `injection` from every case's summary.json, stratified
+Picks kicks of cause `injection` (or the `--causes` given) from every
+case's summary.json (events open for at most `--max-window-steps` steps
+when given: an event open through a whole blow-out takes as long to
+explain as the blow-out took to run), stratified
 by K (`materials.water.K`) and by time: collapse (t < 0.15 s), impact
 (0.15-0.6 s) and late (t >= 0.6 s), taking one per stratum in turn
 (deterministic: cases and events in name and id order), then runs
@@ -25,13 +29,14 @@ def stratum(t):
     return "collapse" if t < 0.15 else ("impact" if t < 0.6 else "late")
 
 
-def pick(matrix, n):
+def pick(matrix, n, causes=("injection",), max_window=None):
     strata = {}
     for d in sorted(glob.glob(os.path.join(matrix, "*", "summary.json"))):
         s = json.load(open(d))
         k = s["params"].get("materials.water.K")
         for e in sorted(s["events"], key=lambda e: e["id"]):
-            if e["cause"] == "injection" and e.get("checkpoint"):
+            short = max_window is None or e["last_step"] - e["first_step"] <= max_window
+            if e["cause"] in causes and e.get("checkpoint") and short:
                 strata.setdefault((k, stratum(e["t"])), []).append((os.path.dirname(d), e))
     keys = sorted(strata, key=lambda k: (k[0], ["collapse", "impact", "late"].index(k[1])))
     chosen, round_ = [], 0
@@ -52,10 +57,11 @@ def pick(matrix, n):
     return out, {k: len(v) for k, v in strata.items()}
 
 
-def explain(kick, case, event):
+def explain(kick, case, event, counterfactual=False):
     out = os.path.join(case, "explain", f"event_{event}", "explain.json")
     if not os.path.exists(out):
-        subprocess.run([kick, "explain", case, "--event", str(event), "--threads", "1"],
+        extra = ["--counterfactual"] if counterfactual else []
+        subprocess.run([kick, "explain", case, "--event", str(event), "--threads", "1", *extra],
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     return json.load(open(out)) if os.path.exists(out) else None
 
@@ -67,21 +73,25 @@ def main():
     ap.add_argument("--kick", default="target/release/kick")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--table-only", action="store_true")
+    ap.add_argument("--causes", default="injection")
+    ap.add_argument("--counterfactual", action="store_true")
+    ap.add_argument("--max-window-steps", type=int, default=None)
     a = ap.parse_args()
-    chosen, sizes = pick(a.matrix, a.n)
+    chosen, sizes = pick(a.matrix, a.n, tuple(a.causes.split(",")), a.max_window_steps)
     print(f"injection kicks per (K, time) stratum: {sizes}", file=sys.stderr)
     if a.table_only:
         results = [explain_done(case, e["id"]) for _, case, e in chosen]
     else:
         with ThreadPoolExecutor(a.jobs) as ex:
-            results = list(ex.map(lambda c: explain(a.kick, c[1], c[2]["id"]), chosen))
+            results = list(ex.map(lambda c: explain(a.kick, c[1], c[2]["id"], a.counterfactual), chosen))
     keys = ["internal", "external", "walls", "jump", "small_mass_node", "cell_crossing", "stress_outlier"]
-    print("| case | event | K (Pa) | t (s) | stratum | matched | closure | largest part | internal | jump | M1 small-mass | M2 crossing | M3 outlier | M4 drift | M5 Courant |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| case | event | K (Pa) | t (s) | stratum | matched | closure | largest part | internal | jump | M1 small-mass | M2 crossing | M3 outlier | M4 drift | M5 Courant | prevented by |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    prevented_by = {}
     by = {}
     for (k, case, e), j in zip(chosen, results):
         if j is None:
-            print(f"| {os.path.basename(case)} | {e['id']} | {k[0]:g} | {e['t']:.3f} | {k[1]} | not explained | | | | | | | | | |")
+            print(f"| {os.path.basename(case)} | {e['id']} | {k[0]:g} | {e['t']:.3f} | {k[1]} | not explained | | | | | | | | | | |")
             continue
         sh = j["shares"]
         by.setdefault(k[1], []).append(sh)
@@ -90,7 +100,11 @@ def main():
         print(f"| {os.path.basename(case)} | {e['id']} | {k[0]:g} | {e['t']:.3f} | {k[1]} | {j['matched']} | {j['closure_rest_max']:.1e} | "
               f"{j['largest_part']['part']} | {f2(sh['internal'])} | {f2(sh['jump'])} | {f2(sh['small_mass_node'])} | "
               f"{f2(sh['cell_crossing'])} | {f2(sh['stress_outlier'])} | {f2(j['m4_ringing']['drift_over_speed'])} | "
-              f"{f2(j['m5_time_step']['courant_before'])} |")
+              f"{f2(j['m5_time_step']['courant_before'])} | {prevents(j, prevented_by)} |")
+    if prevented_by:
+        print()
+        print("single changes that prevent the event (counterfactual replays): "
+              + ", ".join(f"{c} {n}" for c, n in sorted(prevented_by.items(), key=lambda x: -x[1])))
     print()
     print("| stratum | events | " + " | ".join(f"{k} (median [min, max])" for k in keys) + " |")
     print("|---|---|" + "---|" * len(keys))
@@ -103,6 +117,17 @@ def main():
             v = [x[k] for x in lst]
             cells.append(f"{statistics.median(v):.2f} [{min(v):.2f}, {max(v):.2f}]")
         print(f"| {s} | {len(lst)} | " + " | ".join(cells) + " |")
+
+
+def prevents(j, tally):
+    """The counterfactual changes after which the event did not happen."""
+    cf = j.get("counterfactual") or []
+    if not cf:
+        return "-"
+    names = [c["change"] for c in cf if c["change"] != "unchanged" and c["event_happens"] is False and not c.get("refused")]
+    for n in names:
+        tally[n] = tally.get(n, 0) + 1
+    return ", ".join(names) if names else "none"
 
 
 def explain_done(case, event):

@@ -97,6 +97,12 @@ impl Rows {
     }
 }
 
+/// `RunOptions::stall_steps` over the steps t_end / first dt needs: no
+/// stable run's time step falls that far below its first (Uintah's per-axis
+/// first step is sqrt(gamma) = 2.65 times its next at gamma = 7), while a
+/// blow-out's runaway particles shrink it by orders of magnitude.
+pub const STALL_FACTOR: f64 = 20.0;
+
 pub struct RunOptions {
     /// Where the timeseries tables go (none are written without it).
     pub dir: Option<PathBuf>,
@@ -105,6 +111,9 @@ pub struct RunOptions {
     pub csv: bool,
     /// Stop after this step even if t_end is not reached.
     pub until_step: Option<u64>,
+    /// A run past this many steps has collapsed its time step: it stops as
+    /// blown up (`case_runner` sets it from t_end over the first step).
+    pub stall_steps: Option<u64>,
     /// Stop when a monitor calls a blow-out (a benchmark only records it).
     pub stop_on_blow_out: bool,
     /// End the run once a probe's check has its answer (`Probe::ends_run`).
@@ -120,6 +129,7 @@ impl RunOptions {
             rows,
             csv: false,
             until_step: None,
+            stall_steps: None,
             stop_on_blow_out: true,
             end_when_checked: false,
             bar: None,
@@ -233,6 +243,17 @@ impl<'p, S: Stepper> Runner<'p, S> {
             let stepped = self.step()?;
             if let Some(reason) = stepped.stop {
                 break (Status::BlewUp, reason);
+            }
+            if let Some(n) = self.opts.stall_steps {
+                if self.stepper.step_count() > n {
+                    break (
+                        Status::BlewUp,
+                        format!(
+                            "time step collapsed: {n} steps taken, {STALL_FACTOR} times what t_end over the first step needs, at t = {:.4} s",
+                            self.stepper.time()
+                        ),
+                    );
+                }
             }
             self.each(|p, run| p.between_steps(run))?;
             if self.opts.end_when_checked {
