@@ -141,8 +141,7 @@ fn case_runner<'p, S: Stepper>(
     let mut run_opts = RunOptions::new(Some(dir.to_path_buf()), rows);
     run_opts.csv = opts.csv;
     run_opts.end_when_checked = case.output.end_when_checked;
-    run_opts.stall_steps =
-        Some((crate::runner::STALL_FACTOR * (case.solver.scene.t_end / first_dt).ceil()) as u64);
+    run_opts.collapse_from = Some(first_dt);
     let bar = opts.bar.clone().unwrap_or_else(ProgressBar::hidden);
     bar.set_length(1000);
     bar.set_prefix(case.name.clone());

@@ -97,11 +97,14 @@ impl Rows {
     }
 }
 
-/// `RunOptions::stall_steps` over the steps t_end / first dt needs: no
-/// stable run's time step falls that far below its first (Uintah's per-axis
-/// first step is sqrt(gamma) = 2.65 times its next at gamma = 7), while a
-/// blow-out's runaway particles shrink it by orders of magnitude.
-pub const STALL_FACTOR: f64 = 20.0;
+/// A time step below this share of the first, held for `COLLAPSE_STEPS`
+/// steps in a row, has collapsed: no stable run's step falls that far
+/// (Uintah's per-axis first step is sqrt(gamma) = 2.65 times its next at
+/// gamma = 7; a surge adds |v| to c), while a blow-out's runaway particles
+/// shrink it by orders of magnitude; one that leaves the box within the
+/// steps lets the run go on.
+pub const COLLAPSE_SHARE: f64 = 0.01;
+pub const COLLAPSE_STEPS: u64 = 20_000;
 
 pub struct RunOptions {
     /// Where the timeseries tables go (none are written without it).
@@ -111,9 +114,10 @@ pub struct RunOptions {
     pub csv: bool,
     /// Stop after this step even if t_end is not reached.
     pub until_step: Option<u64>,
-    /// A run past this many steps has collapsed its time step: it stops as
-    /// blown up (`case_runner` sets it from t_end over the first step).
-    pub stall_steps: Option<u64>,
+    /// The run's first time step: a run whose step stays below
+    /// `COLLAPSE_SHARE` of it for `COLLAPSE_STEPS` steps in a row has
+    /// collapsed its time step and stops as blown up (None: never).
+    pub collapse_from: Option<f64>,
     /// Stop when a monitor calls a blow-out (a benchmark only records it).
     pub stop_on_blow_out: bool,
     /// End the run once a probe's check has its answer (`Probe::ends_run`).
@@ -129,7 +133,7 @@ impl RunOptions {
             rows,
             csv: false,
             until_step: None,
-            stall_steps: None,
+            collapse_from: None,
             stop_on_blow_out: true,
             end_when_checked: false,
             bar: None,
@@ -235,6 +239,7 @@ impl<'p, S: Stepper> Runner<'p, S> {
     pub fn run(&mut self) -> std::io::Result<Simulated> {
         self.row(false);
         self.each(|p, run| p.begin(run))?;
+        let mut collapsed_since: Option<u64> = None;
         let (status, reason) = loop {
             let limit = self.opts.until_step;
             if self.stepper.finished() || limit.is_some_and(|n| self.stepper.step_count() >= n) {
@@ -244,12 +249,16 @@ impl<'p, S: Stepper> Runner<'p, S> {
             if let Some(reason) = stepped.stop {
                 break (Status::BlewUp, reason);
             }
-            if let Some(n) = self.opts.stall_steps {
-                if self.stepper.step_count() > n {
+            if let Some(first) = self.opts.collapse_from {
+                let dt = self.stepper.phase(self.stepper.primary_phase()).next_dt();
+                let step = self.stepper.step_count();
+                if dt >= COLLAPSE_SHARE * first {
+                    collapsed_since = None;
+                } else if step + 1 - *collapsed_since.get_or_insert(step) >= COLLAPSE_STEPS {
                     break (
                         Status::BlewUp,
                         format!(
-                            "time step collapsed: {n} steps taken, {STALL_FACTOR} times what t_end over the first step needs, at t = {:.4} s",
+                            "time step collapsed: below {COLLAPSE_SHARE} of the first ({first:.3e} s) for {COLLAPSE_STEPS} steps, {dt:.3e} s at t = {:.4} s",
                             self.stepper.time()
                         ),
                     );
@@ -484,6 +493,27 @@ mod tests {
             ),
             (1, 30, 4, 30, 1)
         );
+    }
+
+    /// A time step held below 1 % of the first for COLLAPSE_STEPS steps
+    /// stops the run as blown up at exactly that step; a run whose step
+    /// stays near its first goes on.
+    #[test]
+    fn a_collapsed_time_step_stops_the_run() {
+        let mut r = runner(COLLAPSE_STEPS + 100, 1000);
+        let dt = r.stepper.next_dt();
+        r.opts.collapse_from = Some(1000.0 * dt);
+        let out = r.run().unwrap();
+        assert_eq!(out.status, Status::BlewUp);
+        assert!(
+            out.reason.starts_with("time step collapsed"),
+            "{}",
+            out.reason
+        );
+        assert_eq!(out.steps, COLLAPSE_STEPS);
+        let mut r = runner(200, 100);
+        r.opts.collapse_from = Some(dt);
+        assert_eq!(r.run().unwrap().status, Status::Completed);
     }
 
     /// A run restarted from a ring checkpoint continues bit for bit: the
