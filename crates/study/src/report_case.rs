@@ -286,23 +286,25 @@ fn events_section(c: &CaseInputs, page: &mut Page) {
 }
 
 /// A unit enum as summary.json spells it.
+/// The record `kick explain` wrote for event `id` of the case in `dir`
+/// (CASE_DIR/explain/event_K/explain.json), if any.
+pub fn explain_record(dir: &std::path::Path, id: u32) -> Option<serde_json::Value> {
+    let file = dir
+        .join("explain")
+        .join(format!("event_{id}"))
+        .join("explain.json");
+    serde_json::from_str(&std::fs::read_to_string(file).ok()?).ok()
+}
+
 /// The events `kick explain` wrote a folder for (CASE_DIR/explain/event_K):
 /// their largest part, leading mechanism and picture, linked.
 fn explained_section(c: &CaseInputs, page: &mut Page) {
-    let mut found: Vec<(u32, serde_json::Value)> = vec![];
-    for e in &c.summary.events {
-        let file = c
-            .dir
-            .join("explain")
-            .join(format!("event_{}", e.id))
-            .join("explain.json");
-        let json = std::fs::read_to_string(&file)
-            .ok()
-            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
-        if let Some(j) = json {
-            found.push((e.id, j));
-        }
-    }
+    let found: Vec<(u32, serde_json::Value)> = c
+        .summary
+        .events
+        .iter()
+        .filter_map(|e| Some((e.id, explain_record(&c.dir, e.id)?)))
+        .collect();
     if found.is_empty() {
         return;
     }

@@ -6,6 +6,7 @@
 //! and the median shares of the internal force and of M1-M3.
 
 use crate::plot_common::Res;
+use crate::report_case::explain_record;
 use crate::report_data::{median, Matrix, ParamKey};
 use crate::report_html::{Cell, Page};
 use std::collections::BTreeMap;
@@ -40,8 +41,7 @@ struct Explained {
     m: [f64; 3],
 }
 
-fn read(path: &Path) -> Option<Explained> {
-    let j: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()?;
+fn read(j: serde_json::Value) -> Option<Explained> {
     let sh = &j["shares"];
     let share = |k: &str| sh[k].as_f64().unwrap_or(f64::NAN);
     let m = [
@@ -76,12 +76,7 @@ pub fn mechanism_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
             .and_then(|(_, v)| v.as_f64())
             .unwrap_or(f64::NAN);
         for e in &r.summary.events {
-            let file = r
-                .dir
-                .join("explain")
-                .join(format!("event_{}", e.id))
-                .join("explain.json");
-            if let Some(x) = read(&file) {
+            if let Some(x) = explain_record(&r.dir, e.id).and_then(read) {
                 let order = ["collapse", "impact", "late"]
                     .iter()
                     .position(|s| *s == stratum(e.t))

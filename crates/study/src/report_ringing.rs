@@ -75,8 +75,8 @@ struct MapPoint {
 impl MapPoint {
     /// The halved seed's rate differs from the full one's by this share.
     fn halving_change(&self) -> Option<f64> {
-        let a = self.full.as_ref()?.rate_per_step?;
-        let b = self.halved.as_ref()?.rate_per_step?;
+        let a = self.full.as_ref()?.growth.rate_per_step?;
+        let b = self.halved.as_ref()?.growth.rate_per_step?;
         Some((b / a - 1.0).abs())
     }
 }
@@ -136,11 +136,12 @@ pub fn ringing_map(m: &Matrix, out: &Path, page: &mut Page) -> Res {
                 .iter()
                 .filter_map(|((x, y), p)| {
                     let f = p.full.as_ref()?;
-                    let (colour, mut text) = match class(f.rate_per_step, f.window_end) {
+                    let g = &f.growth;
+                    let (colour, mut text) = match class(g.rate_per_step, g.window_end) {
                         5 => (CLASSES[5].1, "x".to_string()),
                         k => (
                             CLASSES[k].1,
-                            format!("{:+.2}", 1e3 * f.rate_per_step.unwrap_or(0.0)),
+                            format!("{:+.2}", 1e3 * g.rate_per_step.unwrap_or(0.0)),
                         ),
                     };
                     if p.halving_change().is_some_and(|c| c > HALVING_TOLERANCE) {
@@ -196,12 +197,16 @@ pub fn ringing_map(m: &Matrix, out: &Path, page: &mut Page) -> Res {
                 .collect();
             let unstable = full
                 .iter()
-                .filter(|(_, f)| f.rate_per_step.is_some_and(|r| r > UNSTABLE_PER_STEP))
+                .filter(|(_, f)| {
+                    f.growth
+                        .rate_per_step
+                        .is_some_and(|r| r > UNSTABLE_PER_STEP)
+                })
                 .count();
             let fastest = full
                 .iter()
-                .filter(|(_, f)| f.window_end != WindowEnd::NotFinite)
-                .filter_map(|(at, f)| Some((*at, f.rate_per_step?)))
+                .filter(|(_, f)| f.growth.window_end != WindowEnd::NotFinite)
+                .filter_map(|(at, f)| Some((*at, f.growth.rate_per_step?)))
                 .max_by(|a, b| a.1.total_cmp(&b.1));
             let changes: Vec<f64> = points
                 .values()

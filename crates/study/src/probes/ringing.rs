@@ -9,7 +9,7 @@
 use crate::runner::{Probe, Run, Simulated};
 use crate::summary::Check;
 use crate::tables;
-use monitor::ringing_growth::{perturbation_energy, GrowthFigures, PerturbationGrowth, WindowEnd};
+use monitor::ringing_growth::{perturbation_energy, GrowthFigures, PerturbationGrowth};
 use serde::{Deserialize, Serialize};
 use solver::flows::Flow;
 use solver::{Scene, Solver};
@@ -24,14 +24,9 @@ pub struct RingingFigures {
     /// The seed's share of |U| and its wavelength in cells.
     pub share: f64,
     pub wavelength_cells: f64,
-    pub e0: f64,
-    pub drift_energy: f64,
-    pub rate_per_step: Option<f64>,
-    pub rate_per_second: Option<f64>,
-    pub fit_from_step: u64,
-    pub fit_to_step: u64,
-    pub window_end: WindowEnd,
-    pub ratio_end: f64,
+    /// The growth fit (its keys sit beside these in the check).
+    #[serde(flatten)]
+    pub growth: GrowthFigures,
 }
 
 impl Check for RingingFigures {
@@ -79,30 +74,13 @@ impl Ringing {
     }
 
     fn figures(&self) -> RingingFigures {
-        let GrowthFigures {
-            e0,
-            drift_energy,
-            rate_per_step,
-            rate_per_second,
-            fit_from_step,
-            fit_to_step,
-            window_end,
-            ratio_end,
-        } = self.growth.figures();
         let dt_over_h = self.first_dt.unwrap_or(0.0) / self.cell;
         RingingFigures {
             flow_courant: self.drift * dt_over_h,
             sound_courant: self.sound * dt_over_h,
             share: self.share,
             wavelength_cells: self.wavelength_cells,
-            e0,
-            drift_energy,
-            rate_per_step,
-            rate_per_second,
-            fit_from_step,
-            fit_to_step,
-            window_end,
-            ratio_end,
+            growth: self.growth.figures(),
         }
     }
 }
