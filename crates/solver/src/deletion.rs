@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 pub enum CullReason {
     /// Outside the box on a non-periodic axis.
     Escaped,
-    /// J <= 0 or det F <= 0, or J above `scene.max_j`.
+    /// J <= 0 or not a number, det F <= 0, or J above `scene.max_j`.
     Inverted,
     /// Flowed out through an open side (a drained wall).
     Drained,
@@ -101,9 +101,11 @@ impl CullRules {
     fn reason(&self, ps: &Particles, p: usize) -> Option<CullReason> {
         // Inversion first, as the monitor judges it: an inverted particle
         // often leaves the box in the same step.
+        // `!(j > 0)` also takes a J that is not a number, as Uintah's Water
+        // model does.
         let j = ps.j[p];
         let degenerate =
-            j <= 0.0 || j > self.max_j || (self.det_apart && ps.f[p].determinant() <= 0.0);
+            !(j > 0.0) || j > self.max_j || (self.det_apart && ps.f[p].determinant() <= 0.0);
         if self.inversion && degenerate {
             return Some(CullReason::Inverted);
         }

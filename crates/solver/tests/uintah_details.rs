@@ -107,10 +107,12 @@ fn the_substepped_f_update_is_the_plain_one_below_one() {
 
 /// Under on_inversion = "delete" a particle whose J passes scene.max_j is
 /// deleted at the end of the step and counted as inverted; without
-/// max_j it stays.
+/// max_j it stays. One whose J is not a number is deleted either way
+/// (Uintah's `!(J > 0)`).
 #[test]
 fn a_particle_past_max_j_is_deleted() {
     for (max_j, deleted) in [(Some(1e5), 1), (None, 0)] {
+        // A particle whose J is not a number goes too, with or without max_j.
         let mut scene = common::box_scene(
             [0.3, 0.2],
             [0.0, 0.0, 0.1, 0.12],
@@ -122,6 +124,7 @@ fn a_particle_past_max_j_is_deleted() {
         let mut ps = solver::scene::seed(&scene);
         ps.f[7] = Mat2::new(1e3, 0.0, 0.0, 1e3);
         ps.j[7] = 1e6;
+        ps.f[9] = Mat2::new(f64::NAN, 0.0, 0.0, 1.0);
         let cfg = SolverConfig {
             scene,
             method: uintah_method(),
@@ -130,7 +133,8 @@ fn a_particle_past_max_j_is_deleted() {
         let mut s = Solver::with_particles(cfg, ps);
         let n = s.particle_count();
         s.step().unwrap();
-        assert_eq!(s.losses().inverted, deleted, "max_j {max_j:?}");
-        assert_eq!(s.particle_count(), n - deleted as usize);
+        assert_eq!(s.losses().inverted, deleted + 1, "max_j {max_j:?}");
+        assert_eq!(s.particle_count(), n - 1 - deleted as usize);
+        assert!(s.view().j.iter().all(|j| j.is_finite()));
     }
 }
