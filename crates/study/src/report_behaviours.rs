@@ -357,22 +357,46 @@ pub fn behaviours_by_configuration(m: &Matrix, page: &mut Page) {
         .iter()
         .filter_map(|r| param(r, ParamKey::is_bulk_modulus))
         .fold(f64::INFINITY, f64::min);
+    // A remedy's settings are axes of their own (`artificial_viscosity.linear`)
+    // beside its switch: the label names the switch only, and only when on.
+    let label_axes: Vec<usize> = others
+        .iter()
+        .copied()
+        .filter(|&a| {
+            let f = m.axes[a].field();
+            !f.split_once('.')
+                .is_some_and(|(head, _)| others.iter().any(|&b| m.axes[b].field() == head))
+        })
+        .collect();
     let config = |r: &Row| -> String {
-        others
+        let parts: Vec<String> = label_axes
             .iter()
-            .map(|&a| format!("{}={}", m.axes[a].field(), r.params[a]))
-            .collect::<Vec<_>>()
-            .join(" ")
+            .filter_map(|&a| {
+                let (f, v) = (m.axes[a].field(), r.params[a].as_str());
+                match v {
+                    "" | "-" | "false" => None,
+                    "true" => Some(f.to_string()),
+                    _ => Some(format!("{f}={v}")),
+                }
+            })
+            .collect();
+        parts.join(" ")
     };
-    let mut by_config: BTreeMap<String, Vec<(&Row, RunFigures)>> = BTreeMap::new();
+    // Grouped by every other axis; labelled by `config`.
+    let full = |r: &Row| -> Vec<String> { others.iter().map(|&a| r.params[a].clone()).collect() };
+    let mut by_config: BTreeMap<Vec<String>, (String, Vec<(&Row, RunFigures)>)> = BTreeMap::new();
     for r in &m.rows {
         if let Some(f) = RunFigures::of(r, t_end) {
-            by_config.entry(config(r)).or_default().push((r, f));
+            by_config
+                .entry(full(r))
+                .or_insert_with(|| (config(r), vec![]))
+                .1
+                .push((r, f));
         }
     }
     let mut rows = vec![];
     let mut best: Option<(usize, f64, String)> = None;
-    for (name, runs) in &by_config {
+    for (name, runs) in by_config.values() {
         let mut s = [Score::default(); 4];
         for (_, f) in runs {
             if f.k == k_min {
