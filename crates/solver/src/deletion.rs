@@ -101,11 +101,12 @@ impl CullRules {
     fn reason(&self, ps: &Particles, p: usize) -> Option<CullReason> {
         // Inversion first, as the monitor judges it: an inverted particle
         // often leaves the box in the same step.
-        // `!(j > 0)` also takes a J that is not a number, as Uintah's Water
-        // model does.
+        // A J that is not a number too, as Uintah's Water model's !(J > 0).
         let j = ps.j[p];
-        let degenerate =
-            !(j > 0.0) || j > self.max_j || (self.det_apart && ps.f[p].determinant() <= 0.0);
+        let degenerate = j <= 0.0
+            || j.is_nan()
+            || j > self.max_j
+            || (self.det_apart && ps.f[p].determinant() <= 0.0);
         if self.inversion && degenerate {
             return Some(CullReason::Inverted);
         }
