@@ -302,6 +302,9 @@ impl RunFigures {
     }
 }
 
+/// A configuration's label and its runs with their figures.
+type Configuration<'a> = (String, Vec<(&'a Row, RunFigures)>);
+
 /// A behaviour's score in one configuration: runs that show it of those it
 /// concerns.
 #[derive(Clone, Copy, Default)]
@@ -384,7 +387,7 @@ pub fn behaviours_by_configuration(m: &Matrix, page: &mut Page) {
     };
     // Grouped by every other axis; labelled by `config`.
     let full = |r: &Row| -> Vec<String> { others.iter().map(|&a| r.params[a].clone()).collect() };
-    let mut by_config: BTreeMap<Vec<String>, (String, Vec<(&Row, RunFigures)>)> = BTreeMap::new();
+    let mut by_config: BTreeMap<Vec<String>, Configuration> = BTreeMap::new();
     for r in &m.rows {
         if let Some(f) = RunFigures::of(r, t_end) {
             by_config
