@@ -28,10 +28,12 @@ fn param(r: &Row, is: fn(&ParamKey) -> bool) -> Option<f64> {
 /// Largest checkerboard index over `CHECKERBOARD_WINDOW`, from the case's timeseries.
 pub fn early_checkerboard(r: &Row) -> Option<f64> {
     let df = read_parquet(&r.dir.join("timeseries.parquet")).ok()?;
-    let (t, cb) = (
-        f64_column(&df, "t")?,
-        f64_column(&df, "checkerboard_means")?,
-    );
+    early_checkerboard_of(&df)
+}
+
+/// `early_checkerboard` of a timeseries already read.
+fn early_checkerboard_of(df: &polars::prelude::DataFrame) -> Option<f64> {
+    let (t, cb) = (f64_column(df, "t")?, f64_column(df, "checkerboard_means")?);
     let (lo, hi) = CHECKERBOARD_WINDOW;
     t.iter()
         .zip(&cb)
@@ -297,7 +299,7 @@ impl RunFigures {
                 && r.summary.status == Status::Completed
                 && end >= t_end * (1.0 - 1e-9),
             hydro_late: r.hydro_late(),
-            early_checkerboard: early_checkerboard(r),
+            early_checkerboard: early_checkerboard_of(&df),
         })
     }
 }
