@@ -665,10 +665,16 @@ impl Solver {
         self.n_outside = m.n_outside;
         self.n_nonfinite = m.n_nonfinite;
         self.signal_speed = m.signal_speed;
+        self.set_axis_signal_speed(m.axis_signal_speed);
+    }
+
+    /// The per-axis signal speed for the next step: `measured` after a
+    /// step, Uintah's initial one before the first.
+    fn set_axis_signal_speed(&mut self, measured: f64) {
         self.axis_signal_speed = if self.step == 0 {
             self.initial_axis_signal_speed()
         } else {
-            m.axis_signal_speed
+            measured
         };
     }
 
@@ -699,11 +705,7 @@ impl Solver {
     /// Recomputes the signal speed after velocities were changed outside a step.
     fn refresh_signal_speed(&mut self) {
         self.signal_speed = timestep::max_signal_speed(&self.particles);
-        self.axis_signal_speed = if self.step == 0 {
-            self.initial_axis_signal_speed()
-        } else {
-            timestep::max_axis_signal_speed(&self.particles)
-        };
+        self.set_axis_signal_speed(timestep::max_axis_signal_speed(&self.particles));
     }
 
     /// Adds the perturbations scheduled for the step being taken (after G2P).

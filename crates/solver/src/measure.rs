@@ -64,10 +64,9 @@ pub fn measure(
         acc.outside += out as usize;
         acc.nonfinite += !finite as usize;
         acc.signal_speed = acc.signal_speed.max(ps.wave_speed[p] + v.norm());
-        let old = ps.v_prev[p];
         acc.axis_signal_speed = acc
             .axis_signal_speed
-            .max(ps.wave_speed[p] + old.x.abs().max(old.y.abs()));
+            .max(crate::timestep::axis_signal_speed_of(ps, p));
     };
     let combine = |total: &mut Partial, part: &Partial| {
         total.kinetic += part.kinetic;

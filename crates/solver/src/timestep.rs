@@ -42,10 +42,14 @@ pub fn refresh_eos_of(particles: &mut Particles, materials: &[Material], p: usiz
 /// max_p(c_p + max(|v_prev,x|, |v_prev,y|)): Uintah's per-axis signal
 /// speed from the step-start velocity.
 pub fn max_axis_signal_speed(particles: &Particles) -> f64 {
-    par::max(particles.len(), |p| {
-        let old = particles.v_prev[p];
-        particles.wave_speed[p] + old.x.abs().max(old.y.abs())
-    })
+    par::max(particles.len(), |p| axis_signal_speed_of(particles, p))
+}
+
+/// Particle `p`'s c_p + max(|v_prev,x|, |v_prev,y|).
+#[inline]
+pub fn axis_signal_speed_of(particles: &Particles, p: usize) -> f64 {
+    let old = particles.v_prev[p];
+    particles.wave_speed[p] + old.x.abs().max(old.y.abs())
 }
 
 pub fn cfl_step(cfl: f64, h: f64, signal_speed: f64) -> f64 {
