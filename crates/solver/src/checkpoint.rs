@@ -6,7 +6,7 @@ use crate::particles::{Mat2, Particles, Vec2};
 use crate::Solver;
 
 const MAGIC: &[u8; 8] = b"KICKSTAT";
-pub const VERSION: u32 = 7;
+pub const VERSION: u32 = 8;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum CheckpointError {
@@ -302,6 +302,9 @@ pub fn save(s: &Solver) -> Vec<u8> {
     w.u32s(&ps.id);
     let material: Vec<u32> = ps.material.iter().map(|&m| m as u32).collect();
     w.u32s(&material);
+    // The pressure-implicit step's cell pressure: the next solve's starting guess.
+    w.u64(s.projection.pressure.len() as u64);
+    w.f64s(&s.projection.pressure);
     w.seal()
 }
 
@@ -390,5 +393,13 @@ pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
         }
         *m = code as u16;
     }
+    let cells = r.u64()?;
+    if cells != s.projection.pressure.len() as u64 {
+        return Err(CheckpointError::UnknownCode {
+            what: "cell pressure count",
+            code: cells,
+        });
+    }
+    r.f64s(&mut s.projection.pressure)?;
     r.finish()
 }

@@ -18,7 +18,23 @@ pub const METHOD_KEYS: &[&str] = &[
     "force",
     "quadrature",
     "xpic_order",
+    "formulation",
+    "projection",
 ];
+
+/// How the pressure is advanced.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Formulation {
+    /// Pressure from the EOS at every particle, explicit in time (the
+    /// acoustic CFL limits the step).
+    #[default]
+    Explicit,
+    /// One fluid's cell pressure solved implicitly each step (a projection
+    /// at K = infinity); the step follows the flow, not the sound
+    /// (`stages/projection.rs`, docs/physics.md section 8).
+    PressureImplicit,
+}
 
 /// Shape-function family.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -227,6 +227,12 @@ pub struct Method {
     pub quadrature: QuadratureKind,
     /// The order m of `transfer = "xpic"` (1 = PIC).
     pub xpic_order: u32,
+    /// `explicit` (the default) or `pressure_implicit`.
+    #[serde(skip_serializing_if = "is_explicit")]
+    pub formulation: Formulation,
+    /// `[method.projection]`: the pressure-implicit formulation's settings.
+    #[serde(skip_serializing_if = "is_default_projection")]
+    pub projection: ProjectionSettings,
     /// The remedies, each its own `[method.KEY]` sub-table (absent = off;
     /// `remedies/`). It also refuses every key that is neither.
     #[serde(flatten)]
@@ -247,7 +253,53 @@ impl Default for Method {
             force: ForceKind::Gradient,
             quadrature: QuadratureKind::Particles,
             xpic_order: 2,
+            formulation: Formulation::Explicit,
+            projection: ProjectionSettings::default(),
             remedies: RemedySettings::default(),
+        }
+    }
+}
+
+fn is_explicit(f: &Formulation) -> bool {
+    *f == Formulation::Explicit
+}
+
+fn is_default_projection(p: &ProjectionSettings) -> bool {
+    *p == ProjectionSettings::default()
+}
+
+/// `[method.projection]`: the controls of the pressure-implicit step
+/// (docs/physics.md section 8).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ProjectionSettings {
+    /// Share of each fluid cell's hourglass velocity (the nodal mode the
+    /// cell divergence cannot see) removed per step, 0 ..= 0.25.
+    pub hourglass: f64,
+    /// Weight of the cell pressure's checkerboard control (the 2 x 2
+    /// alternating sums around each node, against the 1 / rho0 scale of
+    /// the operator), 0 ..= 1.
+    pub checkerboard: f64,
+    /// Share of the grid packing's error (packing J - 1 in the cells whose
+    /// nodes are full) corrected per step, 0 ..= 1.
+    pub drift: f64,
+    /// A node lighter than this share of rho0 h^2 takes that mass in the
+    /// pressure operator and its velocity correction (free-surface nodes).
+    pub light_node_share: f64,
+    /// Relative residual |b - A p| / |b| at which the conjugate gradient stops.
+    pub tolerance: f64,
+    pub max_iterations: u32,
+}
+
+impl Default for ProjectionSettings {
+    fn default() -> Self {
+        ProjectionSettings {
+            hourglass: 0.05,
+            checkerboard: 0.05,
+            drift: 0.1,
+            light_node_share: 0.25,
+            tolerance: 1e-8,
+            max_iterations: 4000,
         }
     }
 }
@@ -380,6 +432,9 @@ impl SolverConfig {
                 .any(|mat| mat.shear_modulus > 0.0),
             remedies: &m.remedies,
         })?;
+        if m.formulation == Formulation::PressureImplicit {
+            self.validate_pressure_implicit()?;
+        }
         for (i, p) in self.perturb.iter().enumerate() {
             check(p.step >= 1, &format!("perturb[{i}].step"), "must be >= 1")?;
             ordered_rect(&p.region, &format!("perturb[{i}].region"))?;
@@ -515,6 +570,75 @@ impl SolverConfig {
         Ok(())
     }
 
+    /// What the pressure-implicit step supports: one fluid, no tension
+    /// cut, particle quadrature and the gradient force, no remedy (it has
+    /// its own controls in `[method.projection]`).
+    fn validate_pressure_implicit(&self) -> Result<(), ConfigError> {
+        let (m, s) = (&self.method, &self.scene);
+        let p = &m.projection;
+        within(p.hourglass, 0.0, 0.25, "method.projection.hourglass")?;
+        within(p.checkerboard, 0.0, 1.0, "method.projection.checkerboard")?;
+        within(p.drift, 0.0, 1.0, "method.projection.drift")?;
+        within(
+            p.light_node_share,
+            1e-6,
+            1.0,
+            "method.projection.light_node_share",
+        )?;
+        within(p.tolerance, 1e-14, 1e-2, "method.projection.tolerance")?;
+        within(
+            p.max_iterations as f64,
+            1.0,
+            1e6,
+            "method.projection.max_iterations",
+        )?;
+        let needs = |key: &str, what: &str| ConfigError {
+            key: key.into(),
+            message: format!("method.formulation = \"pressure_implicit\" {what}"),
+        };
+        if s.materials.len() != 1 {
+            return Err(needs(
+                "materials",
+                &format!(
+                    "solves one fluid phase (got {} materials)",
+                    s.materials.len()
+                ),
+            ));
+        }
+        let mat = &s.materials[0];
+        if mat.shear_modulus > 0.0 {
+            return Err(needs(
+                &mat.key(0, "shear_modulus"),
+                "solves a fluid, not a solid",
+            ));
+        }
+        if mat.pressure_floor.is_some() {
+            return Err(needs(
+                &mat.key(0, "pressure_floor"),
+                "has no tension cut (the cut would make the solve a complementarity problem)",
+            ));
+        }
+        if m.quadrature != QuadratureKind::Particles {
+            return Err(needs(
+                "method.quadrature",
+                "integrates its pressure on the cells: use \"particles\"",
+            ));
+        }
+        if m.force != ForceKind::Gradient {
+            return Err(needs(
+                "method.force",
+                "takes the velocity gradient from the shape functions: use \"gradient\"",
+            ));
+        }
+        if let Some(key) = m.remedies.active().first().map(|r| r.descriptor().key) {
+            return Err(needs(
+                &format!("method.{key}"),
+                "takes no remedy (its own controls are [method.projection])",
+            ));
+        }
+        Ok(())
+    }
+
     fn validate_materials(&self) -> Result<(), ConfigError> {
         let s = &self.scene;
         check(
@@ -524,7 +648,15 @@ impl SolverConfig {
         )?;
         for (i, m) in s.materials.iter().enumerate() {
             within(m.rho0, 1e-6, 1e6, &m.key(i, "rho0"))?;
-            within(m.k, 1e-6, 1e13, &m.key(i, "K"))?;
+            if m.k == f64::INFINITY {
+                check(
+                    self.method.formulation == Formulation::PressureImplicit,
+                    &m.key(i, "K"),
+                    "\"inf\" (incompressible) needs method.formulation = \"pressure_implicit\"",
+                )?;
+            } else {
+                within(m.k, 1e-6, 1e13, &m.key(i, "K"))?;
+            }
             within(m.gamma, 1.0, 20.0, &m.key(i, "gamma"))?;
             within(m.viscosity, 0.0, 1e6, &m.key(i, "viscosity"))?;
             within(m.j_res, 0.5, 2.0, &m.key(i, "j_res"))?;

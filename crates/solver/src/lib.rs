@@ -156,6 +156,8 @@ pub struct Solver {
     remedies: remedies::Remedies,
     /// Scratch of `quadrature = "mixed"` (empty otherwise).
     quadrature: stages::quadrature_mixed::Scratch,
+    /// The cell pressure and scratch of the pressure-implicit step (empty otherwise).
+    projection: stages::projection::Scratch,
 }
 
 impl Solver {
@@ -232,6 +234,7 @@ impl Solver {
             xpic: transfers::xpic::Scratch::default(),
             remedies: remedies::Remedies::default(),
             quadrature: stages::quadrature_mixed::Scratch::default(),
+            projection: stages::projection::Scratch::default(),
         };
         if solver.cfg.method.quadrature == QuadratureKind::Mixed {
             solver.quadrature = stages::quadrature_mixed::Scratch::new(&solver.grid);
@@ -240,8 +243,28 @@ impl Solver {
             solver.xpic = transfers::xpic::Scratch::new(&solver.grid, n);
         }
         solver.remedies = solver.cfg.build_remedies(&solver.grid, n);
+        solver.build_projection(n);
         solver.start_clock();
         solver
+    }
+
+    fn implicit(&self) -> bool {
+        self.cfg.method.formulation == Formulation::PressureImplicit
+    }
+
+    /// The pressure-implicit step's scratch (kept when it exists: its
+    /// pressure is the next solve's starting guess).
+    fn build_projection(&mut self, n: usize) {
+        if !self.implicit() {
+            self.projection = stages::projection::Scratch::default();
+        } else if self.projection.pressure.is_empty() {
+            self.projection = stages::projection::Scratch::new(&self.grid, n);
+        }
+    }
+
+    /// What the last pressure solve did (pressure-implicit step only).
+    pub fn projection_stats(&self) -> Option<stages::projection::SolveStats> {
+        self.implicit().then_some(self.projection.stats)
     }
 
     /// Adds the bodies' initial flows (docs/physics.md section 7) to the
@@ -288,7 +311,7 @@ impl Solver {
 
     /// Sets t = 0: fixes the time step from the current state and measures energy.
     fn start_clock(&mut self) {
-        timestep::refresh_eos_cache(&mut self.particles, &self.cfg.scene.materials);
+        self.refresh_eos_cache();
         self.step = 0;
         self.time = 0.0;
         self.dissipated = 0.0;
@@ -305,6 +328,19 @@ impl Solver {
     fn cfl_dt(&self) -> f64 {
         if let Some(dt) = self.cfg.method.dt_value {
             return dt;
+        }
+        if self.implicit() {
+            // The wave speeds are zero: the signal speed is max |v|.
+            let s = &self.cfg.scene;
+            let m = &s.materials[0];
+            let h = s.cell;
+            return stages::projection::flow_dt(
+                self.cfg.method.cfl,
+                h,
+                self.signal_speed,
+                s.gravity,
+                m.viscosity / m.rho0,
+            );
         }
         let speed = match self.cfg.method.dt {
             DtMode::PerAxis => self.axis_signal_speed,
@@ -327,6 +363,9 @@ impl Solver {
 
     /// The step the next `step()` will take (before clamping to t_end).
     pub fn next_dt(&self) -> f64 {
+        if self.implicit() {
+            return self.cfl_dt();
+        }
         match self.cfg.method.dt {
             DtMode::Fixed => self.dt_fixed,
             DtMode::Dynamic | DtMode::PerAxis => self.cfl_dt(),
@@ -452,6 +491,9 @@ impl Solver {
         }
         self.xpic.fit_particles(n);
         self.remedies.fit_particles(n);
+        if self.implicit() {
+            self.projection.fit_particles(n);
+        }
     }
 
     /// Appends a particle that enters through an inflow wall: the next free
@@ -465,6 +507,9 @@ impl Solver {
         let p = ps.len() - 1;
         ps.id[p] = id;
         timestep::refresh_eos_of(ps, &self.cfg.scene.materials, p);
+        if self.cfg.method.formulation == Formulation::PressureImplicit {
+            ps.wave_speed[p] = 0.0;
+        }
         self.stencils.push(Stencil::default());
         self.fit_scratch(self.particles.len());
         self.losses.injected += 1;
@@ -511,6 +556,7 @@ impl Solver {
             stages::quadrature_mixed::Scratch::default()
         };
         self.remedies = self.cfg.build_remedies(&self.grid, n);
+        self.build_projection(n);
         self.fit_scratch(n);
         if let Some(dt) = self.cfg.method.dt_value {
             self.dt_fixed = dt;
@@ -619,8 +665,12 @@ impl Solver {
     }
 
     /// The EOS figures (wave speed, stored energy) of every particle again.
+    /// Under the pressure-implicit step no wave speed limits the step: zero.
     pub(crate) fn refresh_eos_cache(&mut self) {
         timestep::refresh_eos_cache(&mut self.particles, &self.cfg.scene.materials);
+        if self.implicit() {
+            self.particles.wave_speed.fill(0.0);
+        }
     }
 
     /// The particles, handed on to another solver (the set-up behind gates).
@@ -780,7 +830,7 @@ impl Solver {
         checkpoint::load(self, bytes)?;
         // An inflow may have left more particles than there were at t = 0.
         self.fit_scratch(self.particles.len());
-        timestep::refresh_eos_cache(&mut self.particles, &self.cfg.scene.materials);
+        self.refresh_eos_cache();
         self.measure();
         Ok(())
     }

@@ -16,8 +16,9 @@ pub struct Material {
     pub rho0: f64,
     #[serde(default = "defaults::eos")]
     pub eos: EosKind,
-    /// Low-pressure bulk modulus K (Pa).
-    #[serde(rename = "K")]
+    /// Low-pressure bulk modulus K (Pa); "inf" (or TOML's inf): the
+    /// incompressible limit, under the pressure-implicit formulation only.
+    #[serde(rename = "K", with = "bulk_modulus")]
     pub k: f64,
     /// Power-law exponent (power EOS only).
     #[serde(default = "defaults::gamma")]
@@ -40,6 +41,49 @@ pub struct Material {
     /// U(J) + 2 mu dev D. 0 = none (G stays G).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub softening_strain: f64,
+}
+
+/// K as a number, or "inf" for the incompressible limit (written back as
+/// "inf": JSON has no infinity).
+mod bulk_modulus {
+    use serde::{de, Deserializer, Serializer};
+    use std::fmt;
+
+    pub fn serialize<S: Serializer>(k: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if *k == f64::INFINITY {
+            s.serialize_str("inf")
+        } else {
+            s.serialize_f64(*k)
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        struct V;
+        impl de::Visitor<'_> for V {
+            type Value = f64;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a bulk modulus in Pa, or \"inf\"")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<f64, E> {
+                Ok(v)
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<f64, E> {
+                Ok(v as f64)
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<f64, E> {
+                Ok(v as f64)
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<f64, E> {
+                match v {
+                    "inf" => Ok(f64::INFINITY),
+                    _ => Err(E::custom(format!(
+                        "\"{v}\" is not a bulk modulus (a number in Pa, or \"inf\")"
+                    ))),
+                }
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 fn is_zero(v: &f64) -> bool {

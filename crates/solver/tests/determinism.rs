@@ -70,6 +70,30 @@ fn configs() -> Vec<SolverConfig> {
         },
         perturb: vec![],
     });
+    // The pressure-implicit step (its solve is serial; its particle update
+    // parallel; its warm start is in the checkpoint): finite K, viscous,
+    // and the incompressible limit.
+    let mut mat = Material::new(1.5e6);
+    mat.viscosity = 0.5;
+    out.push(SolverConfig {
+        scene: Scene::dam_break(mat),
+        method: Method {
+            formulation: Formulation::PressureImplicit,
+            ..common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usl)
+        },
+        perturb: vec![],
+    });
+    out.push(SolverConfig {
+        scene: Scene::dam_break(Material {
+            k: f64::INFINITY,
+            ..Material::new(1.0)
+        }),
+        method: Method {
+            formulation: Formulation::PressureImplicit,
+            ..common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl)
+        },
+        perturb: vec![],
+    });
     out
 }
 

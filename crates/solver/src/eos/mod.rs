@@ -19,6 +19,15 @@ impl Material {
     /// Unclamped EOS at the mechanical J (thermal J_res applied here).
     #[inline]
     pub fn eos(&self, j: f64) -> EosState {
+        if self.k == f64::INFINITY {
+            // Incompressible: no EOS pressure (the projection's is the
+            // pressure) and no stored energy.
+            return EosState {
+                pressure: 0.0,
+                tangent_modulus: f64::INFINITY,
+                energy: 0.0,
+            };
+        }
         // j / 1 is j exactly: skip the division in the usual case.
         let je = if self.j_res == 1.0 { j } else { j / self.j_res };
         self.eos_at(je)

@@ -4,6 +4,7 @@
 pub mod g2p;
 pub mod grid_update;
 pub mod p2g;
+pub mod projection;
 pub mod quadrature_mixed;
 pub(crate) mod scheme;
 pub mod sort;

@@ -32,6 +32,9 @@ pub struct Inputs<'a> {
     /// the gradient force.
     pub mls: Option<f64>,
     pub gravity: Vec2,
+    /// The pressure-implicit step: the internal force leaves the particle
+    /// pressure out (the cell pressure is solved for on the grid).
+    pub pressure_free: bool,
 }
 
 /// One scatter pass: its inputs and the grid fields it writes, shared by the
@@ -180,13 +183,18 @@ fn scatter_particle<const W: usize, const MASS: bool, const MOMENTUM: bool, cons
     // Internal force at node (a, c): A (dNx wy, wx dNy) with A = -V sigma / h.
     // MLS: -V sigma D^-1 (x_i - x_p) N, the same form with dN_x -> N_x (a - fx),
     // dN_y -> N_y (c - fy) and A = -V sigma (D^-1 h^2) / h.
+    let sigma = if FORCE && inputs.pressure_free {
+        ps.stress[p] + ps.pressure[p] * Mat2::identity()
+    } else {
+        ps.stress[p]
+    };
     let (a_mat, dwx, dwy) = match inputs.mls {
         Some(inertia) if FORCE => (
-            ps.stress[p] * (-ps.vol[p] * inertia * pass.inv_h),
+            sigma * (-ps.vol[p] * inertia * pass.inv_h),
             std::array::from_fn::<f64, W, _>(|a| wx[a] * (a as f64 - fx)),
             std::array::from_fn::<f64, W, _>(|c| wy[c] * (c as f64 - fy)),
         ),
-        _ if FORCE => (ps.stress[p] * (-ps.vol[p] * pass.inv_h), dwx, dwy),
+        _ if FORCE => (sigma * (-ps.vol[p] * pass.inv_h), dwx, dwy),
         _ => (Mat2::zeros(), dwx, dwy),
     };
     debug_assert!(base + (W - 1) * (dims[0] + 1) < pass.len);

@@ -1,8 +1,9 @@
 //! USF, USL and MUSL as orderings of the same stages.
 
-use crate::config::{ForceKind, QuadratureKind, SchemeKind, TransferKind};
+use crate::config::{ForceKind, Formulation, QuadratureKind, SchemeKind, TransferKind};
 use crate::remedies::{GridStep, Step};
 use crate::stages::p2g::{self, Terms};
+use crate::stages::projection;
 use crate::timing::lap;
 use crate::{par, stages::g2p, stages::grid_update, stages::stress, Solver};
 use std::time::Instant;
@@ -42,6 +43,14 @@ enum StressVelocity {
 /// The stages of a step up to and including the grid update (v^{n+1} on the
 /// grid): a multiphase step couples the phases' grids here (`drag`).
 pub fn to_grid(s: &mut Solver, clock: &mut Instant) {
+    if s.cfg.method.formulation == Formulation::PressureImplicit {
+        // Its own order: u* from the viscous stress and gravity, then the pressure.
+        p2g(s, ALL, clock);
+        grid_velocities(s, clock);
+        grid_update(s, clock);
+        project(s, clock);
+        return;
+    }
     match s.cfg.method.scheme {
         SchemeKind::Usf => {
             p2g(s, MASS_MOMENTUM, clock);
@@ -60,6 +69,21 @@ pub fn to_grid(s: &mut Solver, clock: &mut Instant) {
 
 /// The stages after the grid update: G2P, then the stress under USL and MUSL.
 pub fn from_grid(s: &mut Solver, clock: &mut Instant) {
+    if s.cfg.method.formulation == Formulation::PressureImplicit {
+        g2p(s, clock);
+        let material = &s.cfg.scene.materials[0];
+        s.dissipated += projection::update_particles(
+            &mut s.particles,
+            &s.stencils,
+            &s.shape,
+            &s.grid,
+            material,
+            &mut s.projection,
+            s.dt,
+        );
+        lap(&mut s.times.stress, clock);
+        return;
+    }
     match s.cfg.method.scheme {
         SchemeKind::Usf => g2p(s, clock),
         SchemeKind::Usl => {
@@ -83,6 +107,21 @@ pub fn from_grid(s: &mut Solver, clock: &mut Instant) {
 fn grid_velocities(s: &mut Solver, clock: &mut Instant) {
     let grid = &mut s.grid;
     s.ke_grid_p2g = par::keep_warm(|| grid_update::velocities(grid));
+    lap(&mut s.times.grid, clock);
+}
+
+/// The pressure solve of the pressure-implicit step (`stages/projection.rs`),
+/// its dissipation booked.
+fn project(s: &mut Solver, clock: &mut Instant) {
+    let inputs = projection::Inputs {
+        particles: &s.particles,
+        material: &s.cfg.scene.materials[0],
+        settings: &s.cfg.method.projection,
+        dt: s.dt,
+    };
+    projection::project(&inputs, &mut s.grid, &mut s.projection);
+    let stats = s.projection.stats;
+    s.dissipated += stats.dissipated_projection + stats.dissipated_hourglass;
     lap(&mut s.times.grid, clock);
 }
 
@@ -130,6 +169,7 @@ fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
             ForceKind::Gradient => None,
         },
         gravity: s.gravity,
+        pressure_free: s.cfg.method.formulation == Formulation::PressureImplicit,
     };
     let mixed = terms.force && s.cfg.method.quadrature == QuadratureKind::Mixed;
     let scattered = Terms {

@@ -53,7 +53,7 @@ pub fn update(
 /// Velocity gradient L = sum v grad N^T at a particle, summed row by row
 /// (x inner): column 0 takes dN_x N_y, column 1 N_x dN_y.
 #[inline(always)]
-fn velocity_gradient<const W: usize>(
+pub(crate) fn velocity_gradient<const W: usize>(
     shape: &Shape,
     st: &Stencil,
     velocity: &[Vec2],

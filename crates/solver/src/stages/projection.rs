@@ -1,0 +1,710 @@
+//! The pressure-implicit step (`method.formulation = "pressure_implicit"`,
+//! docs/physics.md section 8): one fluid's pressure lives on the cells the
+//! particles fill and is solved each step, so that the time step follows
+//! the flow and not the sound.
+//!
+//! With D the bilinear element's divergence at the cell centre, G = h^2 D^T
+//! the nodal force of a cell pressure (folded like every nodal force: a
+//! wall keeps the tangential part of its image, a periodic edge wraps) and
+//! M the folded nodal mass, the cell pressure solves
+//!
+//!   h^2 p / (K_t dt^2) + G^T M^-1 G p + S p
+//!       = h^2 p(J^n) / (K_t dt^2) - h^2 D u* / dt + h^2 r / dt
+//!
+//! on the fluid cells (air cells: p = 0; walls: Neumann through the fold),
+//! then u^{n+1} = u* + dt M^-1 G p. K_t = infinity drops the first terms:
+//! the incompressible projection. S = (beta / rho0) C^T C, with C the 2 x 2
+//! alternating sums around the nodes, controls the cell checkerboard that
+//! G cannot see; r = drift (packing J - 1) / dt in the cells whose nodes
+//! are full moves the particles back to the packing their J says. The
+//! cells' J rate is e = D u^{n+1} + (dt / h^2) S p - r, so that
+//! p^{n+1} = p(J^n) - K_t dt e exactly as the particles' J^{n+1} = J^n (1 + dt e).
+//!
+//! Everything here is serial, in cell and node order: bit-identical for any
+//! thread count. The solved pressure is the next step's starting guess (it
+//! is in the checkpoint).
+
+use crate::config::{Material, ProjectionSettings};
+use crate::grid::{Grid, FULL_NODE_SHARE, PAD};
+use crate::par::{Pieces, CHUNK};
+use crate::particles::{Mat2, Particles, Vec2};
+use crate::shapes::{Shape, Stencil};
+use crate::viscosity;
+use rayon::prelude::*;
+
+/// No unknown: an air cell.
+const AIR: u32 = u32::MAX;
+
+/// The corners of a cell as (x offset, y offset, sign of x, sign of y) of
+/// the bilinear gradient at its centre: grad N = (sx, sy) / (2 h).
+const CORNERS: [(usize, usize, f64, f64); 4] = [
+    (0, 0, -1.0, -1.0),
+    (1, 0, 1.0, -1.0),
+    (0, 1, -1.0, 1.0),
+    (1, 1, 1.0, 1.0),
+];
+
+/// The hourglass pattern over the corners (in `CORNERS` order): the nodal
+/// velocity mode the centre divergence and gradient cannot see.
+const HOURGLASS: [f64; 4] = [1.0, -1.0, -1.0, 1.0];
+
+/// What the last solve did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SolveStats {
+    pub fluid_cells: usize,
+    pub iterations: u32,
+    /// |b - A p| / |b| at the end.
+    pub residual: f64,
+    pub converged: bool,
+    /// Energy the projection removed (kinetic lost minus the pressure's
+    /// work into the stored energy, J/m).
+    pub dissipated_projection: f64,
+    /// Energy the hourglass control removed (J/m).
+    pub dissipated_hourglass: f64,
+    /// Mean of packing J - 1 over the cells whose nodes are full (before the step's correction).
+    pub packing_error: f64,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Scratch {
+    cells: [usize; 2],
+    periodic: [bool; 2],
+    /// Per cell: its unknown, or `AIR`.
+    unknown: Vec<u32>,
+    /// Per unknown: its cell.
+    fluid: Vec<u32>,
+    /// Per cell: the solved pressure (air: 0), the next solve's starting guess.
+    pub pressure: Vec<f64>,
+    /// Per cell: the J rate e of the last step (air: 0).
+    rate: Vec<f64>,
+    /// Per cell: sum V, sum V0 of its particles.
+    vol: Vec<f64>,
+    vol0: Vec<f64>,
+    /// Per particle: its cell at the start of the step.
+    particle_cell: Vec<u32>,
+    /// Per unknown: the corner nodes (padded indices).
+    corners: Vec<[u32; 4]>,
+    /// Per unknown: h^2 / (K_t dt^2) (0 at K = infinity), and the drift target r.
+    alpha: Vec<f64>,
+    target: Vec<f64>,
+    /// The nodes around which all four cells are fluid: their unknowns in
+    /// `CORNERS` order of the node's cells (SW, SE, NW, NE).
+    quads: Vec<[u32; 4]>,
+    /// Per node: 1 / M' (folded mass, light nodes floored).
+    inv_mass: Vec<f64>,
+    /// Per node: a corner of a fluid cell (else it takes the velocity of
+    /// its fluid neighbours).
+    fluid_node: Vec<bool>,
+    /// Per node: G p, then M^-1 G p.
+    nodal: Vec<Vec2>,
+    /// Conjugate-gradient vectors, one entry per unknown.
+    x: Vec<f64>,
+    b: Vec<f64>,
+    r: Vec<f64>,
+    z: Vec<f64>,
+    d: Vec<f64>,
+    q: Vec<f64>,
+    diag: Vec<f64>,
+    /// Per chunk of particles: the viscous work of the particle update.
+    partials: Vec<f64>,
+    pub stats: SolveStats,
+}
+
+impl Scratch {
+    pub fn new(grid: &Grid, particles: usize) -> Self {
+        let n_cells = grid.cells[0] * grid.cells[1];
+        let n_nodes = grid.dims[0] * grid.dims[1];
+        Scratch {
+            cells: grid.cells,
+            periodic: grid.periodic,
+            unknown: vec![AIR; n_cells],
+            fluid: Vec::with_capacity(n_cells),
+            pressure: vec![0.0; n_cells],
+            rate: vec![0.0; n_cells],
+            vol: vec![0.0; n_cells],
+            vol0: vec![0.0; n_cells],
+            particle_cell: vec![0; particles],
+            corners: Vec::with_capacity(n_cells),
+            alpha: Vec::with_capacity(n_cells),
+            target: Vec::with_capacity(n_cells),
+            quads: Vec::with_capacity(n_cells),
+            inv_mass: vec![0.0; n_nodes],
+            fluid_node: vec![false; n_nodes],
+            nodal: vec![Vec2::zeros(); n_nodes],
+            x: Vec::with_capacity(n_cells),
+            b: Vec::with_capacity(n_cells),
+            r: Vec::with_capacity(n_cells),
+            z: Vec::with_capacity(n_cells),
+            d: Vec::with_capacity(n_cells),
+            q: Vec::with_capacity(n_cells),
+            diag: Vec::with_capacity(n_cells),
+            partials: vec![0.0; crate::par::chunk_count(particles)],
+            stats: SolveStats::default(),
+        }
+    }
+
+    pub fn fit_particles(&mut self, n: usize) {
+        if self.particle_cell.len() < n {
+            self.particle_cell.resize(n, 0);
+        }
+        let chunks = crate::par::chunk_count(n);
+        if self.partials.len() < chunks {
+            self.partials.resize(chunks, 0.0);
+        }
+    }
+
+    /// The cell holding `x` (periodic axes wrap; others clamp to the box).
+    fn cell_of(&self, grid: &Grid, x: Vec2) -> usize {
+        let r = (x - grid.origin) / grid.h;
+        let index = |v: f64, axis: usize| {
+            let n = self.cells[axis];
+            if !v.is_finite() {
+                0
+            } else if self.periodic[axis] {
+                (v.floor() as i64).rem_euclid(n as i64) as usize
+            } else {
+                (v.max(0.0) as usize).min(n - 1)
+            }
+        };
+        index(r.x, 0) + self.cells[0] * index(r.y, 1)
+    }
+
+    /// Cell (i, j) with periodic wrap; None off a walled box.
+    fn cell_at(&self, i: i64, j: i64) -> Option<usize> {
+        let wrap = |v: i64, axis: usize| {
+            let n = self.cells[axis] as i64;
+            if self.periodic[axis] {
+                Some(v.rem_euclid(n) as usize)
+            } else {
+                (0..n).contains(&v).then_some(v as usize)
+            }
+        };
+        Some(wrap(i, 0)? + self.cells[0] * wrap(j, 1)?)
+    }
+}
+
+/// The inputs of the solve.
+pub struct Inputs<'a> {
+    pub particles: &'a Particles,
+    pub material: &'a Material,
+    pub settings: &'a ProjectionSettings,
+    pub dt: f64,
+}
+
+/// Marks the fluid cells, applies the hourglass control to u* and solves
+/// for the cell pressure; `grid.vel_new` then holds u^{n+1} (ghosts
+/// filled) and `grid.accel` its acceleration.
+pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
+    let (ps, mat, set, dt) = (
+        inputs.particles,
+        inputs.material,
+        inputs.settings,
+        inputs.dt,
+    );
+    let h = grid.h;
+    let full_mass = mat.rho0 * h * h;
+    mark_fluid(ps, grid, s);
+    // 1 / M' on every active node (ghosts hold their partner's mass).
+    let light = set.light_node_share * full_mass;
+    for &n in &grid.active {
+        let n = n as usize;
+        s.inv_mass[n] = 1.0 / grid.mass[n].max(light);
+    }
+    s.stats = SolveStats {
+        fluid_cells: s.fluid.len(),
+        ..SolveStats::default()
+    };
+    if set.hourglass > 0.0 {
+        let before = kinetic(grid);
+        damp_hourglass(grid, s, set.hourglass);
+        s.stats.dissipated_hourglass = before - kinetic(grid);
+    }
+    let ke_star = kinetic(grid);
+    assemble(grid, s, mat, set, dt, full_mass);
+    solve(grid, s, set, set.checkerboard / mat.rho0);
+    // u^{n+1} = u* + dt M^-1 G p.
+    for (k, &c) in s.fluid.iter().enumerate() {
+        s.pressure[c as usize] = s.x[k];
+    }
+    apply_g(grid, s, |s, k| s.x[k]);
+    for &n in &grid.active {
+        let n = n as usize;
+        let a = s.nodal[n];
+        grid.vel_new[n] += dt * a;
+        grid.accel[n] += a;
+    }
+    extrapolate(grid, s, dt);
+    // The J rate e = D u^{n+1} + (dt / h^2) S p - r, and the pressure's work.
+    let beta = set.checkerboard / mat.rho0;
+    for k in 0..s.fluid.len() {
+        s.q[k] = 0.0;
+    }
+    if beta > 0.0 {
+        for quad in &s.quads {
+            let c = alternating(quad, &s.x);
+            for (u, sign) in quad.iter().zip(HOURGLASS) {
+                s.q[*u as usize] += beta * sign * c;
+            }
+        }
+    }
+    let mut pressure_work = 0.0;
+    for (k, &c) in s.fluid.iter().enumerate() {
+        let c = c as usize;
+        let div = divergence(&s.corners[k], &grid.vel_new, h);
+        let e = div + dt / (h * h) * s.q[k] - s.target[k];
+        s.rate[c] = e;
+        pressure_work += s.x[k] * s.vol[c] * dt * e;
+    }
+    s.stats.dissipated_projection = ke_star - kinetic(grid) + pressure_work;
+}
+
+/// The nodes a particle reaches beyond its cell's corners (B-splines) are
+/// in no fluid cell: no pressure holds them, and left alone they would fall
+/// freely and drag the surface particles with them. Each takes the mean
+/// velocity of its fluid neighbours (the eight around it), as fluid codes
+/// extrapolate the velocity into the air band.
+fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64) {
+    let nx = grid.dims[0] as i64;
+    let mut changed = false;
+    for &n in &grid.inside {
+        let n = n as usize;
+        if s.fluid_node[n] {
+            continue;
+        }
+        let (mut sum, mut count) = (Vec2::zeros(), 0u32);
+        for dj in -1..=1i64 {
+            for di in -1..=1i64 {
+                let m = (n as i64 + di + dj * nx) as usize;
+                if (di, dj) != (0, 0) && s.fluid_node[m] {
+                    sum += grid.vel_new[m];
+                    count += 1;
+                }
+            }
+        }
+        if count > 0 {
+            let v = grid.project_walls(n, sum / count as f64);
+            grid.accel[n] = (v - grid.vel[n]) / dt;
+            grid.vel_new[n] = v;
+            changed = true;
+        }
+    }
+    if changed {
+        let mut vel = std::mem::take(&mut grid.vel_new);
+        grid.fill(&mut vel);
+        grid.vel_new = vel;
+        let mut accel = std::mem::take(&mut grid.accel);
+        grid.fill(&mut accel);
+        grid.accel = accel;
+    }
+}
+
+/// Fluid cells (those holding a particle), each particle's cell, the
+/// cells' volumes, and the unknowns' corners.
+fn mark_fluid(ps: &Particles, grid: &Grid, s: &mut Scratch) {
+    for c in s.fluid.drain(..) {
+        s.unknown[c as usize] = AIR;
+        s.rate[c as usize] = 0.0;
+    }
+    s.vol.fill(0.0);
+    s.vol0.fill(0.0);
+    for p in 0..ps.len() {
+        let c = s.cell_of(grid, ps.x[p]);
+        s.particle_cell[p] = c as u32;
+        s.vol[c] += ps.vol[p];
+        s.vol0[c] += ps.vol0[p];
+    }
+    let nx = grid.dims[0];
+    for c in &s.corners {
+        for &n in c {
+            s.fluid_node[n as usize] = false;
+        }
+    }
+    s.corners.clear();
+    for c in 0..s.unknown.len() {
+        if s.vol0[c] > 0.0 {
+            s.unknown[c] = s.fluid.len() as u32;
+            s.fluid.push(c as u32);
+            let (ci, cj) = (c % s.cells[0], c / s.cells[0]);
+            let base = (ci + PAD) + (cj + PAD) * nx;
+            let corners = CORNERS.map(|(a, b, _, _)| (base + a + b * nx) as u32);
+            for n in corners {
+                s.fluid_node[n as usize] = true;
+                s.fluid_node[owner(grid, n as usize)] = true;
+            }
+            s.corners.push(corners);
+        } else {
+            s.pressure[c] = 0.0;
+        }
+    }
+    // The nodes whose four cells are all fluid (walls: no image cells).
+    s.quads.clear();
+    let [cx, cy] = s.cells.map(|n| n as i64);
+    let node_range = |axis: usize, n: i64| if s.periodic[axis] { 0..n } else { 1..n };
+    for nj in node_range(1, cy) {
+        for ni in node_range(0, cx) {
+            let around = [(-1, -1), (0, -1), (-1, 0), (0, 0)]
+                .map(|(a, b)| s.cell_at(ni + a, nj + b).map(|c| s.unknown[c]));
+            if let [Some(sw), Some(se), Some(nw), Some(ne)] = around {
+                if [sw, se, nw, ne].iter().all(|&u| u != AIR) {
+                    s.quads.push([sw, se, nw, ne]);
+                }
+            }
+        }
+    }
+}
+
+/// The 2 x 2 alternating sum of a node's cells (SW - SE - NW + NE).
+#[inline]
+fn alternating(quad: &[u32; 4], x: &[f64]) -> f64 {
+    quad.iter()
+        .zip(HOURGLASS)
+        .map(|(&u, sign)| sign * x[u as usize])
+        .sum()
+}
+
+/// D u at a cell: (1 / 2h) sum over the corners of (sx, sy) . u.
+#[inline]
+fn divergence(corners: &[u32; 4], u: &[Vec2], h: f64) -> f64 {
+    let mut sum = 0.0;
+    for (&n, (_, _, sx, sy)) in corners.iter().zip(CORNERS) {
+        let v = u[n as usize];
+        sum += sx * v.x + sy * v.y;
+    }
+    sum / (2.0 * h)
+}
+
+/// `s.nodal` = M'^-1 F G p for the cell values `value(s, k)` of the
+/// unknowns: G p scattered on the corners, folded (walls, periodic
+/// edges), divided by the mass, filled back to the ghosts.
+fn apply_g(grid: &Grid, s: &mut Scratch, value: impl Fn(&Scratch, usize) -> f64) {
+    let half_h = 0.5 * grid.h;
+    for &n in &grid.active {
+        s.nodal[n as usize] = Vec2::zeros();
+    }
+    for k in 0..s.fluid.len() {
+        let g = half_h * value(s, k);
+        let corners = s.corners[k];
+        for (&n, (_, _, sx, sy)) in corners.iter().zip(CORNERS) {
+            s.nodal[n as usize] += Vec2::new(sx * g, sy * g);
+        }
+    }
+    grid.fold(&mut s.nodal);
+    for &n in &grid.inside {
+        let n = n as usize;
+        s.nodal[n] *= s.inv_mass[n];
+    }
+    grid.fill(&mut s.nodal);
+}
+
+/// The right-hand side, the diagonal terms and the Jacobi preconditioner.
+fn assemble(
+    grid: &Grid,
+    s: &mut Scratch,
+    mat: &Material,
+    set: &ProjectionSettings,
+    dt: f64,
+    full_mass: f64,
+) {
+    let h = grid.h;
+    let h2 = h * h;
+    let incompressible = mat.k == f64::INFINITY;
+    let beta = set.checkerboard / mat.rho0;
+    let full = FULL_NODE_SHARE * full_mass;
+    s.alpha.clear();
+    s.target.clear();
+    s.b.clear();
+    s.diag.clear();
+    s.x.clear();
+    let (mut error_sum, mut error_cells) = (0.0, 0usize);
+    for (k, &c) in s.fluid.iter().enumerate() {
+        let c = c as usize;
+        let corners = s.corners[k];
+        let j_cell = s.vol[c] / s.vol0[c];
+        // The grid's packing: the corners' mass over a full node's.
+        let masses = corners.map(|n| grid.mass[n as usize]);
+        let target = if masses.iter().all(|&m| m >= full) {
+            let packing = masses.iter().sum::<f64>() / (4.0 * full_mass);
+            let error = if incompressible {
+                packing - 1.0
+            } else {
+                packing * j_cell - 1.0
+            };
+            error_sum += error;
+            error_cells += 1;
+            set.drift * error / dt
+        } else {
+            0.0
+        };
+        let (alpha, p_eos) = if incompressible {
+            (0.0, 0.0)
+        } else {
+            let state = mat.eos(j_cell);
+            let kt = state.tangent_modulus.max(1e-300);
+            (h2 / (kt * dt * dt), state.pressure)
+        };
+        let div_star = divergence(&corners, &grid.vel_new, h);
+        s.alpha.push(alpha);
+        s.target.push(target);
+        s.b.push(alpha * p_eos - h2 / dt * div_star + h2 / dt * target);
+        // Diagonal of G^T M^-1 G without the walls' doubling (|g|^2 = h^2 / 2
+        // per corner): a preconditioner only.
+        let gmg: f64 = corners
+            .iter()
+            .map(|&n| 0.5 * h2 * s.inv_mass[n as usize])
+            .sum();
+        s.diag.push(alpha + gmg);
+        s.x.push(s.pressure[c]);
+    }
+    for quad in &s.quads {
+        for &u in quad {
+            s.diag[u as usize] += beta;
+        }
+    }
+    s.stats.packing_error = if error_cells > 0 {
+        error_sum / error_cells as f64
+    } else {
+        0.0
+    };
+}
+
+/// y = A x for the unknowns (`s.nodal` is scratch).
+fn apply_a(grid: &Grid, s: &mut Scratch, beta: f64, from_d: bool) {
+    let h = grid.h;
+    if from_d {
+        apply_g(grid, s, |s, k| s.d[k]);
+    } else {
+        apply_g(grid, s, |s, k| s.x[k]);
+    }
+    let h2 = h * h;
+    for k in 0..s.fluid.len() {
+        let v = if from_d { s.d[k] } else { s.x[k] };
+        s.q[k] = s.alpha[k] * v + h2 * divergence(&s.corners[k], &s.nodal, h);
+    }
+    if beta > 0.0 {
+        for quad in &s.quads {
+            let src = if from_d { &s.d } else { &s.x };
+            let c = beta * alternating(quad, src);
+            for (u, sign) in quad.iter().zip(HOURGLASS) {
+                s.q[*u as usize] += sign * c;
+            }
+        }
+    }
+}
+
+/// Jacobi-preconditioned conjugate gradient from the last step's pressure.
+fn solve(grid: &Grid, s: &mut Scratch, set: &ProjectionSettings, beta: f64) {
+    let n = s.fluid.len();
+    for v in [&mut s.r, &mut s.z, &mut s.d, &mut s.q] {
+        v.clear();
+        v.resize(n, 0.0);
+    }
+    if n == 0 {
+        s.stats.converged = true;
+        return;
+    }
+    // No air cell and no compressibility: p is known up to a constant;
+    // solve for the mean-free part of a mean-free right-hand side.
+    let singular = s.alpha.iter().all(|&a| a == 0.0) && n == s.unknown.len();
+    if singular {
+        remove_mean(&mut s.b);
+        remove_mean(&mut s.x);
+    }
+    apply_a(grid, s, beta, false);
+    for k in 0..n {
+        s.r[k] = s.b[k] - s.q[k];
+    }
+    let b_norm = dot(&s.b, &s.b).sqrt();
+    let goal = set.tolerance * b_norm.max(f64::MIN_POSITIVE);
+    let mut r_norm = dot(&s.r, &s.r).sqrt();
+    let mut rz = 0.0;
+    let mut iterations = 0;
+    while r_norm > goal && iterations < set.max_iterations {
+        for k in 0..n {
+            s.z[k] = s.r[k] / s.diag[k];
+        }
+        if singular {
+            remove_mean(&mut s.z);
+        }
+        let rz_new = dot(&s.r, &s.z);
+        if iterations == 0 {
+            s.d.copy_from_slice(&s.z);
+        } else {
+            let ratio = rz_new / rz;
+            for k in 0..n {
+                s.d[k] = s.z[k] + ratio * s.d[k];
+            }
+        }
+        rz = rz_new;
+        apply_a(grid, s, beta, true);
+        let dq = dot(&s.d, &s.q);
+        if !(dq > 0.0) {
+            break;
+        }
+        let step = rz / dq;
+        for k in 0..n {
+            s.x[k] += step * s.d[k];
+            s.r[k] -= step * s.q[k];
+        }
+        r_norm = dot(&s.r, &s.r).sqrt();
+        iterations += 1;
+    }
+    s.stats.iterations = iterations;
+    s.stats.residual = if b_norm > 0.0 {
+        r_norm / b_norm
+    } else {
+        r_norm
+    };
+    s.stats.converged = r_norm <= goal;
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn remove_mean(v: &mut [f64]) {
+    let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+    v.iter_mut().for_each(|x| *x -= mean);
+}
+
+/// Removes `share` of each fluid cell's hourglass velocity (mass-weighted
+/// so that momentum is kept where no node is floored), cell by cell in
+/// order, on the owner nodes, then fills the ghosts.
+fn damp_hourglass(grid: &mut Grid, s: &Scratch, share: f64) {
+    for corners in &s.corners {
+        let owners = corners.map(|n| owner(grid, n as usize));
+        let masses = owners.map(|n| 1.0 / s.inv_mass[n]);
+        let total: f64 = masses.iter().sum();
+        let mut mode = Vec2::zeros();
+        for k in 0..4 {
+            mode += HOURGLASS[k] * masses[k] * grid.vel_new[owners[k]];
+        }
+        mode /= total;
+        for k in 0..4 {
+            let n = owners[k];
+            let dv = -share * HOURGLASS[k] * mode * (0.25 * total / masses[k]);
+            grid.vel_new[n] = grid.project_walls(n, grid.vel_new[n] + dv);
+        }
+    }
+    let mut vel = std::mem::take(&mut grid.vel_new);
+    grid.fill(&mut vel);
+    grid.vel_new = vel;
+}
+
+/// The node a cell corner's value lives on: itself, or across a periodic edge.
+fn owner(grid: &Grid, n: usize) -> usize {
+    let (mut i, mut j) = grid.coords(n);
+    if grid.periodic[0] && i == PAD + grid.cells[0] {
+        i = PAD;
+    }
+    if grid.periodic[1] && j == PAD + grid.cells[1] {
+        j = PAD;
+    }
+    grid.index(i, j)
+}
+
+/// Kinetic energy of the real particles' mass on the grid at `vel_new`.
+fn kinetic(grid: &Grid) -> f64 {
+    crate::stages::grid_update::updated_kinetic(grid)
+}
+
+/// The particles after G2P: F from the velocity gradient, J^{n+1} = J^n
+/// (1 + dt e) of the particle's cell, the viscous stress, the cell
+/// pressure, the stored energy; no wave speed (no sound limits the step).
+/// Returns the viscous work.
+pub fn update_particles(
+    particles: &mut Particles,
+    stencils: &[Stencil],
+    shape: &Shape,
+    grid: &Grid,
+    material: &Material,
+    s: &mut Scratch,
+    dt: f64,
+) -> f64 {
+    crate::shapes::with_width!(shape, W => update_with::<W>(particles, stencils, shape, grid, material, s, dt))
+}
+
+fn update_with<const W: usize>(
+    particles: &mut Particles,
+    stencils: &[Stencil],
+    shape: &Shape,
+    grid: &Grid,
+    m: &Material,
+    s: &mut Scratch,
+    dt: f64,
+) -> f64 {
+    let nx = grid.dims[0];
+    let inv_h = 1.0 / grid.h;
+    let n = particles.len();
+    let n_chunks = crate::par::chunk_count(n);
+    let piece = crate::par::piece_chunks(n);
+    let (rate, pressure_cell) = (&s.rate[..], &s.pressure[..]);
+    let velocity = &grid.vel_new[..];
+    (
+        particles.f.par_chunks_mut(CHUNK),
+        particles.j.par_chunks_mut(CHUNK),
+        particles.vol.par_chunks_mut(CHUNK),
+        particles.stress.par_chunks_mut(CHUNK),
+        particles.pressure.par_chunks_mut(CHUNK),
+        particles.dev_rate.par_chunks_mut(CHUNK),
+        particles.wave_speed.par_chunks_mut(CHUNK),
+        particles.stored_energy.par_chunks_mut(CHUNK),
+        particles.vol0.par_chunks(CHUNK),
+        stencils.par_chunks(CHUNK),
+        s.particle_cell[..n].par_chunks(CHUNK),
+        s.partials[..n_chunks].par_iter_mut(),
+    )
+        .into_par_iter()
+        .pieces(piece)
+        .for_each(
+            |(f, j, vol, stress, pressure, dev_rate, wave, stored, vol0, st, cell, work)| {
+                let mut acc = 0.0;
+                for k in 0..f.len() {
+                    let l = crate::stages::stress::velocity_gradient::<W>(
+                        shape, &st[k], velocity, nx, inv_h,
+                    );
+                    let c = cell[k] as usize;
+                    let j_next = j[k] * (1.0 + dt * rate[c]);
+                    let f_new = (Mat2::identity() + dt * l) * f[k];
+                    let det = f_new.determinant();
+                    f[k] = if det > 0.0 && j_next > 0.0 {
+                        f_new * (j_next / det).sqrt()
+                    } else {
+                        f_new
+                    };
+                    j[k] = j_next;
+                    vol[k] = vol0[k] * j_next;
+                    let d = 0.5 * (l + l.transpose());
+                    let visc = viscosity::newtonian(m.viscosity, &d);
+                    acc += visc.power * vol[k] * dt;
+                    pressure[k] = pressure_cell[c];
+                    stress[k] = visc.stress - pressure[k] * Mat2::identity();
+                    dev_rate[k] = visc.dev_rate;
+                    wave[k] = 0.0;
+                    stored[k] = vol0[k] * m.eos(j_next).energy;
+                }
+                *work = acc;
+            },
+        );
+    s.partials[..n_chunks].iter().sum()
+}
+
+/// The flow's time step: CFL h / max |v|, the gravity-wave limit CFL
+/// sqrt(h / g) and the explicit viscous limit h^2 / (4 nu).
+pub fn flow_dt(cfl: f64, h: f64, max_speed: f64, gravity: f64, nu: f64) -> f64 {
+    let mut dt = f64::INFINITY;
+    if max_speed > 0.0 {
+        dt = dt.min(cfl * h / max_speed);
+    }
+    if gravity > 0.0 {
+        dt = dt.min(cfl * (h / gravity).sqrt());
+    }
+    if nu > 0.0 {
+        dt = dt.min(0.25 * h * h / nu);
+    }
+    if dt.is_finite() {
+        dt
+    } else {
+        // Neither flow nor gravity nor viscosity: a cell per unit speed.
+        cfl * h
+    }
+}
