@@ -5,7 +5,8 @@
 //! - nodal: the pressure per node that drives the nodal forces: J-bar's
 //!   nodal J through the EOS, pressure smoothing's nodal p, else the
 //!   projection sum N m p / sum N m of the particle pressure;
-//! - cell: the cell pressure of a method that carries one (cell
+//! - cell: the cell pressure of a method that carries one (the
+//!   pressure-implicit step's solved pressure, cell
 //!   dilatation's cell J through the EOS).
 //!
 //! Each is the alternating amplitude A = sqrt(mean (L q)^2) / 8 over the
@@ -102,12 +103,20 @@ impl FieldCheckerboard {
     /// The cell measure over a box of `cells`, for a method that carries a
     /// cell pressure.
     pub fn cell(&self, v: &StateView, cells: [usize; 2], scale: f64) -> Option<f64> {
+        let h = v.grid.h;
+        let filled = CELL_FILLED_SHARE * h * h;
+        if let Some(pi) = &v.projection {
+            // The pressure-implicit step's solved cell pressure.
+            return alternating_amplitude(cells, |i, j| {
+                let c = i + j * cells[0];
+                (pi.volume0[c] >= filled).then(|| pi.pressure[c])
+            })
+            .map(|a| a / scale);
+        }
         let (volume, volume0) = v.remedies.pressure_fields().find_map(|(_, f)| match f {
             PressureField::CellJ { volume, volume0 } => Some((volume, volume0)),
             _ => None,
         })?;
-        let h = v.grid.h;
-        let filled = CELL_FILLED_SHARE * h * h;
         alternating_amplitude(cells, |i, j| {
             let c = i + j * cells[0];
             (volume0[c] >= filled).then(|| pressure_of(&v.materials[0], volume[c] / volume0[c]))

@@ -289,17 +289,30 @@ pub struct ProjectionSettings {
     /// Relative residual |b - A p| / |b| at which the conjugate gradient stops.
     pub tolerance: f64,
     pub max_iterations: u32,
+    /// The conjugate gradient's preconditioner.
+    pub preconditioner: Preconditioner,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Preconditioner {
+    /// The diagonal.
+    Jacobi,
+    /// Incomplete Cholesky on the 3 x 3 pattern, the matrix read by nine
+    /// probes (Jacobi on a periodic axis whose cell count is not a multiple of 3).
+    Ic0,
 }
 
 impl Default for ProjectionSettings {
     fn default() -> Self {
         ProjectionSettings {
             hourglass: 0.05,
-            checkerboard: 0.05,
+            checkerboard: 1.0,
             drift: 0.1,
             light_node_share: 0.25,
             tolerance: 1e-8,
             max_iterations: 4000,
+            preconditioner: Preconditioner::Ic0,
         }
     }
 }

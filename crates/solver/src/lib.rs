@@ -46,7 +46,7 @@ pub use multiphase::mixture::Mixture;
 pub use particles::{Mat2, Vec2};
 pub use remedies::EnergyChange;
 pub use timing::StageTimes;
-pub use view::{GridView, StateView};
+pub use view::{GridView, ProjectionView, StateView};
 
 use deletion::CullRules;
 use grid::Grid;

@@ -95,6 +95,18 @@ pub struct StateView<'a> {
     /// (`energy_parts`) and the fields it builds the pressure from
     /// (`pressure_fields`).
     pub remedies: &'a crate::remedies::Remedies,
+    /// The pressure-implicit step's cell pressure (None otherwise).
+    pub projection: Option<ProjectionView<'a>>,
+}
+
+/// The pressure-implicit step as the monitor reads it.
+#[derive(Clone, Copy)]
+pub struct ProjectionView<'a> {
+    /// Per cell of the box (`i + j * cells[0]`): the solved pressure (air: 0).
+    pub pressure: &'a [f64],
+    /// Per cell: the particles' V0 (a cell is fluid when it holds some).
+    pub volume0: &'a [f64],
+    pub stats: crate::stages::projection::SolveStats,
 }
 
 pub fn make(s: &Solver) -> StateView<'_> {
@@ -148,5 +160,10 @@ pub fn make(s: &Solver) -> StateView<'_> {
         culled: &s.culled,
         n_initial: s.n_initial,
         remedies: &s.remedies,
+        projection: s.projection_stats().map(|stats| ProjectionView {
+            pressure: &s.projection.pressure,
+            volume0: s.projection.cell_volume0(),
+            stats,
+        }),
     }
 }

@@ -429,15 +429,19 @@ fn list_command(args: ListArgs) -> ExitCode {
             .iter()
             .map(study::labels::named_material_label)
             .collect();
+        // The pressure-implicit step has its own order and a flow step.
+        let stepping = match m.formulation {
+            solver::Formulation::Explicit => format!("{:?} cfl={} dt={:?}", m.scheme, m.cfl, m.dt),
+            solver::Formulation::PressureImplicit => {
+                format!("pressure_implicit cfl={} (flow)", m.cfl)
+            }
+        };
         let line = writeln!(
             out,
-            "{}\t{:?} {:?} {:?} cfl={} dt={:?}\t{}",
+            "{}\t{:?} {:?} {stepping}\t{}",
             case.name,
             m.shape,
             m.transfer,
-            m.scheme,
-            m.cfl,
-            m.dt,
             mats.join("; ")
         );
         // A closed pipe (`kick list | head`) ends the listing quietly.
