@@ -118,8 +118,8 @@ pub struct Scratch {
     d: Vec<f64>,
     q: Vec<f64>,
     diag: Vec<f64>,
-    /// Per unknown: the unknowns of its 3 x 3 cells (slot (dx + 1) + 3 (dy
-    /// + 1); `AIR` where none), the matrix row over them, and its
+    /// Per unknown: the unknowns of its 3 x 3 cells (slot (dx + 1) +
+    /// 3 (dy + 1); `AIR` where none), the matrix row over them, and its
     /// incomplete Cholesky factor's row.
     neighbours: Vec<[u32; 9]>,
     matrix: Vec<[f64; 9]>,
@@ -163,7 +163,7 @@ impl Scratch {
             neighbours: Vec::with_capacity(n_cells),
             matrix: Vec::with_capacity(n_cells),
             lower: Vec::with_capacity(n_cells),
-            probe_exact: (0..2).all(|a| !grid.periodic[a] || grid.cells[a] % 3 == 0),
+            probe_exact: (0..2).all(|a| !grid.periodic[a] || grid.cells[a].is_multiple_of(3)),
             partials: vec![0.0; crate::par::chunk_count(particles)],
             stats: SolveStats::default(),
         }
@@ -708,9 +708,9 @@ fn factorise(s: &mut Scratch) {
             }
         }
         let mut pivot = s.matrix[i][4];
-        for a in 0..lower.len {
+        for (a, &slot) in slots.iter().enumerate().take(lower.len) {
             let k = lower.index[a] as usize;
-            let mut sum = s.matrix[i][slots[a]];
+            let mut sum = s.matrix[i][slot];
             let row_k = &s.lower[k];
             for b in 0..a {
                 let j = lower.index[b];
