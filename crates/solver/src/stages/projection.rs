@@ -90,6 +90,9 @@ pub struct Scratch {
     pub pressure: Vec<f64>,
     /// Per cell: the J rate e of the last step (air: 0).
     rate: Vec<f64>,
+    /// Per cell: the pressure gradient the particles read their pressure
+    /// with (`reconstruct`).
+    gradient: Vec<Vec2>,
     /// Per cell: sum V, sum V0 of its particles.
     vol: Vec<f64>,
     vol0: Vec<f64>,
@@ -143,6 +146,7 @@ impl Scratch {
             fluid: Vec::with_capacity(n_cells),
             pressure: vec![0.0; n_cells],
             rate: vec![0.0; n_cells],
+            gradient: vec![Vec2::zeros(); n_cells],
             vol: vec![0.0; n_cells],
             vol0: vec![0.0; n_cells],
             particle_cell: vec![0; particles],
@@ -287,6 +291,41 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
         pressure_work += s.x[k] * s.vol[c] * dt * e;
     }
     s.stats.dissipated_projection = ke_star - kinetic(grid) + pressure_work;
+    reconstruct(s, h);
+}
+
+/// The gradient of the cell pressure at each fluid cell, by central
+/// differences where both neighbours are fluid, one-sided at a wall (no
+/// neighbour), and against -p of the cell itself at an air neighbour (p = 0
+/// on the face between): each particle reads p_c + grad . (x - x_c), exact
+/// for a linear field, so a resting layer's particles read the hydrostatic
+/// pressure where they stand and not their cell centre's (a sampling error
+/// of rho0 g h / 4).
+fn reconstruct(s: &mut Scratch, h: f64) {
+    for k in 0..s.fluid.len() {
+        let c = s.fluid[k] as usize;
+        let p0 = s.x[k];
+        let row = s.neighbours[k];
+        let side = |slot: usize, di: i64, dj: i64| -> Option<f64> {
+            let m = row[slot];
+            if m != AIR {
+                return Some(s.x[m as usize]);
+            }
+            let (ci, cj) = ((c % s.cells[0]) as i64, (c / s.cells[0]) as i64);
+            s.cell_at(ci + di, cj + dj).map(|_| -p0)
+        };
+        let slope = |minus: Option<f64>, plus: Option<f64>| match (minus, plus) {
+            (Some(a), Some(b)) => (b - a) / (2.0 * h),
+            (None, Some(b)) => (b - p0) / h,
+            (Some(a), None) => (p0 - a) / h,
+            (None, None) => 0.0,
+        };
+        // Slots: (dx + 1) + 3 (dy + 1).
+        s.gradient[c] = Vec2::new(
+            slope(side(3, -1, 0), side(5, 1, 0)),
+            slope(side(1, 0, -1), side(7, 0, 1)),
+        );
+    }
 }
 
 /// The nodes a particle reaches beyond its cell's corners (B-splines) are
@@ -849,7 +888,8 @@ fn update_with<const W: usize>(
     let n = particles.len();
     let n_chunks = crate::par::chunk_count(n);
     let piece = crate::par::piece_chunks(n);
-    let (rate, pressure_cell) = (&s.rate[..], &s.pressure[..]);
+    let (rate, pressure_cell, gradient) = (&s.rate[..], &s.pressure[..], &s.gradient[..]);
+    let (origin, h, cells_x) = (grid.origin, grid.h, s.cells[0]);
     let velocity = &grid.vel_new[..];
     (
         particles.f.par_chunks_mut(CHUNK),
@@ -860,7 +900,10 @@ fn update_with<const W: usize>(
         particles.dev_rate.par_chunks_mut(CHUNK),
         particles.wave_speed.par_chunks_mut(CHUNK),
         particles.stored_energy.par_chunks_mut(CHUNK),
-        particles.vol0.par_chunks(CHUNK),
+        particles
+            .vol0
+            .par_chunks(CHUNK)
+            .zip(particles.x.par_chunks(CHUNK)),
         stencils.par_chunks(CHUNK),
         s.particle_cell[..n].par_chunks(CHUNK),
         s.partials[..n_chunks].par_iter_mut(),
@@ -868,7 +911,7 @@ fn update_with<const W: usize>(
         .into_par_iter()
         .pieces(piece)
         .for_each(
-            |(f, j, vol, stress, pressure, dev_rate, wave, stored, vol0, st, cell, work)| {
+            |(f, j, vol, stress, pressure, dev_rate, wave, stored, (vol0, x), st, cell, work)| {
                 let mut acc = 0.0;
                 for k in 0..f.len() {
                     let l = crate::stages::stress::velocity_gradient::<W>(
@@ -888,7 +931,9 @@ fn update_with<const W: usize>(
                     let d = 0.5 * (l + l.transpose());
                     let visc = viscosity::newtonian(m.viscosity, &d);
                     acc += visc.power * vol[k] * dt;
-                    pressure[k] = pressure_cell[c];
+                    let centre = origin
+                        + h * Vec2::new((c % cells_x) as f64 + 0.5, (c / cells_x) as f64 + 0.5);
+                    pressure[k] = pressure_cell[c] + gradient[c].dot(&(x[k] - centre));
                     stress[k] = visc.stress - pressure[k] * Mat2::identity();
                     dev_rate[k] = visc.dev_rate;
                     wave[k] = 0.0;
