@@ -130,3 +130,83 @@ fn a_compressible_column_settles_to_the_hydrostatic_pressure() {
         assert!(speed < 1e-4, "{:?}: speed {speed}", material.eos);
     }
 }
+
+/// What the formulation does not support is refused with the key that asks
+/// for it; `K = "inf"` is refused under the explicit formulation.
+#[test]
+fn what_it_cannot_solve_is_refused_by_key() {
+    let scene = || {
+        common::box_scene(
+            [0.2, 0.3],
+            [0.0, 0.0, 0.1, DEPTH],
+            Material::new(1.5e6),
+            9.81,
+        )
+    };
+    let method = || implicit(ShapeKind::Bspline2, TransferKind::Apic);
+    let key_of = |scene: Scene, method: Method| common::refusal(scene, method).map(|e| e.key);
+
+    let explicit = common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usf);
+    let mut s = scene();
+    s.materials[0] = incompressible();
+    assert_eq!(
+        key_of(s.clone(), explicit).as_deref(),
+        Some("materials[0].K")
+    );
+    assert_eq!(
+        key_of(s, method()),
+        None,
+        "K = inf is the implicit formulation's"
+    );
+
+    let mut s = scene();
+    s.materials.push(Material::tait(1.5e6));
+    assert_eq!(key_of(s, method()).as_deref(), Some("materials"));
+    let mut s = scene();
+    s.materials[0].shear_modulus = 1e5;
+    assert_eq!(
+        key_of(s, method()).as_deref(),
+        Some("materials[0].shear_modulus")
+    );
+    let mut s = scene();
+    s.materials[0].pressure_floor = Some(0.0);
+    assert_eq!(
+        key_of(s, method()).as_deref(),
+        Some("materials[0].pressure_floor")
+    );
+
+    let mut m = method();
+    m.quadrature = QuadratureKind::Mixed;
+    assert_eq!(key_of(scene(), m).as_deref(), Some("method.quadrature"));
+    let mut m = method();
+    m.force = ForceKind::Mls;
+    assert_eq!(key_of(scene(), m).as_deref(), Some("method.force"));
+    let mut m = method();
+    m.remedies.j_bar = Some(Default::default());
+    assert_eq!(key_of(scene(), m).as_deref(), Some("method.j_bar"));
+    let mut m = method();
+    m.projection.hourglass = 0.5;
+    assert_eq!(
+        key_of(scene(), m).as_deref(),
+        Some("method.projection.hourglass")
+    );
+
+    // A mixture is two phases: the solve is for one fluid.
+    let phase = |method: Method| {
+        common::phase([0.0, 0.0, 0.1, 0.05], 1000.0, 0.4, method, |_| {
+            Vec2::zeros()
+        })
+    };
+    let drag = solver::multiphase::drag::Drag {
+        coefficient: 1.0,
+        kozeny_carman: None,
+        model: solver::multiphase::drag::DragModel::BangBangNode,
+        update: solver::multiphase::drag::DragUpdate::Explicit,
+    };
+    let explicit = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
+    let refused = Mixture::new([phase(explicit), phase(method())], drag).err();
+    assert_eq!(
+        refused.map(|e| e.key).as_deref(),
+        Some("method.formulation")
+    );
+}

@@ -987,6 +987,35 @@ mod tests {
             .unwrap()
     }
 
+    /// The study file's spelling: `formulation = "pressure_implicit"`, `K =
+    /// "inf"` (and TOML's bare inf), `[method.projection]` with its keys; a
+    /// wrong key in the table is refused.
+    #[test]
+    fn the_pressure_implicit_keys_parse() {
+        let method: solver::Method = toml::from_str(
+            "formulation = \"pressure_implicit\"\n[projection]\ndrift = 0.2\npreconditioner = \"jacobi\"\n",
+        )
+        .unwrap();
+        assert_eq!(method.formulation, solver::Formulation::PressureImplicit);
+        assert_eq!(method.projection.drift, 0.2);
+        assert_eq!(
+            method.projection.preconditioner,
+            solver::Preconditioner::Jacobi
+        );
+        assert!(toml::from_str::<solver::Method>("[projection]\ndrfit = 0.2\n").is_err());
+        for text in ["K = \"inf\"", "K = inf"] {
+            let m: solver::Material = toml::from_str(text).unwrap();
+            assert_eq!(m.k, f64::INFINITY, "{text}");
+        }
+        assert!(toml::from_str::<solver::Material>("K = \"infinite\"").is_err());
+        // Written back as "inf" (JSON has no infinity) and read again.
+        let m: solver::Material = toml::from_str("K = \"inf\"").unwrap();
+        let json = serde_json::to_string(&m).unwrap();
+        assert!(json.contains("\"K\":\"inf\""), "{json}");
+        let back: solver::Material = serde_json::from_str(&json).unwrap();
+        assert_eq!(back.k, f64::INFINITY);
+    }
+
     #[test]
     fn line_column_counts_lines_and_characters_from_one() {
         let text = "a = 1\nbé = 2\n\nc";

@@ -58,6 +58,18 @@ impl Mixture {
         }
         if phases
             .iter()
+            .any(|p| p.config().method.formulation != crate::config::Formulation::Explicit)
+        {
+            // Its pressure solve is for one fluid filling its cells.
+            return Err(ConfigError {
+                key: "method.formulation".into(),
+                message:
+                    "\"pressure_implicit\" solves one fluid phase; a mixture needs \"explicit\""
+                        .into(),
+            });
+        }
+        if phases
+            .iter()
             .any(|p| p.config().method.quadrature == crate::config::QuadratureKind::Mixed)
         {
             // Its full cells are judged by one phase's density.
