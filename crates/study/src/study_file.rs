@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use solver::multiphase::drag::{Drag, DragModel, DragUpdate};
 use solver::remedies::{Descriptor, DESCRIPTORS};
 use solver::{Material, Method, Perturb, Phase, Scene, SolverConfig, Wall};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use toml::{Table, Value};
 
@@ -308,20 +308,37 @@ fn expand(
         let mut table = root.clone();
         let mut rest = index;
         let mut name_parts = vec![];
+        // The method keys this case's matrix entries set (its own entry).
+        let mut entry_keys = BTreeSet::new();
         for (key, values) in axes.iter().rev() {
             let v = &values[rest % values.len()];
             rest /= values.len();
             set_path(&mut table, key, v.clone()).map_err(|m| (format!("matrix.{key}"), m))?;
             name_parts.push(name_part(key, v));
+            match (key.as_str(), v) {
+                ("method", Value::Table(t)) => entry_keys.extend(t.keys().cloned()),
+                (k, _) => {
+                    if let Some(rest) = k.strip_prefix("method.") {
+                        entry_keys.insert(rest.split('.').next().unwrap_or(rest).to_string());
+                    }
+                }
+            }
         }
+        let ignored = formulation_keys(root, &table, &entry_keys)?;
         name_parts.reverse();
         let name = if name_parts.is_empty() {
             base.to_string()
         } else {
             name_parts.join("_")
         };
+        let with_ignored = |mut c: Case| {
+            for (key, value) in &ignored {
+                c.params.insert(format!("ignored.{key}"), value.clone());
+            }
+            c
+        };
         let Some(n) = ensemble else {
-            cases.push(case(name, table)?);
+            cases.push(with_ignored(case(name, table)?));
             continue;
         };
         for member in 0..n {
@@ -337,10 +354,55 @@ fn expand(
                 let base = scene.get("seed").and_then(Value::as_integer).unwrap_or(0);
                 scene.insert("seed".into(), Value::Integer(base + member as i64));
             }
-            cases.push(case(format!("{name}_e{member}"), table)?);
+            cases.push(with_ignored(case(format!("{name}_e{member}"), table)?));
         }
     }
     Ok(cases)
+}
+
+/// The method keys the pressure-implicit formulation does not use: it has
+/// its own order of stages, its own J update and takes dt from the flow.
+const UNUSED_BY_PRESSURE_IMPLICIT: [&str; 3] = ["scheme", "dt", "j_update"];
+
+/// Under `formulation = "pressure_implicit"`, a key it does not use is
+/// refused when the formulation's own entry sets it (the matrix entry that
+/// switches it on, or the base `[method]` when that does), and ignored when
+/// inherited from the base: returned as (key, value) for the summary.
+fn formulation_keys(
+    root: &Table,
+    table: &Table,
+    entry_keys: &BTreeSet<String>,
+) -> Result<Vec<(String, Value)>, KeyError> {
+    let method_of = |t: &Table| t.get("method").and_then(Value::as_table).cloned();
+    let Some(method) = method_of(table) else {
+        return Ok(vec![]);
+    };
+    if method.get("formulation").and_then(Value::as_str) != Some("pressure_implicit") {
+        return Ok(vec![]);
+    }
+    let own: BTreeSet<String> = if entry_keys.contains("formulation") {
+        entry_keys.clone()
+    } else {
+        let base = method_of(root).unwrap_or_default();
+        base.keys()
+            .cloned()
+            .chain(entry_keys.iter().cloned())
+            .collect()
+    };
+    let mut ignored = vec![];
+    for key in UNUSED_BY_PRESSURE_IMPLICIT {
+        let Some(value) = method.get(key) else {
+            continue;
+        };
+        if own.contains(key) {
+            return Err((
+                format!("method.{key}"),
+                "is not used by formulation = \"pressure_implicit\" (its own order of stages and J update, dt from the flow): leave it out of the entry that sets the formulation".into(),
+            ));
+        }
+        ignored.push((format!("method.{key}"), value.clone()));
+    }
+    Ok(ignored)
 }
 
 /// `[[matrix.also]]`: further blocks of cases, each the main product with
@@ -1143,6 +1205,43 @@ mod tests {
         std::fs::write(&path, text.replace("ensemble = 3", "ensemble = 0")).unwrap();
         let e = load(&path, &[]).unwrap_err();
         assert_eq!(e.key, "matrix.ensemble", "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Under the pressure-implicit formulation the keys it does not use
+    /// (scheme, dt, j_update) are refused in the entry that switches it on
+    /// and ignored, listed as `ignored.method.KEY`, when inherited.
+    #[test]
+    fn pressure_implicit_refuses_its_unused_keys_and_lists_inherited_ones() {
+        let dir = std::env::temp_dir().join(format!("kick_implicit_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("s.toml");
+        let base =
+            "[scene]\n[[scene.body]]\nrect = [0.0, 0.0, 0.2, 0.4]\n[materials.water]\nK = 1e5\n\
+                    [method]\nscheme = \"usf\"\ndt = \"fixed\"\n[matrix]\n";
+        let inherited =
+            format!("{base}\"method\" = [{{ }}, {{ formulation = \"pressure_implicit\" }}]\n");
+        std::fs::write(&path, inherited).unwrap();
+        let study = load(&path, &[]).unwrap();
+        let implicit = &study.cases[1];
+        assert_eq!(
+            implicit.solver.method.formulation,
+            solver::Formulation::PressureImplicit
+        );
+        assert_eq!(
+            implicit.params["ignored.method.scheme"],
+            Value::String("usf".into())
+        );
+        assert_eq!(
+            implicit.params["ignored.method.dt"],
+            Value::String("fixed".into())
+        );
+        assert!(!study.cases[0].params.contains_key("ignored.method.scheme"));
+        let own = format!(
+            "{base}\"method\" = [{{ formulation = \"pressure_implicit\", j_update = \"exp\" }}]\n"
+        );
+        std::fs::write(&path, own).unwrap();
+        assert_eq!(load(&path, &[]).unwrap_err().key, "method.j_update");
         let _ = std::fs::remove_dir_all(&dir);
     }
 
