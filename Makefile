@@ -56,6 +56,8 @@ bench: build
 	$(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape linear --transfer flip --set method.null_space_filter=true
 	$(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape gimp --transfer flip
 	$(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape cpgimp --transfer flip
+	# The pressure-implicit formulation's cost per particle-step.
+	$(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape bspline2 --transfer apic --set method.formulation=pressure_implicit
 
 fmt:
 	$(CARGO) fmt --all

@@ -92,7 +92,10 @@ def decay(folder, nu):
         rate = check.get("rate")
         if s["status"] != "completed" or check.get("later_max_ratio", 0.0) > 0.5:
             rate = None  # blown up, or the mode swings back: no decay rate
-        key = (method_of(s["case"]), p.get("scene.cell"), p.get("materials.water.K"))
+        k = p.get("materials.water.K")
+        # The incompressible limit is K = "inf" (pressure-implicit formulation).
+        k = float("inf") if k == "inf" else k
+        key = (method_of(s["case"]), p.get("scene.cell"), k)
         mu = p.get("materials.water.viscosity", 0.0)
         runs[key][(mode_of(p), mu > 0)] = (rate, check["k"], s["wall_s"])
     out = {}

@@ -69,10 +69,12 @@ pub struct SolveStats {
     /// |b - A p| / |b| at the end.
     pub residual: f64,
     pub converged: bool,
-    /// Energy the projection removed (kinetic lost minus the pressure's
-    /// work into the stored energy, J/m).
+    /// Energy the projection removed: minus its velocity change's work at
+    /// the time-centred velocity, less the pressure's work into the stored
+    /// energy (J/m).
     pub dissipated_projection: f64,
-    /// Energy the hourglass control removed (J/m).
+    /// Energy the hourglass control removed: minus its velocity change's
+    /// work at the time-centred velocity (J/m).
     pub dissipated_hourglass: f64,
     /// Mean of packing J - 1 over the cells whose nodes are full (before the step's correction).
     pub packing_error: f64,
@@ -113,6 +115,9 @@ pub struct Scratch {
     fluid_node: Vec<bool>,
     /// Per node: G p, then M^-1 G p.
     nodal: Vec<Vec2>,
+    /// Per node: u* as the grid update left it, and after the hourglass control.
+    before_hourglass: Vec<Vec2>,
+    before_projection: Vec<Vec2>,
     /// Conjugate-gradient vectors, one entry per unknown.
     x: Vec<f64>,
     b: Vec<f64>,
@@ -157,6 +162,8 @@ impl Scratch {
             inv_mass: vec![0.0; n_nodes],
             fluid_node: vec![false; n_nodes],
             nodal: vec![Vec2::zeros(); n_nodes],
+            before_hourglass: vec![Vec2::zeros(); n_nodes],
+            before_projection: vec![Vec2::zeros(); n_nodes],
             x: Vec::with_capacity(n_cells),
             b: Vec::with_capacity(n_cells),
             r: Vec::with_capacity(n_cells),
@@ -249,12 +256,18 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
         fluid_cells: s.fluid.len(),
         ..SolveStats::default()
     };
-    if set.hourglass > 0.0 {
-        let before = kinetic(grid);
-        damp_hourglass(grid, s, set.hourglass);
-        s.stats.dissipated_hourglass = before - kinetic(grid);
+    // u* before and after the hourglass control, for the energy booked below.
+    for &n in &grid.active {
+        s.before_hourglass[n as usize] = grid.vel_new[n as usize];
     }
-    let ke_star = kinetic(grid);
+    if set.hourglass > 0.0 {
+        damp_hourglass(grid, s, set.hourglass);
+    }
+    for &n in &grid.active {
+        let n = n as usize;
+        s.before_projection[n] = grid.vel_new[n];
+        grid.accel[n] += (s.before_projection[n] - s.before_hourglass[n]) / dt;
+    }
     assemble(grid, s, mat, set, dt, full_mass);
     solve(grid, s, set, set.checkerboard / mat.rho0);
     // u^{n+1} = u* + dt M^-1 G p.
@@ -290,7 +303,22 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
         s.rate[c] = e;
         pressure_work += s.x[k] * s.vol[c] * dt * e;
     }
-    s.stats.dissipated_projection = ke_star - kinetic(grid) + pressure_work;
+    // The work of each velocity change at the time-centred velocity
+    // (v^n + v^{n+1}) / 2: the kinetic energy's change telescopes exactly
+    // over gravity and viscosity, the hourglass control and the projection.
+    // (Against u* itself, the projection would be booked the kinetic energy
+    // of the weight it cancels, 1/2 M (g dt)^2 a step for water at rest.)
+    let (mut work_hourglass, mut work_projection) = (0.0, 0.0);
+    for &n in &grid.active {
+        let n = n as usize;
+        let m = grid.mass_raw[n];
+        let mean = 0.5 * (grid.vel[n] + grid.vel_new[n]);
+        work_hourglass += m * (s.before_projection[n] - s.before_hourglass[n]).dot(&mean);
+        work_projection += m * (grid.vel_new[n] - s.before_projection[n]).dot(&mean);
+    }
+    s.stats.dissipated_hourglass = -work_hourglass;
+    // What the pressure's work did not put into stored energy.
+    s.stats.dissipated_projection = -work_projection + pressure_work;
     reconstruct(s, h);
 }
 
@@ -345,7 +373,7 @@ fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64) {
         for dj in -1..=1i64 {
             for di in -1..=1i64 {
                 let m = (n as i64 + di + dj * nx) as usize;
-                if (di, dj) != (0, 0) && s.fluid_node[m] {
+                if (di, dj) != (0, 0) && s.fluid_node[owner(grid, m)] {
                     sum += grid.vel_new[m];
                     count += 1;
                 }
@@ -384,21 +412,24 @@ fn mark_fluid(ps: &Particles, grid: &Grid, s: &mut Scratch) {
         s.vol0[c] += ps.vol0[p];
     }
     let nx = grid.dims[0];
+    // The flags live on the owner nodes (a periodic edge's two sides are one node).
     for c in &s.corners {
         for &n in c {
-            s.fluid_node[n as usize] = false;
+            s.fluid_node[owner(grid, n as usize)] = false;
         }
     }
     s.corners.clear();
     for c in 0..s.unknown.len() {
-        if s.vol0[c] > 0.0 {
+        let (ci, cj) = (c % s.cells[0], c / s.cells[0]);
+        let base = (ci + PAD) + (cj + PAD) * nx;
+        let corners = CORNERS.map(|(a, b, _, _)| (base + a + b * nx) as u32);
+        // A cell whose corners the particles' stencils do not all reach (a
+        // particle clamped into it from outside the box) has no operator row.
+        let reached = corners.iter().all(|&n| grid.is_active(n as usize));
+        if s.vol0[c] > 0.0 && reached {
             s.unknown[c] = s.fluid.len() as u32;
             s.fluid.push(c as u32);
-            let (ci, cj) = (c % s.cells[0], c / s.cells[0]);
-            let base = (ci + PAD) + (cj + PAD) * nx;
-            let corners = CORNERS.map(|(a, b, _, _)| (base + a + b * nx) as u32);
             for n in corners {
-                s.fluid_node[n as usize] = true;
                 s.fluid_node[owner(grid, n as usize)] = true;
             }
             s.corners.push(corners);
@@ -569,6 +600,14 @@ fn assemble(
     }
     for k in 0..s.fluid.len() {
         s.target[k] = s.q[k];
+    }
+    // Incompressible and no air cell: the solve drops the mean of the
+    // right-hand side, so the target must have none (else every cell's J
+    // rate e would be minus its mean).
+    if incompressible && s.fluid.len() == s.unknown.len() {
+        remove_mean(&mut s.target);
+    }
+    for k in 0..s.fluid.len() {
         s.b[k] += h2 / dt * s.target[k];
     }
     for quad in &s.quads {
@@ -842,20 +881,19 @@ fn damp_hourglass(grid: &mut Grid, s: &Scratch, share: f64) {
 }
 
 /// The node a cell corner's value lives on: itself, or across a periodic edge.
+/// The node a padded node's value lives on: itself, or across a periodic
+/// edge (the ghosts on either side wrap to their partners in the box).
 fn owner(grid: &Grid, n: usize) -> usize {
-    let (mut i, mut j) = grid.coords(n);
-    if grid.periodic[0] && i == PAD + grid.cells[0] {
-        i = PAD;
-    }
-    if grid.periodic[1] && j == PAD + grid.cells[1] {
-        j = PAD;
-    }
-    grid.index(i, j)
-}
-
-/// Kinetic energy of the real particles' mass on the grid at `vel_new`.
-fn kinetic(grid: &Grid) -> f64 {
-    crate::stages::grid_update::updated_kinetic(grid)
+    let (i, j) = grid.coords(n);
+    let wrap = |k: usize, axis: usize| {
+        if grid.periodic[axis] {
+            let cells = grid.cells[axis] as i64;
+            ((k as i64 - PAD as i64).rem_euclid(cells) + PAD as i64) as usize
+        } else {
+            k
+        }
+    };
+    grid.index(wrap(i, 0), wrap(j, 1))
 }
 
 /// The particles after G2P: F from the velocity gradient, J^{n+1} = J^n
