@@ -1,5 +1,6 @@
 //! The step loop allocates nothing (counted by a global allocator), for every
-//! shape, transfer and scheme, on one thread and on two.
+//! shape, transfer and scheme, and under the pressure-implicit step, on one
+//! thread and on two.
 //!
 //! Steps run inside `pool.install`, so every allocation of a step happens on a
 //! worker of that pool; only those are counted. Other threads are not the
@@ -48,12 +49,13 @@ fn step_does_not_allocate() {
             .exit_handler(|_| STEP_WORKER.with(|w| w.set(false)))
             .build()
             .unwrap();
+        let mut configs = vec![];
         for shape in common::SHAPES {
             for transfer in common::TRANSFERS {
                 for scheme in common::SCHEMES {
                     let mut mat = Material::tait(1.5e4);
                     mat.viscosity = 0.5;
-                    let cfg = SolverConfig {
+                    configs.push(SolverConfig {
                         scene: Scene::dam_break(mat),
                         method: common::method(shape, transfer, scheme),
                         perturb: vec![Perturb {
@@ -61,29 +63,44 @@ fn step_does_not_allocate() {
                             region: [0.0, 0.0, 0.05, 0.05],
                             dv: [0.1, 0.0],
                         }],
-                    };
-                    let mut s = Solver::new(cfg).unwrap();
-                    pool.install(|| {
-                        // Warm-up: first steps, and every worker started (one
-                        // spawned late would set up its queues while counting).
-                        for _ in 0..5 {
-                            s.step().unwrap();
-                        }
-                        pool.broadcast(|_| ());
-                        ALLOCATIONS.store(0, Ordering::SeqCst);
-                        COUNTING.store(true, Ordering::SeqCst);
-                        for _ in 0..50 {
-                            s.step().unwrap();
-                        }
-                        COUNTING.store(false, Ordering::SeqCst);
                     });
-                    let n = ALLOCATIONS.load(Ordering::SeqCst);
-                    assert_eq!(
-                        n, 0,
-                        "{threads} threads {shape:?} {transfer:?} {scheme:?}: {n} allocations"
-                    );
+                }
+                // The pressure-implicit step (its own order: one scheme),
+                // compressible and incompressible.
+                for k in [1.5e6, f64::INFINITY] {
+                    let mut mat = Material::tait(1.5e6);
+                    mat.k = k;
+                    mat.viscosity = 0.5;
+                    configs.push(SolverConfig {
+                        scene: Scene::dam_break(mat),
+                        method: Method {
+                            formulation: Formulation::PressureImplicit,
+                            ..common::method(shape, transfer, SchemeKind::Usl)
+                        },
+                        perturb: vec![],
+                    });
                 }
             }
+        }
+        for cfg in configs {
+            let label = format!("{:?}", cfg.method);
+            let mut s = Solver::new(cfg).unwrap();
+            pool.install(|| {
+                // Warm-up: first steps, and every worker started (one
+                // spawned late would set up its queues while counting).
+                for _ in 0..5 {
+                    s.step().unwrap();
+                }
+                pool.broadcast(|_| ());
+                ALLOCATIONS.store(0, Ordering::SeqCst);
+                COUNTING.store(true, Ordering::SeqCst);
+                for _ in 0..50 {
+                    s.step().unwrap();
+                }
+                COUNTING.store(false, Ordering::SeqCst);
+            });
+            let n = ALLOCATIONS.load(Ordering::SeqCst);
+            assert_eq!(n, 0, "{threads} threads {label}: {n} allocations");
         }
     }
 }
