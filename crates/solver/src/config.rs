@@ -278,7 +278,7 @@ pub struct ProjectionSettings {
     pub hourglass: f64,
     /// Weight of the cell pressure's checkerboard control (the 2 x 2
     /// alternating sums around each node, against the 1 / rho0 scale of
-    /// the operator), 0 ..= 1.
+    /// the operator), 0 ..= 16.
     pub checkerboard: f64,
     /// Share of the grid packing's error (packing J - 1 in the cells whose
     /// nodes are full) corrected per step, 0 ..= 1.
@@ -590,7 +590,7 @@ impl SolverConfig {
         let (m, s) = (&self.method, &self.scene);
         let p = &m.projection;
         within(p.hourglass, 0.0, 0.25, "method.projection.hourglass")?;
-        within(p.checkerboard, 0.0, 1.0, "method.projection.checkerboard")?;
+        within(p.checkerboard, 0.0, 16.0, "method.projection.checkerboard")?;
         within(p.drift, 0.0, 1.0, "method.projection.drift")?;
         within(
             p.light_node_share,
