@@ -116,17 +116,17 @@ pub struct StepReport {
     pub events_opened: usize,
     /// Set when the run must stop (blow-out or non-finite state).
     pub blow_out: Option<String>,
-    /// The pressure-implicit step (NaN otherwise): the mean packing error
+    /// The pressure-implicit step (None otherwise): the mean packing error
     /// of the grid mass (packing J - 1 over the cells whose nodes are
     /// full), the conjugate gradient's iterations and final relative
     /// residual, and the energy the projection (with its drift and
     /// checkerboard controls and the extrapolation) and the hourglass
     /// control removed this step (J/m), which the solver books as dissipated.
-    pub packing_error: f64,
-    pub solver_iterations: f64,
-    pub solver_residual: f64,
-    pub projection_dissipated: f64,
-    pub hourglass_dissipated: f64,
+    pub packing_error: Option<f64>,
+    pub solver_iterations: Option<f64>,
+    pub solver_residual: Option<f64>,
+    pub projection_dissipated: Option<f64>,
+    pub hourglass_dissipated: Option<f64>,
 }
 
 impl StepReport {
@@ -633,15 +633,11 @@ impl Monitor {
             booked: self.booking.booked,
             budget_drift: budget - self.booking.injected() - self.initial_total,
             budget_drift_unbooked: budget_unbooked - self.initial_total,
-            packing_error: v.projection.map_or(f64::NAN, |p| p.stats.packing_error),
-            solver_iterations: v.projection.map_or(f64::NAN, |p| p.stats.iterations as f64),
-            solver_residual: v.projection.map_or(f64::NAN, |p| p.stats.residual),
-            projection_dissipated: v
-                .projection
-                .map_or(f64::NAN, |p| p.stats.dissipated_projection),
-            hourglass_dissipated: v
-                .projection
-                .map_or(f64::NAN, |p| p.stats.dissipated_hourglass),
+            packing_error: v.projection.map(|p| p.stats.packing_error),
+            solver_iterations: v.projection.map(|p| p.stats.iterations as f64),
+            solver_residual: v.projection.map(|p| p.stats.residual),
+            projection_dissipated: v.projection.map(|p| p.stats.dissipated_projection),
+            hourglass_dissipated: v.projection.map(|p| p.stats.dissipated_hourglass),
             detector_total: watched,
             max_accel_g: scan.max_a2.sqrt() / g,
             max_transfer_jump: scan.max_jump2.sqrt(),
