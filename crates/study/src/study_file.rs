@@ -325,6 +325,14 @@ fn expand(
             }
         }
         let ignored = formulation_keys(root, &table, &entry_keys)?;
+        // The case's own table (written as case.toml, read again by report,
+        // reproduce and explain) leaves them out: there they would be the
+        // formulation's own entry.
+        if let Some(Value::Table(method)) = table.get_mut("method") {
+            for (key, _) in &ignored {
+                method.remove(key.trim_start_matches("method."));
+            }
+        }
         name_parts.reverse();
         let name = if name_parts.is_empty() {
             base.to_string()
@@ -1237,6 +1245,10 @@ mod tests {
             Value::String("fixed".into())
         );
         assert!(!study.cases[0].params.contains_key("ignored.method.scheme"));
+        // Its case.toml, read again (report, reproduce), is accepted.
+        std::fs::write(&path, toml::to_string(&implicit.table).unwrap()).unwrap();
+        let again = load(&path, &[]).unwrap();
+        assert_eq!(again.cases[0].solver.method, implicit.solver.method);
         let own = format!(
             "{base}\"method\" = [{{ formulation = \"pressure_implicit\", j_update = \"exp\" }}]\n"
         );
