@@ -333,10 +333,9 @@ impl Solver {
             // The wave speeds are zero: the signal speed is max |v|.
             let s = &self.cfg.scene;
             let m = &s.materials[0];
-            let h = s.cell;
             return stages::projection::flow_dt(
                 self.cfg.method.cfl,
-                h,
+                s.cell,
                 self.signal_speed,
                 s.gravity,
                 m.viscosity / m.rho0,
@@ -502,12 +501,14 @@ impl Solver {
     /// that the budget does not read it as an injection.
     pub(crate) fn inject(&mut self, x: Vec2, v: Vec2, mass: f64, vol0: f64, material: u16) {
         let id = self.id_base + self.losses.injected as u32;
+        let implicit = self.implicit();
         let ps = &mut self.particles;
         ps.push(x, v, mass, vol0, material);
         let p = ps.len() - 1;
         ps.id[p] = id;
         timestep::refresh_eos_of(ps, &self.cfg.scene.materials, p);
-        if self.cfg.method.formulation == Formulation::PressureImplicit {
+        if implicit {
+            // No wave speed limits the step (`refresh_eos_cache`).
             ps.wave_speed[p] = 0.0;
         }
         self.stencils.push(Stencil::default());

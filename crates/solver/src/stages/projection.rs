@@ -283,18 +283,9 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
     }
     extrapolate(grid, s, dt);
     // The J rate e = D u^{n+1} + (dt / h^2) S p - r, and the pressure's work.
-    let beta = set.checkerboard / mat.rho0;
-    for k in 0..s.fluid.len() {
-        s.q[k] = 0.0;
-    }
-    if beta > 0.0 {
-        for quad in &s.quads {
-            let c = alternating(quad, &s.x);
-            for (u, sign) in quad.iter().zip(HOURGLASS) {
-                s.q[*u as usize] += beta * sign * c;
-            }
-        }
-    }
+    let n = s.fluid.len();
+    s.q[..n].fill(0.0);
+    add_checkerboard(&s.quads, &s.x, set.checkerboard / mat.rho0, &mut s.q);
     let mut pressure_work = 0.0;
     for (k, &c) in s.fluid.iter().enumerate() {
         let c = c as usize;
@@ -635,18 +626,26 @@ fn apply_a(grid: &Grid, s: &mut Scratch, beta: f64, from_d: bool) {
         let v = if from_d { s.d[k] } else { s.x[k] };
         s.q[k] = s.alpha[k] * v + h2 * divergence(&s.corners[k], &s.nodal, h);
     }
-    if beta > 0.0 {
-        for quad in &s.quads {
-            let src = if from_d { &s.d } else { &s.x };
-            let c = beta * alternating(quad, src);
-            for (u, sign) in quad.iter().zip(HOURGLASS) {
-                s.q[*u as usize] += sign * c;
-            }
+    let src = if from_d { &s.d } else { &s.x };
+    add_checkerboard(&s.quads, src, beta, &mut s.q);
+}
+
+/// out += S p, S = beta C^T C over the nodes whose four cells are fluid
+/// (the checkerboard control).
+fn add_checkerboard(quads: &[[u32; 4]], p: &[f64], beta: f64, out: &mut [f64]) {
+    if beta == 0.0 {
+        return;
+    }
+    for quad in quads {
+        let c = beta * alternating(quad, p);
+        for (u, sign) in quad.iter().zip(HOURGLASS) {
+            out[*u as usize] += sign * c;
         }
     }
 }
 
-/// Jacobi-preconditioned conjugate gradient from the last step's pressure.
+/// Preconditioned conjugate gradient (IC(0) on the probed matrix, or
+/// Jacobi) from the last step's pressure.
 fn solve(grid: &Grid, s: &mut Scratch, set: &ProjectionSettings, beta: f64) {
     let n = s.fluid.len();
     for v in [&mut s.r, &mut s.z, &mut s.d, &mut s.q] {

@@ -1,6 +1,6 @@
 //! USF, USL and MUSL as orderings of the same stages.
 
-use crate::config::{ForceKind, Formulation, QuadratureKind, SchemeKind, TransferKind};
+use crate::config::{ForceKind, QuadratureKind, SchemeKind, TransferKind};
 use crate::remedies::{GridStep, Step};
 use crate::stages::p2g::{self, Terms};
 use crate::stages::projection;
@@ -43,7 +43,7 @@ enum StressVelocity {
 /// The stages of a step up to and including the grid update (v^{n+1} on the
 /// grid): a multiphase step couples the phases' grids here (`drag`).
 pub fn to_grid(s: &mut Solver, clock: &mut Instant) {
-    if s.cfg.method.formulation == Formulation::PressureImplicit {
+    if s.implicit() {
         // Its own order: u* from the viscous stress and gravity, then the pressure.
         p2g(s, ALL, clock);
         grid_velocities(s, clock);
@@ -69,7 +69,7 @@ pub fn to_grid(s: &mut Solver, clock: &mut Instant) {
 
 /// The stages after the grid update: G2P, then the stress under USL and MUSL.
 pub fn from_grid(s: &mut Solver, clock: &mut Instant) {
-    if s.cfg.method.formulation == Formulation::PressureImplicit {
+    if s.implicit() {
         g2p(s, clock);
         let material = &s.cfg.scene.materials[0];
         s.dissipated += projection::update_particles(
@@ -169,7 +169,7 @@ fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
             ForceKind::Gradient => None,
         },
         gravity: s.gravity,
-        pressure_free: s.cfg.method.formulation == Formulation::PressureImplicit,
+        pressure_free: s.implicit(),
     };
     let mixed = terms.force && s.cfg.method.quadrature == QuadratureKind::Mixed;
     let scattered = Terms {
