@@ -283,6 +283,10 @@ pub struct ProjectionSettings {
     /// Share of the grid packing's error (packing J - 1 in the cells whose
     /// nodes are full) corrected per step, 0 ..= 1.
     pub drift: f64,
+    /// How the drift is corrected: by moving the particles (a second solve
+    /// of the same operator for a displacement) or by a divergence target
+    /// in the velocity solve (which the particles then carry as flow).
+    pub drift_correction: DriftCorrection,
     /// A node lighter than this share of rho0 h^2 takes that mass in the
     /// pressure operator and its velocity correction (free-surface nodes).
     pub light_node_share: f64,
@@ -291,6 +295,16 @@ pub struct ProjectionSettings {
     pub max_iterations: u32,
     /// The conjugate gradient's preconditioner.
     pub preconditioner: Preconditioner,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DriftCorrection {
+    /// Particle positions only: velocities, J and the stored energy are
+    /// untouched; the gravitational energy it changes is booked.
+    Position,
+    /// A divergence target r in the velocity solve.
+    Velocity,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -309,6 +323,7 @@ impl Default for ProjectionSettings {
             hourglass: 0.05,
             checkerboard: 1.0,
             drift: 0.1,
+            drift_correction: DriftCorrection::Velocity,
             light_node_share: 0.25,
             tolerance: 1e-8,
             max_iterations: 4000,

@@ -72,7 +72,8 @@ fn configs() -> Vec<SolverConfig> {
     });
     // The pressure-implicit step (its solve is serial; its particle update
     // parallel; its warm start is in the checkpoint): finite K, viscous,
-    // and the incompressible limit.
+    // and the incompressible limit with the drift corrected by position
+    // (the particles' move is parallel too).
     let mut mat = Material::new(1.5e6);
     mat.viscosity = 0.5;
     out.push(SolverConfig {
@@ -90,6 +91,11 @@ fn configs() -> Vec<SolverConfig> {
         }),
         method: Method {
             formulation: Formulation::PressureImplicit,
+            projection: ProjectionSettings {
+                drift: 0.3,
+                drift_correction: DriftCorrection::Position,
+                ..Default::default()
+            },
             ..common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl)
         },
         perturb: vec![],

@@ -66,8 +66,12 @@ fn step_does_not_allocate() {
                     });
                 }
                 // The pressure-implicit step (its own order: one scheme),
-                // compressible and incompressible.
-                for k in [1.5e6, f64::INFINITY] {
+                // compressible with the drift corrected by velocity, and
+                // incompressible with it corrected by position.
+                for (k, drift_correction) in [
+                    (1.5e6, DriftCorrection::Velocity),
+                    (f64::INFINITY, DriftCorrection::Position),
+                ] {
                     let mut mat = Material::tait(1.5e6);
                     mat.k = k;
                     mat.viscosity = 0.5;
@@ -75,6 +79,10 @@ fn step_does_not_allocate() {
                         scene: Scene::dam_break(mat),
                         method: Method {
                             formulation: Formulation::PressureImplicit,
+                            projection: ProjectionSettings {
+                                drift_correction,
+                                ..Default::default()
+                            },
                             ..common::method(shape, transfer, SchemeKind::Usl)
                         },
                         perturb: vec![],

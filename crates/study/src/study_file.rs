@@ -1063,16 +1063,24 @@ mod tests {
     #[test]
     fn the_pressure_implicit_keys_parse() {
         let method: solver::Method = toml::from_str(
-            "formulation = \"pressure_implicit\"\n[projection]\ndrift = 0.2\npreconditioner = \"jacobi\"\n",
+            "formulation = \"pressure_implicit\"\n[projection]\ndrift = 0.2\ndrift_correction = \"position\"\npreconditioner = \"jacobi\"\n",
         )
         .unwrap();
         assert_eq!(method.formulation, solver::Formulation::PressureImplicit);
         assert_eq!(method.projection.drift, 0.2);
         assert_eq!(
+            method.projection.drift_correction,
+            solver::DriftCorrection::Position
+        );
+        assert_eq!(
             method.projection.preconditioner,
             solver::Preconditioner::Jacobi
         );
         assert!(toml::from_str::<solver::Method>("[projection]\ndrfit = 0.2\n").is_err());
+        assert!(
+            toml::from_str::<solver::Method>("[projection]\ndrift_correction = \"both\"\n")
+                .is_err()
+        );
         for text in ["K = \"inf\"", "K = inf"] {
             let m: solver::Material = toml::from_str(text).unwrap();
             assert_eq!(m.k, f64::INFINITY, "{text}");

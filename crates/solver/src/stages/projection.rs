@@ -24,7 +24,7 @@
 //! thread count. The solved pressure is the next step's starting guess (it
 //! is in the checkpoint).
 
-use crate::config::{Material, Preconditioner, ProjectionSettings};
+use crate::config::{DriftCorrection, Material, Preconditioner, ProjectionSettings};
 use crate::grid::{Grid, FULL_NODE_SHARE, PAD};
 use crate::par::{Pieces, CHUNK};
 use crate::particles::{Mat2, Particles, Vec2};
@@ -71,13 +71,16 @@ pub struct SolveStats {
     pub converged: bool,
     /// Energy the projection removed: minus its velocity change's work at
     /// the time-centred velocity, less the pressure's work into the stored
-    /// energy (J/m).
+    /// energy, plus the gravitational energy the drift correction by
+    /// position took out (J/m).
     pub dissipated_projection: f64,
     /// Energy the hourglass control removed: minus its velocity change's
     /// work at the time-centred velocity (J/m).
     pub dissipated_hourglass: f64,
     /// Mean of packing J - 1 over the cells whose nodes are full (before the step's correction).
     pub packing_error: f64,
+    /// Conjugate-gradient iterations of the drift correction by position.
+    pub shift_iterations: u32,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -105,6 +108,9 @@ pub struct Scratch {
     /// Per unknown: h^2 / (K_t dt^2) (0 at K = infinity), and the drift target r.
     alpha: Vec<f64>,
     target: Vec<f64>,
+    /// Per unknown: the drift rate the positions are corrected by (under
+    /// `drift_correction = "position"`; the velocity's target is then 0).
+    shift: Vec<f64>,
     /// The nodes around which all four cells are fluid: their unknowns in
     /// `CORNERS` order of the node's cells (SW, SE, NW, NE).
     quads: Vec<[u32; 4]>,
@@ -158,6 +164,7 @@ impl Scratch {
             corners: Vec::with_capacity(n_cells),
             alpha: Vec::with_capacity(n_cells),
             target: Vec::with_capacity(n_cells),
+            shift: Vec::with_capacity(n_cells),
             quads: Vec::with_capacity(n_cells),
             inv_mass: vec![0.0; n_nodes],
             fluid_node: vec![false; n_nodes],
@@ -598,6 +605,11 @@ fn assemble(
     if incompressible && s.fluid.len() == s.unknown.len() {
         remove_mean(&mut s.target);
     }
+    s.shift.clear();
+    if set.drift_correction == DriftCorrection::Position {
+        s.shift.extend_from_slice(&s.target);
+        s.target.fill(0.0);
+    }
     for k in 0..s.fluid.len() {
         s.b[k] += h2 / dt * s.target[k];
     }
@@ -893,6 +905,102 @@ fn owner(grid: &Grid, n: usize) -> usize {
         }
     };
     grid.index(wrap(i, 0), wrap(j, 1))
+}
+
+/// The drift correction by position (`drift_correction = "position"`),
+/// after the particle update: the same operator without its EOS term
+/// solves A q = h^2 dt s for the step's drift rate s, and each particle
+/// moves by its stencil's share of the nodal displacement M'^-1 G q, whose
+/// divergence D is dt s. Velocities, J and the stored energy are left
+/// alone (a velocity target would be carried on as flow: it swamped the
+/// slosh's wave); the gravitational energy the move changes is booked with
+/// the projection. Returns that energy removed (J/m).
+#[allow(clippy::too_many_arguments)]
+pub fn shift_particles(
+    particles: &mut Particles,
+    stencils: &[Stencil],
+    shape: &Shape,
+    grid: &Grid,
+    set: &ProjectionSettings,
+    beta: f64,
+    gravity: Vec2,
+    s: &mut Scratch,
+    dt: f64,
+) -> f64 {
+    let n = s.fluid.len();
+    if s.shift.len() != n || s.shift.iter().all(|&r| r == 0.0) {
+        return 0.0;
+    }
+    let h2 = grid.h * grid.h;
+    for k in 0..n {
+        s.diag[k] -= s.alpha[k];
+        s.alpha[k] = 0.0;
+        s.b[k] = h2 * dt * s.shift[k];
+        s.x[k] = 0.0;
+    }
+    let pressure_solve = s.stats;
+    solve(grid, s, set, beta);
+    let shift_iterations = s.stats.iterations;
+    s.stats = SolveStats {
+        shift_iterations,
+        ..pressure_solve
+    };
+    apply_g(grid, s, |s, k| s.x[k]);
+    let removed = crate::shapes::with_width!(shape, W => move_particles::<W>(particles, stencils, shape, grid, gravity, s));
+    s.stats.dissipated_projection += removed;
+    removed
+}
+
+/// x_p += sum N_ip d_i for the nodal displacement d in `s.nodal`; returns
+/// sum m_p g . dx_p, the gravitational energy taken out.
+fn move_particles<const W: usize>(
+    particles: &mut Particles,
+    stencils: &[Stencil],
+    shape: &Shape,
+    grid: &Grid,
+    gravity: Vec2,
+    s: &mut Scratch,
+) -> f64 {
+    let nx = grid.dims[0];
+    let n = particles.len();
+    let n_chunks = crate::par::chunk_count(n);
+    let piece = crate::par::piece_chunks(n);
+    let displacement = &s.nodal[..];
+    let lo = grid.origin;
+    let size = Vec2::new(grid.cells[0] as f64 * grid.h, grid.cells[1] as f64 * grid.h);
+    (
+        particles.x.par_chunks_mut(CHUNK),
+        particles.mass.par_chunks(CHUNK),
+        stencils.par_chunks(CHUNK),
+        s.partials[..n_chunks].par_iter_mut(),
+    )
+        .into_par_iter()
+        .pieces(piece)
+        .for_each(|(x, mass, st, energy)| {
+            let mut acc = 0.0;
+            for k in 0..x.len() {
+                let [fx, fy] = st[k].frac;
+                let (wx, _) = shape.stencil_weights::<W>(fx, st[k].half[0]);
+                let (wy, _) = shape.stencil_weights::<W>(fy, st[k].half[1]);
+                let base = st[k].node as usize;
+                let mut dx = Vec2::zeros();
+                for c in 0..W {
+                    let row = base + c * nx;
+                    for a in 0..W {
+                        dx += (wx[a] * wy[c]) * displacement[row + a];
+                    }
+                }
+                acc += mass[k] * gravity.dot(&dx);
+                x[k] += dx;
+                for axis in 0..2 {
+                    if grid.periodic[axis] {
+                        x[k][axis] = lo[axis] + (x[k][axis] - lo[axis]).rem_euclid(size[axis]);
+                    }
+                }
+            }
+            *energy = acc;
+        });
+    s.partials[..n_chunks].iter().sum()
 }
 
 /// The particles after G2P: F from the velocity gradient, J^{n+1} = J^n

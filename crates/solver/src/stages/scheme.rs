@@ -81,6 +81,18 @@ pub fn from_grid(s: &mut Solver, clock: &mut Instant) {
             &mut s.projection,
             s.dt,
         );
+        let settings = &s.cfg.method.projection;
+        s.dissipated += projection::shift_particles(
+            &mut s.particles,
+            &s.stencils,
+            &s.shape,
+            &s.grid,
+            settings,
+            settings.checkerboard / material.rho0,
+            s.gravity,
+            &mut s.projection,
+            s.dt,
+        );
         lap(&mut s.times.stress, clock);
         return;
     }
