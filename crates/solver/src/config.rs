@@ -287,6 +287,9 @@ pub struct ProjectionSettings {
     /// of the same operator for a displacement) or by a divergence target
     /// in the velocity solve (which the particles then carry as flow).
     pub drift_correction: DriftCorrection,
+    /// Relative residual at which the drift correction by position's
+    /// conjugate gradient stops (it corrects a share of a smoothed error).
+    pub drift_tolerance: f64,
     /// A node lighter than this share of rho0 h^2 takes that mass in the
     /// pressure operator and its velocity correction (free-surface nodes).
     pub light_node_share: f64,
@@ -324,6 +327,7 @@ impl Default for ProjectionSettings {
             checkerboard: 1.0,
             drift: 0.1,
             drift_correction: DriftCorrection::Velocity,
+            drift_tolerance: 1e-6,
             light_node_share: 0.25,
             tolerance: 1e-8,
             max_iterations: 4000,
@@ -614,6 +618,12 @@ impl SolverConfig {
             "method.projection.light_node_share",
         )?;
         within(p.tolerance, 1e-14, 1e-2, "method.projection.tolerance")?;
+        within(
+            p.drift_tolerance,
+            1e-14,
+            1e-2,
+            "method.projection.drift_tolerance",
+        )?;
         within(
             p.max_iterations as f64,
             1.0,

@@ -276,7 +276,14 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
         grid.accel[n] += (s.before_projection[n] - s.before_hourglass[n]) / dt;
     }
     assemble(grid, s, mat, set, dt, full_mass);
-    solve(grid, s, set, set.checkerboard / mat.rho0);
+    solve(
+        grid,
+        s,
+        set,
+        set.checkerboard / mat.rho0,
+        true,
+        set.tolerance,
+    );
     // u^{n+1} = u* + dt M^-1 G p.
     for (k, &c) in s.fluid.iter().enumerate() {
         s.pressure[c as usize] = s.x[k];
@@ -658,7 +665,18 @@ fn add_checkerboard(quads: &[[u32; 4]], p: &[f64], beta: f64, out: &mut [f64]) {
 
 /// Preconditioned conjugate gradient (IC(0) on the probed matrix, or
 /// Jacobi) from the last step's pressure.
-fn solve(grid: &Grid, s: &mut Scratch, set: &ProjectionSettings, beta: f64) {
+/// `fresh`: read the matrix and factorise it (else the last step's
+/// product matrix and factor are used: the drift solve by position, whose
+/// matrix differs only by the EOS diagonal taken out beforehand).
+/// `tolerance`: the relative residual to stop at.
+fn solve(
+    grid: &Grid,
+    s: &mut Scratch,
+    set: &ProjectionSettings,
+    beta: f64,
+    fresh: bool,
+    tolerance: f64,
+) {
     let n = s.fluid.len();
     for v in [&mut s.r, &mut s.z, &mut s.d, &mut s.q] {
         v.clear();
@@ -676,7 +694,7 @@ fn solve(grid: &Grid, s: &mut Scratch, set: &ProjectionSettings, beta: f64) {
         remove_mean(&mut s.x);
     }
     let incomplete_cholesky = set.preconditioner == Preconditioner::Ic0 && s.probe_exact;
-    if incomplete_cholesky {
+    if incomplete_cholesky && fresh {
         probe_matrix(grid, s, beta);
         factorise(s);
     }
@@ -685,7 +703,7 @@ fn solve(grid: &Grid, s: &mut Scratch, set: &ProjectionSettings, beta: f64) {
         s.r[k] = s.b[k] - s.q[k];
     }
     let b_norm = dot(&s.b, &s.b).sqrt();
-    let goal = set.tolerance * b_norm.max(f64::MIN_POSITIVE);
+    let goal = tolerance * b_norm.max(f64::MIN_POSITIVE);
     let mut r_norm = dot(&s.r, &s.r).sqrt();
     let mut rz = 0.0;
     let mut iterations = 0;
@@ -932,14 +950,20 @@ pub fn shift_particles(
         return 0.0;
     }
     let h2 = grid.h * grid.h;
+    // The operator without its EOS diagonal: the probed matrix loses it
+    // too, and the pressure matrix's factor preconditions (at K = infinity
+    // it is the same matrix).
     for k in 0..n {
         s.diag[k] -= s.alpha[k];
+        if let Some(row) = s.matrix.get_mut(k) {
+            row[4] -= s.alpha[k];
+        }
         s.alpha[k] = 0.0;
         s.b[k] = h2 * dt * s.shift[k];
         s.x[k] = 0.0;
     }
     let pressure_solve = s.stats;
-    solve(grid, s, set, beta);
+    solve(grid, s, set, beta, false, set.drift_tolerance);
     let shift_iterations = s.stats.iterations;
     s.stats = SolveStats {
         shift_iterations,
