@@ -325,8 +325,8 @@ impl Default for ProjectionSettings {
         ProjectionSettings {
             hourglass: 0.05,
             checkerboard: 1.0,
-            drift: 0.1,
-            drift_correction: DriftCorrection::Velocity,
+            drift: 0.3,
+            drift_correction: DriftCorrection::Position,
             drift_tolerance: 1e-6,
             light_node_share: 0.25,
             tolerance: 1e-8,

@@ -72,14 +72,19 @@ fn configs() -> Vec<SolverConfig> {
     });
     // The pressure-implicit step (its solve is serial; its particle update
     // parallel; its warm start is in the checkpoint): finite K, viscous,
-    // and the incompressible limit with the drift corrected by position
-    // (the particles' move is parallel too).
+    // with the drift corrected by velocity, and the incompressible limit
+    // with it corrected by position (the particles' move is parallel too).
     let mut mat = Material::new(1.5e6);
     mat.viscosity = 0.5;
     out.push(SolverConfig {
         scene: Scene::dam_break(mat),
         method: Method {
             formulation: Formulation::PressureImplicit,
+            projection: ProjectionSettings {
+                drift: 0.1,
+                drift_correction: DriftCorrection::Velocity,
+                ..Default::default()
+            },
             ..common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usl)
         },
         perturb: vec![],
