@@ -1008,10 +1008,10 @@ fn move_particles<const W: usize>(
                 let (wy, _) = shape.stencil_weights::<W>(fy, st[k].half[1]);
                 let base = st[k].node as usize;
                 let mut dx = Vec2::zeros();
-                for c in 0..W {
-                    let row = base + c * nx;
-                    for a in 0..W {
-                        dx += (wx[a] * wy[c]) * displacement[row + a];
+                for (c, wy_c) in wy.iter().enumerate() {
+                    let row = &displacement[base + c * nx..base + c * nx + W];
+                    for (wx_a, d) in wx.iter().zip(row) {
+                        dx += (wx_a * wy_c) * d;
                     }
                 }
                 acc += mass[k] * gravity.dot(&dx);
