@@ -665,8 +665,8 @@ fn add_checkerboard(quads: &[[u32; 4]], p: &[f64], beta: f64, out: &mut [f64]) {
 
 /// Preconditioned conjugate gradient (IC(0) on the probed matrix, or
 /// Jacobi) from the last step's pressure.
-/// `fresh`: read the matrix and factorise it (else the last step's
-/// product matrix and factor are used: the drift solve by position, whose
+/// `fresh`: read the matrix and factorise it (else this step's pressure
+/// matrix and its factor are used: the drift solve by position, whose
 /// matrix differs only by the EOS diagonal taken out beforehand).
 /// `tolerance`: the relative residual to stop at.
 fn solve(
