@@ -1003,17 +1003,8 @@ fn move_particles<const W: usize>(
         .for_each(|(x, mass, st, energy)| {
             let mut acc = 0.0;
             for k in 0..x.len() {
-                let [fx, fy] = st[k].frac;
-                let (wx, _) = shape.stencil_weights::<W>(fx, st[k].half[0]);
-                let (wy, _) = shape.stencil_weights::<W>(fy, st[k].half[1]);
-                let base = st[k].node as usize;
-                let mut dx = Vec2::zeros();
-                for (c, wy_c) in wy.iter().enumerate() {
-                    let row = &displacement[base + c * nx..base + c * nx + W];
-                    for (wx_a, d) in wx.iter().zip(row) {
-                        dx += (wx_a * wy_c) * d;
-                    }
-                }
+                let dx =
+                    crate::transfers::serial::interpolate::<W>(displacement, &st[k], shape, nx);
                 acc += mass[k] * gravity.dot(&dx);
                 x[k] += dx;
                 for axis in 0..2 {

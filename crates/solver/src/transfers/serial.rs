@@ -18,17 +18,23 @@ pub fn gather<const W: usize>(
     out: &mut [Vec2],
 ) {
     for (p, st) in stencils.iter().enumerate() {
-        let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-        let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
-        let mut sum = Vec2::zeros();
-        for c in 0..W {
-            let row = st.node as usize + c * nx;
-            for a in 0..W {
-                sum += (wx[a] * wy[c]) * field[row + a];
-            }
-        }
-        out[p] = sum;
+        out[p] = interpolate::<W>(field, st, shape, nx);
     }
+}
+
+/// sum_i N_ip field_i for one particle's stencil.
+#[inline]
+pub fn interpolate<const W: usize>(field: &[Vec2], st: &Stencil, shape: &Shape, nx: usize) -> Vec2 {
+    let (wx, _) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
+    let (wy, _) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
+    let mut sum = Vec2::zeros();
+    for c in 0..W {
+        let row = st.node as usize + c * nx;
+        for a in 0..W {
+            sum += (wx[a] * wy[c]) * field[row + a];
+        }
+    }
+    sum
 }
 
 /// out_i = sum_p m_p N_ip q_p on the raw active nodes (S^T W q; no folds).
