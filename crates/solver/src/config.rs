@@ -290,6 +290,10 @@ pub struct ProjectionSettings {
     /// Relative residual at which the drift correction by position's
     /// conjugate gradient stops (it corrects a share of a smoothed error).
     pub drift_tolerance: f64,
+    /// The velocity field the particles move with: the bilinear element's
+    /// (whose cell-integrated divergence is the solved D u, so a cell's
+    /// particles keep their packing) or the run's shape functions'.
+    pub advection: Advection,
     /// A node lighter than this share of rho0 h^2 takes that mass in the
     /// pressure operator and its velocity correction (free-surface nodes).
     pub light_node_share: f64,
@@ -312,12 +316,24 @@ pub enum DriftCorrection {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+pub enum Advection {
+    /// x += dt sum N^Q1_i(x) v_i over the particle's cell corners.
+    Bilinear,
+    /// x += dt sum N_ip v_i with the run's shapes (B-spline tails included).
+    Shape,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Preconditioner {
     /// The diagonal.
     Jacobi,
     /// Incomplete Cholesky on the 3 x 3 pattern, the matrix read by nine
     /// probes (Jacobi on a periodic axis whose cell count is not a multiple of 3).
     Ic0,
+    /// Modified incomplete Cholesky (the dropped fill moved onto the
+    /// diagonals, keeping the row sums), on the same pattern and probes.
+    Mic0,
 }
 
 impl Default for ProjectionSettings {
@@ -328,10 +344,11 @@ impl Default for ProjectionSettings {
             drift: 0.3,
             drift_correction: DriftCorrection::Position,
             drift_tolerance: 1e-6,
+            advection: Advection::Shape,
             light_node_share: 0.25,
             tolerance: 1e-8,
             max_iterations: 4000,
-            preconditioner: Preconditioner::Ic0,
+            preconditioner: Preconditioner::Mic0,
         }
     }
 }

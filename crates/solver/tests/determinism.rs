@@ -72,8 +72,9 @@ fn configs() -> Vec<SolverConfig> {
     });
     // The pressure-implicit step (its solve is serial; its particle update
     // parallel; its warm start is in the checkpoint): finite K, viscous,
-    // with the drift corrected by velocity, and the incompressible limit
-    // with it corrected by position (the particles' move is parallel too).
+    // with the drift corrected by velocity and IC(0), and the
+    // incompressible limit with it corrected by position, MIC(0) and the
+    // bilinear advection (the particles' moves are parallel too).
     let mut mat = Material::new(1.5e6);
     mat.viscosity = 0.5;
     out.push(SolverConfig {
@@ -83,6 +84,7 @@ fn configs() -> Vec<SolverConfig> {
             projection: ProjectionSettings {
                 drift: 0.1,
                 drift_correction: DriftCorrection::Velocity,
+                preconditioner: Preconditioner::Ic0,
                 ..Default::default()
             },
             ..common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usl)
@@ -99,6 +101,7 @@ fn configs() -> Vec<SolverConfig> {
             projection: ProjectionSettings {
                 drift: 0.3,
                 drift_correction: DriftCorrection::Position,
+                advection: Advection::Bilinear,
                 ..Default::default()
             },
             ..common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl)

@@ -66,11 +66,22 @@ fn step_does_not_allocate() {
                     });
                 }
                 // The pressure-implicit step (its own order: one scheme),
-                // compressible with the drift corrected by velocity, and
-                // incompressible with it corrected by position.
-                for (k, drift_correction) in [
-                    (1.5e6, DriftCorrection::Velocity),
-                    (f64::INFINITY, DriftCorrection::Position),
+                // compressible with the drift corrected by velocity (IC(0),
+                // the shapes' advection), and incompressible with it
+                // corrected by position (MIC(0), the bilinear advection).
+                for (k, drift_correction, preconditioner, advection) in [
+                    (
+                        1.5e6,
+                        DriftCorrection::Velocity,
+                        Preconditioner::Ic0,
+                        Advection::Shape,
+                    ),
+                    (
+                        f64::INFINITY,
+                        DriftCorrection::Position,
+                        Preconditioner::Mic0,
+                        Advection::Bilinear,
+                    ),
                 ] {
                     let mut mat = Material::tait(1.5e6);
                     mat.k = k;
@@ -81,6 +92,8 @@ fn step_does_not_allocate() {
                             formulation: Formulation::PressureImplicit,
                             projection: ProjectionSettings {
                                 drift_correction,
+                                preconditioner,
+                                advection,
                                 ..Default::default()
                             },
                             ..common::method(shape, transfer, SchemeKind::Usl)

@@ -218,6 +218,7 @@ pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
         solver.reset_stage_times();
         let rows = Rows {
             every: FIELD_EVERY,
+            interval: None,
             mark_event_rows: false,
         };
         let mut timed = RunOptions::new(None, rows);

@@ -133,11 +133,15 @@ fn case_runner<'p, S: Stepper>(
     opts: &CaseOptions,
 ) -> Runner<'p, S> {
     let watches = watches(&stepper, case);
-    let rows = Rows::spread(
-        case.output.timeseries_rows,
-        case.solver.scene.t_end,
-        first_dt,
-    );
+    let rows = if case.solver.method.formulation == solver::Formulation::PressureImplicit {
+        Rows::spread_in_time(case.output.timeseries_rows, case.solver.scene.t_end)
+    } else {
+        Rows::spread(
+            case.output.timeseries_rows,
+            case.solver.scene.t_end,
+            first_dt,
+        )
+    };
     let mut run_opts = RunOptions::new(Some(dir.to_path_buf()), rows);
     run_opts.csv = opts.csv;
     run_opts.end_when_checked = case.output.end_when_checked;

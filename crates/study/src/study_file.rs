@@ -1081,6 +1081,15 @@ mod tests {
             toml::from_str::<solver::Method>("[projection]\ndrift_correction = \"both\"\n")
                 .is_err()
         );
+        let method: solver::Method =
+            toml::from_str("[projection]\npreconditioner = \"mic0\"\nadvection = \"bilinear\"\n")
+                .unwrap();
+        assert_eq!(
+            method.projection.preconditioner,
+            solver::Preconditioner::Mic0
+        );
+        assert_eq!(method.projection.advection, solver::Advection::Bilinear);
+        assert!(toml::from_str::<solver::Method>("[projection]\nadvection = \"apic\"\n").is_err());
         for text in ["K = \"inf\"", "K = inf"] {
             let m: solver::Material = toml::from_str(text).unwrap();
             assert_eq!(m.k, f64::INFINITY, "{text}");

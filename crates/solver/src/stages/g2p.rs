@@ -14,6 +14,9 @@ use rayon::prelude::*;
 pub struct Transfer {
     pub kind: TransferKind,
     pub flip_alpha: f64,
+    /// Move the particles with the bilinear element's velocity (the
+    /// pressure-implicit step's `advection = "bilinear"`), not the shapes'.
+    pub bilinear_advection: bool,
 }
 
 /// How G2P sets particle velocities, fixed per run so the loop carries no branches.
@@ -120,7 +123,12 @@ fn run<const W: usize, const MODE: u8>(
             if MODE == APIC_SPLINE || MODE == APIC_GRADIENT {
                 *affine = Mat2::from_columns(&[b0, b1]) * c_scale;
             }
-            *x += dt * v_pic;
+            *x += dt
+                * if transfer.bilinear_advection {
+                    crate::transfers::serial::bilinear(vel_new, grid, *x)
+                } else {
+                    v_pic
+                };
             for k in 0..2 {
                 if grid.periodic[k] {
                     x[k] = lo[k] + (x[k] - lo[k]).rem_euclid(size[k]);

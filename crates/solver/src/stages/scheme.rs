@@ -258,6 +258,8 @@ fn g2p(s: &mut Solver, clock: &mut Instant) {
         } else {
             s.remedies.flip_fraction(s.dt, s.cfg.method.flip_alpha)
         },
+        bilinear_advection: s.implicit()
+            && s.cfg.method.projection.advection == crate::config::Advection::Bilinear,
     };
     g2p::g2p(
         &mut s.particles,
