@@ -699,10 +699,12 @@ fn solve(
     let incomplete_cholesky = set.preconditioner != Preconditioner::Jacobi && s.probe_exact;
     if incomplete_cholesky && fresh {
         probe_matrix(grid, s, beta);
-        match set.preconditioner {
-            Preconditioner::Mic0 => factorise_modified(s, MIC_SHARE),
-            _ => factorise(s),
-        }
+        let tau = if set.preconditioner == Preconditioner::Mic0 {
+            MIC_SHARE
+        } else {
+            0.0
+        };
+        factorise(s, tau);
     }
     apply_a(grid, s, beta, false);
     for k in 0..n {
@@ -791,75 +793,23 @@ fn probe_matrix(grid: &Grid, s: &mut Scratch, beta: f64) {
     s.d.fill(0.0);
 }
 
-/// Incomplete Cholesky IC(0) on the 3 x 3 pattern, row by row in unknown
-/// order (the fill outside the pattern dropped; a pivot that would not be
-/// positive is replaced by the row's diagonal, so the factor always
-/// exists). Row i keeps its smaller unknowns (at most four: the cell's
-/// 3 x 3 block holds four cells before it in row-major order, or more
-/// across a periodic edge, where the rest is dropped too).
-fn factorise(s: &mut Scratch) {
-    let n = s.fluid.len();
-    s.lower.clear();
-    for i in 0..n {
-        let row = s.neighbours[i];
-        let mut lower = Lower::default();
-        let mut slots = [0usize; 4];
-        for (slot, &k) in row.iter().enumerate() {
-            if k != AIR && (k as usize) < i && lower.len < 4 {
-                lower.index[lower.len] = k;
-                slots[lower.len] = slot;
-                lower.len += 1;
-            }
-        }
-        // Increasing unknown order (row-major slots already are, but for a periodic wrap).
-        for a in 1..lower.len {
-            let mut b = a;
-            while b > 0 && lower.index[b - 1] > lower.index[b] {
-                lower.index.swap(b - 1, b);
-                slots.swap(b - 1, b);
-                b -= 1;
-            }
-        }
-        let mut pivot = s.matrix[i][4];
-        for (a, &slot) in slots.iter().enumerate().take(lower.len) {
-            let k = lower.index[a] as usize;
-            let mut sum = s.matrix[i][slot];
-            let row_k = &s.lower[k];
-            for b in 0..a {
-                let j = lower.index[b];
-                if let Some(t) = row_k.index[..row_k.len].iter().position(|&m| m == j) {
-                    sum -= lower.value[b] * row_k.value[t];
-                }
-            }
-            let l = sum / row_k.diagonal;
-            lower.value[a] = l;
-            pivot -= l * l;
-        }
-        lower.diagonal = if pivot > 1e-12 * s.matrix[i][4] {
-            pivot.sqrt()
-        } else {
-            s.matrix[i][4].sqrt()
-        };
-        lower.inverse = 1.0 / lower.diagonal;
-        s.lower.push(lower);
-    }
-}
-
 /// The share of the dropped fill MIC(0) moves onto the diagonals (below 1,
 /// which would make L L^T exactly row-sum preserving and singular on a
 /// closed incompressible box: the usual 0.97).
 const MIC_SHARE: f64 = 0.97;
 
-/// Modified incomplete Cholesky MIC(0) on the 3 x 3 pattern, column by
-/// column (right-looking): each pivot's column updates the Schur
-/// complement of the rows below it; an update that falls outside the
-/// pattern (a fill IC(0) drops) is moved, times `tau`, onto the diagonals
-/// of the two rows it would have coupled, so that L L^T keeps A's row sums
-/// to within 1 - tau: the smooth error that IC(0) resolves slowly is what
-/// the pressure's conjugate gradient spends its iterations on. A pivot
-/// below a quarter of A's diagonal is replaced by that diagonal (the
-/// factor always exists). With tau = 0 this is IC(0) (`factorise`).
-fn factorise_modified(s: &mut Scratch, tau: f64) {
+/// Incomplete Cholesky on the 3 x 3 pattern, column by column
+/// (right-looking): each pivot's column updates the Schur complement of
+/// the rows below it, and an update that falls outside the pattern (fill)
+/// is dropped (IC(0), `tau` = 0) or moved, times `tau`, onto the diagonals
+/// of the two rows it would have coupled (MIC(0)), so that L L^T keeps A's
+/// row sums to within 1 - tau: the smooth error that IC(0) resolves slowly
+/// is what the pressure's conjugate gradient spends its iterations on. A
+/// pivot below a quarter of A's diagonal is replaced by that diagonal (the
+/// factor always exists). A row keeps at most four entries left of its
+/// diagonal (its 3 x 3 block's cells before it; more only across a
+/// periodic edge, where the rest is dropped).
+fn factorise(s: &mut Scratch, tau: f64) {
     let n = s.fluid.len();
     s.schur.clear();
     s.schur.extend_from_slice(&s.matrix);
