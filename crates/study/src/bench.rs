@@ -1,7 +1,7 @@
 //! `kick bench`: particle-steps per second on the default dam break or on the
 //! scene of the well-known 88-line MLS-MPM fluid.
 
-use crate::runner::{Probe, Rows, Run, RunOptions, Runner, Simulated, Watch};
+use crate::runner::{Cadence, Probe, Rows, Run, RunOptions, Runner, Simulated, Watch};
 use crate::summary::Status;
 use monitor::MonitorConfig;
 use serde_json::json;
@@ -217,8 +217,7 @@ pub fn run(opts: &BenchOptions) -> Result<serde_json::Value, String> {
         let watch = Watch::new(MonitorConfig::default(), &solver.view());
         solver.reset_stage_times();
         let rows = Rows {
-            every: FIELD_EVERY,
-            interval: None,
+            cadence: Cadence::Steps(FIELD_EVERY),
             mark_event_rows: false,
         };
         let mut timed = RunOptions::new(None, rows);

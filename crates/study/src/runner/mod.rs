@@ -71,14 +71,19 @@ pub trait Probe<S: Stepper> {
 /// When timeseries rows are written.
 #[derive(Clone, Copy, Debug)]
 pub struct Rows {
-    /// A regular row every this many steps (plus one at each step that
-    /// opens an event or stops the run).
-    pub every: u64,
-    /// Instead of `every`: a regular row at each step that crosses a
-    /// multiple of this simulated time (s).
-    pub interval: Option<f64>,
+    /// When the regular rows come (plus one at each step that opens an
+    /// event or stops the run).
+    pub cadence: Cadence,
     /// Mark rows written only for an event or the stop (`event_row`).
     pub mark_event_rows: bool,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub enum Cadence {
+    /// Every this many steps.
+    Steps(u64),
+    /// At each step that crosses a multiple of this simulated time (s).
+    Time(f64),
 }
 
 impl Rows {
@@ -86,8 +91,7 @@ impl Rows {
     pub fn spread(rows: u64, t_end: f64, first_dt: f64) -> Self {
         let expected_steps = (t_end / first_dt).ceil().max(1.0) as u64;
         Rows {
-            every: (expected_steps / rows).max(1),
-            interval: None,
+            cadence: Cadence::Steps((expected_steps / rows).max(1)),
             mark_event_rows: true,
         }
     }
@@ -99,8 +103,7 @@ impl Rows {
     /// the 1000 asked, at h = 0.25 cm).
     pub fn spread_in_time(rows: u64, t_end: f64) -> Self {
         Rows {
-            every: 1,
-            interval: Some(t_end / rows.max(1) as f64),
+            cadence: Cadence::Time(t_end / rows.max(1) as f64),
             mark_event_rows: true,
         }
     }
@@ -108,17 +111,16 @@ impl Rows {
     /// A row after every step (a replay's dense output).
     pub fn every_step() -> Self {
         Rows {
-            every: 1,
-            interval: None,
+            cadence: Cadence::Steps(1),
             mark_event_rows: false,
         }
     }
 
     /// Whether a step from `t_before` to `t_after`, numbered `step`, takes a regular row.
     fn regular(&self, step: u64, t_before: f64, t_after: f64) -> bool {
-        match self.interval {
-            Some(interval) => (t_after / interval).floor() > (t_before / interval).floor(),
-            None => step.is_multiple_of(self.every),
+        match self.cadence {
+            Cadence::Steps(every) => step.is_multiple_of(every),
+            Cadence::Time(interval) => (t_after / interval).floor() > (t_before / interval).floor(),
         }
     }
 }
@@ -455,8 +457,7 @@ mod tests {
         let mut opts = RunOptions::new(
             None,
             Rows {
-                every: rows_every,
-                interval: None,
+                cadence: Cadence::Steps(rows_every),
                 mark_event_rows: true,
             },
         );
