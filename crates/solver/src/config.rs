@@ -290,10 +290,18 @@ pub struct ProjectionSettings {
     /// Relative residual at which the drift correction by position's
     /// conjugate gradient stops (it corrects a share of a smoothed error).
     pub drift_tolerance: f64,
+    /// The packing error is read only in cells whose neighbours within
+    /// this many cells are all fluid (0: wherever the four corners are
+    /// full): near the surface the nodal masses follow the surface's
+    /// height, so a wave reads as packing error there.
+    pub drift_depth: u32,
     /// The velocity field the particles move with: the bilinear element's
     /// (whose cell-integrated divergence is the solved D u, so a cell's
     /// particles keep their packing) or the run's shape functions'.
     pub advection: Advection,
+    /// Where the free surface's p = 0 sits: at the air cells' centres, or
+    /// inside the cell where the grid's fluid fraction crosses a half.
+    pub free_surface: FreeSurface,
     /// A node lighter than this share of rho0 h^2 takes that mass in the
     /// pressure operator and its velocity correction (free-surface nodes).
     pub light_node_share: f64,
@@ -325,6 +333,24 @@ pub enum Advection {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+pub enum FreeSurface {
+    /// A cell holding a particle is fluid; p = 0 at the air cells' centres.
+    Cell,
+    /// A cell is fluid where the grid's fluid fraction is at least a half;
+    /// p = 0 where that fraction, interpolated between a fluid cell and
+    /// its air neighbour, crosses a half (ghost fluid: the corner's
+    /// pressure force scaled by 1 / theta). The divergence is unweighted,
+    /// so the projection is oblique in the nodal masses and can add
+    /// kinetic energy.
+    Ghost,
+    /// The same surface with the divergence weighted as the force: the
+    /// projection is orthogonal in the nodal masses and never adds kinetic
+    /// energy; the constraint is then a weighted divergence at the surface.
+    GhostOrthogonal,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Preconditioner {
     /// The diagonal.
     Jacobi,
@@ -344,7 +370,9 @@ impl Default for ProjectionSettings {
             drift: 0.3,
             drift_correction: DriftCorrection::Position,
             drift_tolerance: 1e-6,
+            drift_depth: 0,
             advection: Advection::Shape,
+            free_surface: FreeSurface::Cell,
             light_node_share: 0.25,
             tolerance: 1e-8,
             max_iterations: 4000,
@@ -628,6 +656,12 @@ impl SolverConfig {
         within(p.hourglass, 0.0, 0.25, "method.projection.hourglass")?;
         within(p.checkerboard, 0.0, 16.0, "method.projection.checkerboard")?;
         within(p.drift, 0.0, 1.0, "method.projection.drift")?;
+        within(
+            p.drift_depth as f64,
+            0.0,
+            8.0,
+            "method.projection.drift_depth",
+        )?;
         within(
             p.light_node_share,
             1e-6,

@@ -85,6 +85,7 @@ fn configs() -> Vec<SolverConfig> {
                 drift: 0.1,
                 drift_correction: DriftCorrection::Velocity,
                 preconditioner: Preconditioner::Ic0,
+                free_surface: FreeSurface::Ghost,
                 ..Default::default()
             },
             ..common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usl)
@@ -102,6 +103,8 @@ fn configs() -> Vec<SolverConfig> {
                 drift: 0.3,
                 drift_correction: DriftCorrection::Position,
                 advection: Advection::Bilinear,
+                free_surface: FreeSurface::GhostOrthogonal,
+                drift_depth: 2,
                 ..Default::default()
             },
             ..common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl)

@@ -67,20 +67,26 @@ fn step_does_not_allocate() {
                 }
                 // The pressure-implicit step (its own order: one scheme),
                 // compressible with the drift corrected by velocity (IC(0),
-                // the shapes' advection), and incompressible with it
-                // corrected by position (MIC(0), the bilinear advection).
-                for (k, drift_correction, preconditioner, advection) in [
+                // the shapes' advection, the ghost surface), and
+                // incompressible with it corrected by position (MIC(0), the
+                // bilinear advection, the orthogonal ghost surface, the
+                // drift read two cells deep).
+                for (k, drift_correction, preconditioner, advection, free_surface, drift_depth) in [
                     (
                         1.5e6,
                         DriftCorrection::Velocity,
                         Preconditioner::Ic0,
                         Advection::Shape,
+                        FreeSurface::Ghost,
+                        0,
                     ),
                     (
                         f64::INFINITY,
                         DriftCorrection::Position,
                         Preconditioner::Mic0,
                         Advection::Bilinear,
+                        FreeSurface::GhostOrthogonal,
+                        2,
                     ),
                 ] {
                     let mut mat = Material::tait(1.5e6);
@@ -94,6 +100,8 @@ fn step_does_not_allocate() {
                                 drift_correction,
                                 preconditioner,
                                 advection,
+                                free_surface,
+                                drift_depth,
                                 ..Default::default()
                             },
                             ..common::method(shape, transfer, SchemeKind::Usl)

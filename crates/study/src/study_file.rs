@@ -1090,6 +1090,22 @@ mod tests {
         );
         assert_eq!(method.projection.advection, solver::Advection::Bilinear);
         assert!(toml::from_str::<solver::Method>("[projection]\nadvection = \"apic\"\n").is_err());
+        for (text, surface) in [
+            ("cell", solver::FreeSurface::Cell),
+            ("ghost", solver::FreeSurface::Ghost),
+            ("ghost_orthogonal", solver::FreeSurface::GhostOrthogonal),
+        ] {
+            let method: solver::Method = toml::from_str(&format!(
+                "[projection]\nfree_surface = \"{text}\"\ndrift_depth = 2\n"
+            ))
+            .unwrap();
+            assert_eq!(method.projection.free_surface, surface);
+            assert_eq!(method.projection.drift_depth, 2);
+        }
+        assert!(
+            toml::from_str::<solver::Method>("[projection]\nfree_surface = \"level_set\"\n")
+                .is_err()
+        );
         for text in ["K = \"inf\"", "K = inf"] {
             let m: solver::Material = toml::from_str(text).unwrap();
             assert_eq!(m.k, f64::INFINITY, "{text}");

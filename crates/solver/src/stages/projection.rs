@@ -24,7 +24,9 @@
 //! thread count. The solved pressure is the next step's starting guess (it
 //! is in the checkpoint).
 
-use crate::config::{Advection, DriftCorrection, Material, Preconditioner, ProjectionSettings};
+use crate::config::{
+    Advection, DriftCorrection, FreeSurface, Material, Preconditioner, ProjectionSettings,
+};
 use crate::grid::{Grid, FULL_NODE_SHARE, PAD};
 use crate::par::{Pieces, CHUNK};
 use crate::particles::{Mat2, Particles, Vec2};
@@ -34,6 +36,11 @@ use rayon::prelude::*;
 
 /// No unknown: an air cell.
 const AIR: u32 = u32::MAX;
+
+/// The least share of the way to an air cell's centre at which the ghost
+/// surface may sit: 1 / theta scales a corner's pressure force, and a
+/// surface on the fluid cell's centre would make it unbounded.
+const MIN_SURFACE_SHARE: f64 = 0.05;
 
 /// The corners of a cell as (x offset, y offset, sign of x, sign of y) of
 /// the bilinear gradient at its centre: grad N = (sx, sy) / (2 h).
@@ -81,6 +88,17 @@ pub struct SolveStats {
     pub packing_error: f64,
     /// Conjugate-gradient iterations of the drift correction by position.
     pub shift_iterations: u32,
+    /// The change of the nodes' kinetic energy 1/2 sum m |u|^2 (P2G
+    /// masses) that the pressure correction du made, before the velocities
+    /// beyond the fluid are extrapolated (J/m): sum m du . u^{n+1} - 1/2
+    /// sum m |du|^2.
+    pub kinetic_change: f64,
+    /// Its first part, sum m du . u^{n+1} (J/m): zero to the solve's
+    /// residual for a projection orthogonal in the nodal masses (the cell
+    /// and `ghost_orthogonal` surfaces, without the checkerboard control,
+    /// whose exchange lets D u depart from 0, and with no light node
+    /// floored); what an oblique one can add.
+    pub cross_work: f64,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -105,6 +123,16 @@ pub struct Scratch {
     particle_cell: Vec<u32>,
     /// Per unknown: the corner nodes (padded indices).
     corners: Vec<[u32; 4]>,
+    /// Per cell: the grid's fluid fraction less a half (the free surface's
+    /// level; `free_surface = "ghost"` only).
+    level: Vec<f64>,
+    /// Per unknown and corner: 1 / theta where the cell diagonally across
+    /// that corner is air (theta the share of the way to its centre at
+    /// which the surface lies), else 1. The corner's pressure force is
+    /// scaled by it: the air cell's ghost pressure p (theta - 1) / theta.
+    ghost: Vec<[f64; 4]>,
+    /// Whether the divergence takes the ghost weights too (`ghost_orthogonal`).
+    orthogonal: bool,
     /// Per unknown: h^2 / (K_t dt^2) (0 at K = infinity), and the drift target r.
     alpha: Vec<f64>,
     target: Vec<f64>,
@@ -164,6 +192,9 @@ impl Scratch {
             vol0: vec![0.0; n_cells],
             particle_cell: vec![0; particles],
             corners: Vec::with_capacity(n_cells),
+            level: vec![0.0; n_cells],
+            ghost: Vec::with_capacity(n_cells),
+            orthogonal: false,
             alpha: Vec::with_capacity(n_cells),
             target: Vec::with_capacity(n_cells),
             shift: Vec::with_capacity(n_cells),
@@ -221,6 +252,39 @@ impl Scratch {
         index(r.x, 0) + self.cells[0] * index(r.y, 1)
     }
 
+    /// The share theta of the way from fluid cell `c`'s centre to air cell
+    /// `o`'s at which the fluid fraction, interpolated linearly, crosses a
+    /// half: where the free surface's p = 0 sits (ghost fluid). Floored at
+    /// `MIN_SURFACE_SHARE`; 1 (the air centre) where `o` reads fuller than
+    /// a half (an air cell without particles).
+    fn surface_share(&self, c: usize, o: usize) -> f64 {
+        let (inside, outside) = (self.level[c].max(0.0), self.level[o]);
+        if outside >= 0.0 {
+            return 1.0;
+        }
+        (inside / (inside - outside)).clamp(MIN_SURFACE_SHARE, 1.0)
+    }
+
+    /// Whether every cell within `reach` cells of `c` (off a walled box:
+    /// the wall's image) is fluid.
+    fn deep(&self, c: usize, reach: i64) -> bool {
+        let (ci, cj) = ((c % self.cells[0]) as i64, (c / self.cells[0]) as i64);
+        (-reach..=reach).all(|dj| {
+            (-reach..=reach).all(|di| {
+                self.cell_at(ci + di, cj + dj)
+                    .is_none_or(|o| self.unknown[o] != AIR)
+            })
+        })
+    }
+
+    fn divergence_weights(&self, k: usize) -> &[f64; 4] {
+        if self.orthogonal {
+            &self.ghost[k]
+        } else {
+            &UNWEIGHTED
+        }
+    }
+
     /// Cell (i, j) with periodic wrap; None off a walled box.
     fn cell_at(&self, i: i64, j: i64) -> Option<usize> {
         let wrap = |v: i64, axis: usize| {
@@ -255,7 +319,7 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
     );
     let h = grid.h;
     let full_mass = mat.rho0 * h * h;
-    mark_fluid(ps, grid, s);
+    mark_fluid(ps, grid, s, set.free_surface, full_mass);
     // 1 / M' on every active node (ghosts hold their partner's mass).
     let light = set.light_node_share * full_mass;
     for &n in &grid.active {
@@ -292,12 +356,19 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
         s.pressure[c as usize] = s.x[k];
     }
     apply_g(grid, s, |s, k| s.x[k]);
+    let (mut kinetic_change, mut cross_work) = (0.0, 0.0);
     for &n in &grid.active {
         let n = n as usize;
         let a = s.nodal[n];
         grid.vel_new[n] += dt * a;
         grid.accel[n] += a;
+        let m = grid.mass_raw[n];
+        let du = dt * a;
+        cross_work += m * du.dot(&grid.vel_new[n]);
+        kinetic_change += m * (du.dot(&grid.vel_new[n]) - 0.5 * du.norm_squared());
     }
+    s.stats.kinetic_change = kinetic_change;
+    s.stats.cross_work = cross_work;
     extrapolate(grid, s, dt);
     // The J rate e = D u^{n+1} + (dt / h^2) S p - r, and the pressure's work.
     let n = s.fluid.len();
@@ -306,7 +377,7 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
     let mut pressure_work = 0.0;
     for (k, &c) in s.fluid.iter().enumerate() {
         let c = c as usize;
-        let div = divergence(&s.corners[k], &grid.vel_new, h);
+        let div = divergence(&s.corners[k], s.divergence_weights(k), &grid.vel_new, h);
         let e = div + dt / (h * h) * s.q[k] - s.target[k];
         s.rate[c] = e;
         pressure_work += s.x[k] * s.vol[c] * dt * e;
@@ -327,17 +398,18 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
     s.stats.dissipated_hourglass = -work_hourglass;
     // What the pressure's work did not put into stored energy.
     s.stats.dissipated_projection = -work_projection + pressure_work;
-    reconstruct(s, h);
+    reconstruct(s, h, set.free_surface != FreeSurface::Cell);
 }
 
 /// The gradient of the cell pressure at each fluid cell, by central
 /// differences where both neighbours are fluid, one-sided at a wall (no
 /// neighbour), and against -p of the cell itself at an air neighbour (p = 0
-/// on the face between): each particle reads p_c + grad . (x - x_c), exact
+/// on the face between; under the ghost surface, against the ghost
+/// pressure p (theta - 1) / theta, p = 0 where the surface is): each particle reads p_c + grad . (x - x_c), exact
 /// for a linear field, so a resting layer's particles read the hydrostatic
 /// pressure where they stand and not their cell centre's (a sampling error
 /// of rho0 g h / 4).
-fn reconstruct(s: &mut Scratch, h: f64) {
+fn reconstruct(s: &mut Scratch, h: f64, ghost: bool) {
     for k in 0..s.fluid.len() {
         let c = s.fluid[k] as usize;
         let p0 = s.x[k];
@@ -348,7 +420,14 @@ fn reconstruct(s: &mut Scratch, h: f64) {
                 return Some(s.x[m as usize]);
             }
             let (ci, cj) = ((c % s.cells[0]) as i64, (c / s.cells[0]) as i64);
-            s.cell_at(ci + di, cj + dj).map(|_| -p0)
+            s.cell_at(ci + di, cj + dj).map(|o| {
+                if ghost {
+                    let theta = s.surface_share(c, o);
+                    p0 * (theta - 1.0) / theta
+                } else {
+                    -p0
+                }
+            })
         };
         let slope = |minus: Option<f64>, plus: Option<f64>| match (minus, plus) {
             (Some(a), Some(b)) => (b - a) / (2.0 * h),
@@ -404,9 +483,10 @@ fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64) {
     }
 }
 
-/// Fluid cells (those holding a particle), each particle's cell, the
-/// cells' volumes, and the unknowns' corners.
-fn mark_fluid(ps: &Particles, grid: &Grid, s: &mut Scratch) {
+/// Fluid cells (those holding a particle; under the ghost surface also at
+/// least half full), each particle's cell, the cells' volumes, the
+/// unknowns' corners and their ghost weights.
+fn mark_fluid(ps: &Particles, grid: &Grid, s: &mut Scratch, surface: FreeSurface, full_mass: f64) {
     for c in s.fluid.drain(..) {
         s.unknown[c as usize] = AIR;
         s.rate[c as usize] = 0.0;
@@ -420,6 +500,37 @@ fn mark_fluid(ps: &Particles, grid: &Grid, s: &mut Scratch) {
         s.vol0[c] += ps.vol0[p];
     }
     let nx = grid.dims[0];
+    let corners_of = |c: usize| {
+        let (ci, cj) = (c % s.cells[0], c / s.cells[0]);
+        let base = (ci + PAD) + (cj + PAD) * nx;
+        CORNERS.map(|(a, b, _, _)| (base + a + b * nx) as u32)
+    };
+    let ghost = surface != FreeSurface::Cell;
+    s.orthogonal = surface == FreeSurface::GhostOrthogonal;
+    if ghost {
+        // The fluid fraction: the corners' folded mass over four full
+        // nodes' (the B-spline smears the surface over about a cell, evenly
+        // about it, so a half marks where it is), times J for the volume.
+        for c in 0..s.level.len() {
+            let mass: f64 = corners_of(c)
+                .iter()
+                .map(|&n| {
+                    let n = n as usize;
+                    if grid.is_active(n) {
+                        grid.mass[n]
+                    } else {
+                        0.0
+                    }
+                })
+                .sum();
+            let j = if s.vol0[c] > 0.0 {
+                s.vol[c] / s.vol0[c]
+            } else {
+                1.0
+            };
+            s.level[c] = mass / (4.0 * full_mass) * j - 0.5;
+        }
+    }
     // The flags live on the owner nodes (a periodic edge's two sides are one node).
     for c in &s.corners {
         for &n in c {
@@ -428,13 +539,11 @@ fn mark_fluid(ps: &Particles, grid: &Grid, s: &mut Scratch) {
     }
     s.corners.clear();
     for c in 0..s.unknown.len() {
-        let (ci, cj) = (c % s.cells[0], c / s.cells[0]);
-        let base = (ci + PAD) + (cj + PAD) * nx;
-        let corners = CORNERS.map(|(a, b, _, _)| (base + a + b * nx) as u32);
+        let corners = corners_of(c);
         // A cell whose corners the particles' stencils do not all reach (a
         // particle clamped into it from outside the box) has no operator row.
         let reached = corners.iter().all(|&n| grid.is_active(n as usize));
-        if s.vol0[c] > 0.0 && reached {
+        if s.vol0[c] > 0.0 && reached && (!ghost || s.level[c] >= 0.0) {
             s.unknown[c] = s.fluid.len() as u32;
             s.fluid.push(c as u32);
             for n in corners {
@@ -443,7 +552,25 @@ fn mark_fluid(ps: &Particles, grid: &Grid, s: &mut Scratch) {
             s.corners.push(corners);
         } else {
             s.pressure[c] = 0.0;
+            s.gradient[c] = Vec2::zeros();
         }
+    }
+    s.ghost.clear();
+    for k in 0..s.fluid.len() {
+        let c = s.fluid[k] as usize;
+        let (ci, cj) = ((c % s.cells[0]) as i64, (c / s.cells[0]) as i64);
+        let weights = CORNERS.map(|(a, b, _, _)| {
+            if !ghost {
+                return 1.0;
+            }
+            // The cell across this corner; off a walled box the fold stands for it.
+            let across = s.cell_at(ci + 2 * a as i64 - 1, cj + 2 * b as i64 - 1);
+            match across {
+                Some(o) if s.unknown[o] == AIR => 1.0 / s.surface_share(c, o),
+                _ => 1.0,
+            }
+        });
+        s.ghost.push(weights);
     }
     s.neighbours.clear();
     for k in 0..s.fluid.len() {
@@ -481,16 +608,22 @@ fn alternating(quad: &[u32; 4], x: &[f64]) -> f64 {
         .sum()
 }
 
-/// D u at a cell: (1 / 2h) sum over the corners of (sx, sy) . u.
+/// D u at a cell: (1 / 2h) sum over the corners of w (sx, sy) . u, with
+/// the corners' weights w (1 but under `ghost_orthogonal`).
 #[inline]
-fn divergence(corners: &[u32; 4], u: &[Vec2], h: f64) -> f64 {
+fn divergence(corners: &[u32; 4], weights: &[f64; 4], u: &[Vec2], h: f64) -> f64 {
     let mut sum = 0.0;
-    for (&n, (_, _, sx, sy)) in corners.iter().zip(CORNERS) {
+    for ((&n, (_, _, sx, sy)), w) in corners.iter().zip(CORNERS).zip(weights) {
         let v = u[n as usize];
-        sum += sx * v.x + sy * v.y;
+        sum += w * (sx * v.x + sy * v.y);
     }
     sum / (2.0 * h)
 }
+
+/// The corners' weights of the divergence: 1, or the ghost weights under
+/// `ghost_orthogonal` (then D = G^T / h^2 with the same G as the force,
+/// and the projection is orthogonal in the nodal masses).
+const UNWEIGHTED: [f64; 4] = [1.0; 4];
 
 /// `s.nodal` = M'^-1 F G p for the cell values `value(s, k)` of the
 /// unknowns: G p scattered on the corners, folded (walls, periodic
@@ -503,7 +636,9 @@ fn apply_g(grid: &Grid, s: &mut Scratch, value: impl Fn(&Scratch, usize) -> f64)
     for k in 0..s.fluid.len() {
         let g = half_h * value(s, k);
         let corners = s.corners[k];
-        for (&n, (_, _, sx, sy)) in corners.iter().zip(CORNERS) {
+        let ghost = s.ghost[k];
+        for ((&n, (_, _, sx, sy)), w) in corners.iter().zip(CORNERS).zip(ghost) {
+            let g = g * w;
             s.nodal[n as usize] += Vec2::new(sx * g, sy * g);
         }
     }
@@ -544,7 +679,9 @@ fn assemble(
         // The grid's packing: the corners' mass over a full node's.
         let masses = corners.map(|n| grid.mass[n as usize]);
         // The packing error where all four corners are full (NaN elsewhere).
-        let error = if masses.iter().all(|&m| m >= full) {
+        let measured = masses.iter().all(|&m| m >= full)
+            && (set.drift_depth == 0 || s.deep(c, set.drift_depth as i64));
+        let error = if measured {
             let packing = masses.iter().sum::<f64>() / (4.0 * full_mass);
             let error = if incompressible {
                 packing - 1.0
@@ -564,7 +701,7 @@ fn assemble(
             let kt = state.tangent_modulus.max(1e-300);
             (h2 / (kt * dt * dt), state.pressure)
         };
-        let div_star = divergence(&corners, &grid.vel_new, h);
+        let div_star = divergence(&corners, s.divergence_weights(k), &grid.vel_new, h);
         s.alpha.push(alpha);
         s.target.push(error);
         // The EOS and u* parts; the drift's is added below.
@@ -573,7 +710,9 @@ fn assemble(
         // per corner): a preconditioner only.
         let gmg: f64 = corners
             .iter()
-            .map(|&n| 0.5 * h2 * s.inv_mass[n as usize])
+            .zip(s.ghost[k])
+            .zip(s.divergence_weights(k))
+            .map(|((&n, w), v)| 0.5 * h2 * w * v * s.inv_mass[n as usize])
             .sum();
         s.diag.push(alpha + gmg);
         s.x.push(s.pressure[c]);
@@ -646,7 +785,8 @@ fn apply_a(grid: &Grid, s: &mut Scratch, beta: f64, from_d: bool) {
     let h2 = h * h;
     for k in 0..s.fluid.len() {
         let v = if from_d { s.d[k] } else { s.x[k] };
-        s.q[k] = s.alpha[k] * v + h2 * divergence(&s.corners[k], &s.nodal, h);
+        s.q[k] =
+            s.alpha[k] * v + h2 * divergence(&s.corners[k], s.divergence_weights(k), &s.nodal, h);
     }
     let src = if from_d { &s.d } else { &s.x };
     add_checkerboard(&s.quads, src, beta, &mut s.q);
