@@ -124,7 +124,7 @@ pub struct Scratch {
     /// Per unknown: the corner nodes (padded indices).
     corners: Vec<[u32; 4]>,
     /// Per cell: the grid's fluid fraction less a half (the free surface's
-    /// level; `free_surface = "ghost"` only).
+    /// level; the ghost surfaces only).
     level: Vec<f64>,
     /// Per unknown and corner: 1 / theta where the cell diagonally across
     /// that corner is air (theta the share of the way to its centre at
@@ -404,11 +404,11 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
 /// The gradient of the cell pressure at each fluid cell, by central
 /// differences where both neighbours are fluid, one-sided at a wall (no
 /// neighbour), and against -p of the cell itself at an air neighbour (p = 0
-/// on the face between; under the ghost surface, against the ghost
-/// pressure p (theta - 1) / theta, p = 0 where the surface is): each particle reads p_c + grad . (x - x_c), exact
-/// for a linear field, so a resting layer's particles read the hydrostatic
-/// pressure where they stand and not their cell centre's (a sampling error
-/// of rho0 g h / 4).
+/// on the face between; under the ghost surfaces against the ghost
+/// pressure p (theta - 1) / theta, p = 0 where the surface is): each
+/// particle reads p_c + grad . (x - x_c), exact for a linear field, so a
+/// resting layer's particles read the hydrostatic pressure where they
+/// stand and not their cell centre's (a sampling error of rho0 g h / 4).
 fn reconstruct(s: &mut Scratch, h: f64, ghost: bool) {
     for k in 0..s.fluid.len() {
         let c = s.fluid[k] as usize;
@@ -551,6 +551,8 @@ fn mark_fluid(ps: &Particles, grid: &Grid, s: &mut Scratch, surface: FreeSurface
             }
             s.corners.push(corners);
         } else {
+            // No row: its particles (above a ghost surface, or clamped in
+            // from outside the box) read p = 0, not a gradient left over.
             s.pressure[c] = 0.0;
             s.gradient[c] = Vec2::zeros();
         }
