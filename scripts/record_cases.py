@@ -11,7 +11,9 @@ once (a run stopped half way loses only the cases under way). A row holds the
 run's outcome, its kicks, its anomaly-proper events (kicks with the hallmark:
 quiet before and deformed by strain rate, the ids `kick explain --event`
 takes), the events the store dropped, and the late checkerboard measures
-(the old particle-means index beside the cell and nodal ones). `--until`
+(the old particle-means index beside the cell and nodal ones) and the late
+hydrostatic departure. A record written by an older version of this script
+keeps its columns. `--until`
 starts no case after that time of day (UTC). `--shard I/N` takes the cases
 at positions I, I + N, ... of `kick list STUDY`.
 """
@@ -28,7 +30,8 @@ FIELDS = [
     "case", "status", "reason", "steps", "t_end", "wall_s", "n_kicks",
     "n_anomalies", "anomaly_events", "n_events_stored", "events_dropped",
     "t_first_kick", "checkerboard_means_late", "checkerboard_cell_late",
-    "checkerboard_nodal_late", "final_state_hash", "settings",
+    "checkerboard_nodal_late", "hydro_rel_rms_late", "hydro_excess_late",
+    "n_energy_injections", "final_state_hash", "settings",
 ]
 
 
@@ -50,6 +53,9 @@ def row_of(summary_path, settings):
         "checkerboard_means_late": f["checkerboard_means_late"],
         "checkerboard_cell_late": f["checkerboard_cell_late"],
         "checkerboard_nodal_late": f["checkerboard_nodal_late"],
+        "hydro_rel_rms_late": f["hydro_rel_rms_late"],
+        "hydro_excess_late": f["hydro_excess_late"],
+        "n_energy_injections": m["n_energy_injections"],
         "final_state_hash": s["final_state_hash"], "settings": settings,
     }
 
@@ -99,8 +105,10 @@ def main():
         row = row_of(summary, settings)
         with lock:
             new = not os.path.exists(a.record)
+            # An older record keeps its own columns.
+            fields = FIELDS if new else next(csv.reader(open(a.record)))
             with open(a.record, "a", newline="") as fh:
-                w = csv.DictWriter(fh, fieldnames=FIELDS)
+                w = csv.DictWriter(fh, fieldnames=fields, extrasaction="ignore")
                 if new:
                     w.writeheader()
                 w.writerow(row)
