@@ -362,10 +362,10 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
         let a = s.nodal[n];
         grid.vel_new[n] += dt * a;
         grid.accel[n] += a;
-        let m = grid.mass_raw[n];
-        let du = dt * a;
-        cross_work += m * du.dot(&grid.vel_new[n]);
-        kinetic_change += m * (du.dot(&grid.vel_new[n]) - 0.5 * du.norm_squared());
+        let (m, du) = (grid.mass_raw[n], dt * a);
+        let cross = m * du.dot(&grid.vel_new[n]);
+        cross_work += cross;
+        kinetic_change += cross - 0.5 * m * du.norm_squared();
     }
     s.stats.kinetic_change = kinetic_change;
     s.stats.cross_work = cross_work;
