@@ -283,12 +283,7 @@ fn the_preconditioners_solve_the_same_pressure_mic0_in_the_fewest_iterations() {
 /// steps): the claim is the slow flow's.
 #[test]
 fn the_bilinear_advection_keeps_the_slosh_tanks_packing() {
-    let mut scene = common::box_scene([0.4, 0.3], [0.0, 0.0, 0.4, 0.2], incompressible(), 9.81);
-    scene.initial = InitialState::Hydrostatic;
-    scene.bodies[0].flow = Some(solver::flows::Flow::StandingWave {
-        amplitude: 0.005,
-        mode: 1,
-    });
+    let scene = slosh_tank();
     let packing_after = |advection: Advection| {
         let mut method = implicit(ShapeKind::Bspline2, TransferKind::Apic);
         method.projection.drift = 0.0;
@@ -312,6 +307,18 @@ fn the_bilinear_advection_keeps_the_slosh_tanks_packing() {
     );
 }
 
+/// The incompressible slosh tank of `studies/slosh.toml`: 0.4 m wide,
+/// DEPTH deep, at rest with mode 1's standing wave of 5 mm.
+fn slosh_tank() -> Scene {
+    let mut scene = common::box_scene([0.4, 0.3], [0.0, 0.0, 0.4, DEPTH], incompressible(), 9.81);
+    scene.initial = InitialState::Hydrostatic;
+    scene.bodies[0].flow = Some(solver::flows::Flow::StandingWave {
+        amplitude: 0.005,
+        mode: 1,
+    });
+    scene
+}
+
 /// The slosh tank of `studies/slosh.toml` (0.4 m wide, 0.2 m deep, mode 1,
 /// 5 mm, inviscid, incompressible) under `surface`, with no control (no
 /// checkerboard exchange, hourglass or drift correction) and light nodes
@@ -320,12 +327,7 @@ fn the_bilinear_advection_keeps_the_slosh_tanks_packing() {
 /// correction moves besides the 1/2 sum m |du|^2 it removes) against the
 /// largest kinetic energy removed, -kinetic_change (J/m).
 fn cross_work(surface: FreeSurface, steps: usize) -> (f64, f64) {
-    let mut scene = common::box_scene([0.4, 0.3], [0.0, 0.0, 0.4, DEPTH], incompressible(), 9.81);
-    scene.initial = InitialState::Hydrostatic;
-    scene.bodies[0].flow = Some(solver::flows::Flow::StandingWave {
-        amplitude: 0.005,
-        mode: 1,
-    });
+    let scene = slosh_tank();
     let mut method = implicit(ShapeKind::Bspline2, TransferKind::Apic);
     method.projection.free_surface = surface;
     method.projection.checkerboard = 0.0;
