@@ -5,12 +5,14 @@
 //! Shares: share_X = sum (c_X . dv) / sum |dv|^2, the sums over the
 //! window's steps and the event's particles, c_X the part of a particle's
 //! velocity change that meets criterion X. The parts of the full split
-//! (internal force, gravity, walls, transfer jump, rest) add up to dv, so
+//! (internal force, gravity, walls, transfer jump, and under the
+//! pressure-implicit formulation its hourglass control, pressure
+//! correction and velocity extrapolation, impulse, rest) add up to dv, so
 //! their shares add up to 1; the mechanisms M1-M3 are subsets of them and
 //! may overlap.
 //!
-//! - M1, small-mass node: the internal force, walls and jump of the nodes
-//!   lighter than `SMALL_NODE_SHARE` of a full node rho0 h^2 (gravity is
+//! - M1, small-mass node: every nodal part but gravity (internal force,
+//!   walls, jump and the projection's parts) of the nodes lighter than `SMALL_NODE_SHARE` of a full node rho0 h^2 (gravity is
 //!   the same at every node and is left out).
 //! - M2, cell crossing: the stress parts of the particles whose cell at
 //!   this step's P2G is not their cell at the previous step's (their
@@ -42,6 +44,14 @@ pub struct Shares {
     pub external: f64,
     pub walls: f64,
     pub jump: f64,
+    /// The pressure-implicit projection's parts (0 under explicit
+    /// formulations; absent from older files).
+    #[serde(default)]
+    pub hourglass: f64,
+    #[serde(default)]
+    pub pressure_correction: f64,
+    #[serde(default)]
+    pub extrapolation: f64,
     /// `[[perturb]]` impulses.
     pub impulse: f64,
     pub rest: f64,
@@ -53,7 +63,15 @@ pub struct Shares {
 impl Shares {
     /// The full split's shares: 1 to round-off.
     pub fn split_sum(&self) -> f64 {
-        self.internal + self.external + self.walls + self.jump + self.impulse + self.rest
+        self.internal
+            + self.external
+            + self.walls
+            + self.jump
+            + self.hourglass
+            + self.pressure_correction
+            + self.extrapolation
+            + self.impulse
+            + self.rest
     }
 
     /// Adds another sum of projections part by part.
@@ -62,6 +80,9 @@ impl Shares {
         self.external += b.external;
         self.walls += b.walls;
         self.jump += b.jump;
+        self.hourglass += b.hourglass;
+        self.pressure_correction += b.pressure_correction;
+        self.extrapolation += b.extrapolation;
         self.impulse += b.impulse;
         self.rest += b.rest;
         self.small_mass_node += b.small_mass_node;
@@ -78,6 +99,9 @@ impl Shares {
             external: self.external * d,
             walls: self.walls * d,
             jump: self.jump * d,
+            hourglass: self.hourglass * d,
+            pressure_correction: self.pressure_correction * d,
+            extrapolation: self.extrapolation * d,
             impulse: self.impulse * d,
             rest: self.rest * d,
             small_mass_node: self.small_mass_node * d,
@@ -93,6 +117,9 @@ impl Shares {
             ("gravity", self.external),
             ("walls", self.walls),
             ("transfer jump", self.jump),
+            ("hourglass control", self.hourglass),
+            ("pressure correction", self.pressure_correction),
+            ("velocity extrapolation", self.extrapolation),
             ("impulse", self.impulse),
             ("rest (after-G2P hooks)", self.rest),
         ]
@@ -216,12 +243,15 @@ impl Mechanisms {
             p.external += e.external().dot(&dv);
             p.walls += e.walls().dot(&dv);
             p.jump += e.jump().dot(&dv);
+            p.hourglass += e.hourglass().dot(&dv);
+            p.pressure_correction += e.pressure_correction().dot(&dv);
+            p.extrapolation += e.extrapolation().dot(&dv);
             p.impulse += e.impulse.dot(&dv);
             p.rest += e.rest.dot(&dv);
             for n in &e.nodes {
                 out.min_node_share = out.min_node_share.min(n.mass_share);
                 if n.mass_share < SMALL_NODE_SHARE {
-                    p.small_mass_node += (n.internal + n.walls + n.jump).dot(&dv);
+                    p.small_mass_node += (n.own_parts() - n.external).dot(&dv);
                 }
             }
             for s in &e.stresses {
@@ -241,7 +271,15 @@ impl Mechanisms {
             let size = e.dv.norm()
                 + e.nodes
                     .iter()
-                    .map(|n| n.internal.norm() + n.external.norm() + n.walls.norm() + n.jump.norm())
+                    .map(|n| {
+                        n.internal.norm()
+                            + n.external.norm()
+                            + n.walls.norm()
+                            + n.jump.norm()
+                            + n.hourglass.norm()
+                            + n.pressure_correction.norm()
+                            + n.extrapolation.norm()
+                    })
                     .sum::<f64>();
             if size > 0.0 {
                 out.rest_max = out.rest_max.max(e.rest.norm() / size);

@@ -9,7 +9,11 @@
 //! sum_i N_ip (v*_i - v_p) under XPIC. Each node's increment is split into
 //! internal force, gravity and the rest (wall conditions, ghost images,
 //! grid hooks); the internal force into each particle's -V sigma grad N
-//! (pressure and deviatoric parts). What G2P does not give (after-G2P
+//! (pressure and deviatoric parts). Under the pressure-implicit
+//! formulation the pressure is not a nodal force: the projection's own
+//! changes (its hourglass control, the pressure correction, the velocity
+//! extrapolation above the surface) are parts of their own, and "walls"
+//! keeps only the wall conditions and ghost images. What G2P does not give (after-G2P
 //! hooks, `[[perturb]]` impulses) is the particle's `rest`, zero to
 //! round-off for a method without them.
 
@@ -41,14 +45,34 @@ pub struct NodePart {
     pub internal: Vec2,
     /// N dt g (0 at a massless node).
     pub external: Vec2,
-    /// N (v^{n+1} - v^n) - N dt f / m: wall conditions, ghost images, hooks.
+    /// N (v^{n+1} - v^n) - N dt f / m less the three projection parts
+    /// below: wall conditions, ghost images, hooks.
     pub walls: Vec2,
+    /// Pressure-implicit only (else 0): N times the hourglass control's
+    /// change of u*, the pressure correction dt M'^-1 G p, and the
+    /// extrapolation's change at a node outside the fluid cells.
+    pub hourglass: Vec2,
+    pub pressure_correction: Vec2,
+    pub extrapolation: Vec2,
     /// The transfer's own jump through this node.
     pub jump: Vec2,
     /// N (v^{n+1} - v^n): FLIP's increment through this node (the sum of
     /// the three above), against `interpolated`, N v^n.
     pub flip_increment: Vec2,
     pub interpolated: Vec2,
+}
+
+impl NodePart {
+    /// The sum of this node's parts of dv_p.
+    pub fn own_parts(&self) -> Vec2 {
+        self.internal
+            + self.external
+            + self.walls
+            + self.jump
+            + self.hourglass
+            + self.pressure_correction
+            + self.extrapolation
+    }
 }
 
 /// What one stress-carrying particle gave an explained particle through
@@ -95,13 +119,22 @@ impl Explained {
     pub fn jump(&self) -> Vec2 {
         self.nodes.iter().map(|n| n.jump).sum()
     }
+    pub fn hourglass(&self) -> Vec2 {
+        self.nodes.iter().map(|n| n.hourglass).sum()
+    }
+    pub fn pressure_correction(&self) -> Vec2 {
+        self.nodes.iter().map(|n| n.pressure_correction).sum()
+    }
+    pub fn extrapolation(&self) -> Vec2 {
+        self.nodes.iter().map(|n| n.extrapolation).sum()
+    }
     /// The sum of the parts: dv to round-off (with `rest`, exactly).
     pub fn parts_sum(&self) -> Vec2 {
         self.impulse
             + self
                 .nodes
                 .iter()
-                .map(|n| n.internal + n.external + n.walls + n.jump)
+                .map(|n| n.own_parts())
                 .sum::<Vec2>()
     }
 }
@@ -208,6 +241,7 @@ impl Solver {
     fn explain_nodes<const W: usize>(&self, particles: &[usize]) -> Vec<Explained> {
         let (grid, ps, dt) = (&self.grid, &self.particles, self.dt);
         let g = self.gravity;
+        let implicit = self.implicit();
         let full = self.cfg.first_rho0() * grid.h * grid.h;
         let alpha = match self.cfg.method.transfer {
             TransferKind::Flip => self.remedies.flip_fraction(dt, self.cfg.method.flip_alpha),
@@ -226,12 +260,20 @@ impl Solver {
                 let n = node as usize;
                 let m = grid.mass[n];
                 let dv_node = grid.vel_new[n] - grid.vel[n];
+                let [hourglass, pressure_correction, extrapolation] = if implicit && m > 0.0 {
+                    self.projection
+                        .node_changes(grid, dt, n)
+                        .map(|change| w * change)
+                } else {
+                    [Vec2::zeros(); 3]
+                };
+                let projected = hourglass + pressure_correction + extrapolation;
                 let (internal, external, walls) = if m > 0.0 {
                     let by_force = dt * grid.force[n] / m;
                     (
                         w * (by_force - dt * g),
                         w * dt * g,
-                        w * (dv_node - by_force),
+                        w * (dv_node - by_force) - projected,
                     )
                 } else {
                     (Vec2::zeros(), Vec2::zeros(), w * dv_node)
@@ -247,6 +289,9 @@ impl Solver {
                     internal,
                     external,
                     walls,
+                    hourglass,
+                    pressure_correction,
+                    extrapolation,
                     jump: (1.0 - alpha) * w * (grid.vel[n] - vp),
                     flip_increment: w * dv_node,
                     interpolated: w * grid.vel[n],

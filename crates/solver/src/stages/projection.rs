@@ -221,6 +221,18 @@ impl Scratch {
         }
     }
 
+    /// What this step's projection did to active node `n`'s velocity, for
+    /// the force forensics: the hourglass control's change of u*, the
+    /// pressure correction dt M'^-1 G p, and the extrapolation's (a node
+    /// outside the fluid cells set to its fluid neighbours' mean, ghosts
+    /// filled from it). Valid between `project` and the next step.
+    pub fn node_changes(&self, grid: &Grid, dt: f64, n: usize) -> [Vec2; 3] {
+        let hourglass = self.before_projection[n] - self.before_hourglass[n];
+        let pressure = dt * self.nodal[n];
+        let extrapolation = grid.vel_new[n] - self.before_projection[n] - pressure;
+        [hourglass, pressure, extrapolation]
+    }
+
     /// Per cell: the V0 of the particles it held at the last step.
     pub fn cell_volume0(&self) -> &[f64] {
         &self.vol0
