@@ -289,6 +289,15 @@ impl Scratch {
         })
     }
 
+    /// Whether one of the cells with padded node `n` as a corner holds a particle.
+    fn holds_material_around(&self, grid: &Grid, n: usize) -> bool {
+        let (i, j) = grid.coords(n);
+        let (i, j) = (i as i64 - PAD as i64, j as i64 - PAD as i64);
+        [(-1, -1), (0, -1), (-1, 0), (0, 0)]
+            .iter()
+            .any(|&(di, dj)| self.cell_at(i + di, j + dj).is_some_and(|c| self.vol0[c] > 0.0))
+    }
+
     fn divergence_weights(&self, k: usize) -> &[f64; 4] {
         if self.orthogonal {
             &self.ghost[k]
@@ -381,7 +390,7 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
     }
     s.stats.kinetic_change = kinetic_change;
     s.stats.cross_work = cross_work;
-    extrapolate(grid, s, dt);
+    extrapolate(grid, s, dt, light);
     // The J rate e = D u^{n+1} + (dt / h^2) S p - r, and the pressure's work.
     let n = s.fluid.len();
     s.q[..n].fill(0.0);
@@ -459,13 +468,22 @@ fn reconstruct(s: &mut Scratch, h: f64, ghost: bool) {
 /// in no fluid cell: no pressure holds them, and left alone they would fall
 /// freely and drag the surface particles with them. Each takes the mean
 /// velocity of its fluid neighbours (the eight around it), as fluid codes
-/// extrapolate the velocity into the air band.
-fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64) {
+/// extrapolate the velocity into the air band. Only nodes of cells without
+/// particles (the B-splines' reach) are overwritten.
+fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64, light: f64) {
     let nx = grid.dims[0] as i64;
     let mut changed = false;
     for &n in &grid.inside {
         let n = n as usize;
         if s.fluid_node[n] {
+            continue;
+        }
+        // A corner of a cell that holds material but is counted as air (the
+        // ghost surface's thin surface cells and spray; under the cell
+        // surface every such cell is fluid) carries its own momentum and
+        // keeps u*, in free flight: overwriting it with its neighbours'
+        // velocity is what injected energy at the ghost surface.
+        if grid.mass[n] >= light && s.holds_material_around(grid, n) {
             continue;
         }
         let (mut sum, mut count) = (Vec2::zeros(), 0u32);
@@ -1307,3 +1325,4 @@ pub fn flow_dt(cfl: f64, h: f64, max_speed: f64, gravity: f64, nu: f64) -> f64 {
         cfl * h
     }
 }
+
