@@ -373,7 +373,7 @@ impl Default for ProjectionSettings {
             drift_depth: 0,
             advection: Advection::Shape,
             free_surface: FreeSurface::Cell,
-            light_node_share: 0.25,
+            light_node_share: 0.01,
             tolerance: 1e-8,
             max_iterations: 4000,
             preconditioner: Preconditioner::Mic0,

@@ -130,12 +130,7 @@ impl Explained {
     }
     /// The sum of the parts: dv to round-off (with `rest`, exactly).
     pub fn parts_sum(&self) -> Vec2 {
-        self.impulse
-            + self
-                .nodes
-                .iter()
-                .map(|n| n.own_parts())
-                .sum::<Vec2>()
+        self.impulse + self.nodes.iter().map(|n| n.own_parts()).sum::<Vec2>()
     }
 }
 

@@ -180,12 +180,24 @@ fn under_implicit_pressure_the_pressure_correction_holds_the_column_not_the_wall
         assert!(e.rest.norm() <= 1e-9 * sc, "rest {} of {sc}", e.rest.norm());
         assert!(e.dv.norm() <= 1e-9 * gravity_dv, "dv {}", e.dv);
         assert!((e.external().y + gravity_dv).abs() <= 1e-12 * gravity_dv);
-        assert!(e.hourglass().norm() <= 1e-9 * gravity_dv, "hourglass {}", e.hourglass());
+        assert!(
+            e.hourglass().norm() <= 1e-9 * gravity_dv,
+            "hourglass {}",
+            e.hourglass()
+        );
         if interior(&s, e.particle) {
             interior_seen += 1;
             // (At the floor's nodes the wall takes the weight off the force.)
-            assert!(e.internal().norm() <= 1e-12 * gravity_dv, "internal {}", e.internal());
-            assert!(e.walls().norm() <= 1e-12 * gravity_dv, "walls {}", e.walls());
+            assert!(
+                e.internal().norm() <= 1e-12 * gravity_dv,
+                "internal {}",
+                e.internal()
+            );
+            assert!(
+                e.walls().norm() <= 1e-12 * gravity_dv,
+                "walls {}",
+                e.walls()
+            );
             assert!(
                 (e.pressure_correction().y - gravity_dv).abs() <= 1e-9 * gravity_dv,
                 "pressure correction {} against g dt {gravity_dv}",
@@ -193,7 +205,10 @@ fn under_implicit_pressure_the_pressure_correction_holds_the_column_not_the_wall
             );
         }
     }
-    assert!(interior_seen > 20, "only {interior_seen} interior particles");
+    assert!(
+        interior_seen > 20,
+        "only {interior_seen} interior particles"
+    );
 }
 
 /// A breaking dam under implicit pressure, both free surfaces: the parts
@@ -231,12 +246,22 @@ fn under_implicit_pressure_the_parts_add_up_and_the_step_is_the_step() {
                 e.rest.norm()
             );
             if interior(&b, e.particle) {
-                assert!(e.walls().norm() <= 1e-9 * sc, "{surface:?}: walls {}", e.walls());
+                assert!(
+                    e.walls().norm() <= 1e-9 * sc,
+                    "{surface:?}: walls {}",
+                    e.walls()
+                );
             }
             extrapolated += (e.extrapolation().norm() > 1e-6 * sc) as usize;
             corrected += (e.pressure_correction().norm() > 1e-3 * sc) as usize;
         }
-        assert!(extrapolated > 0, "{surface:?}: no particle reads an extrapolated node");
-        assert!(corrected * 2 > step.explained.len(), "{surface:?}: {corrected} corrected");
+        assert!(
+            extrapolated > 0,
+            "{surface:?}: no particle reads an extrapolated node"
+        );
+        assert!(
+            corrected * 2 > step.explained.len(),
+            "{surface:?}: {corrected} corrected"
+        );
     }
 }

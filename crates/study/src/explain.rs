@@ -688,7 +688,10 @@ fn write_steps(rows: &[StepRow], out: &Path) -> std::io::Result<()> {
         ("share_walls", share(&|s| s.walls)),
         ("share_jump", share(&|s| s.jump)),
         ("share_hourglass", share(&|s| s.hourglass)),
-        ("share_pressure_correction", share(&|s| s.pressure_correction)),
+        (
+            "share_pressure_correction",
+            share(&|s| s.pressure_correction),
+        ),
         ("share_extrapolation", share(&|s| s.extrapolation)),
         ("share_impulse", share(&|s| s.impulse)),
         ("share_rest", share(&|s| s.rest)),

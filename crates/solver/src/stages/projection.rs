@@ -295,7 +295,10 @@ impl Scratch {
         let (i, j) = (i as i64 - PAD as i64, j as i64 - PAD as i64);
         [(-1, -1), (0, -1), (-1, 0), (0, 0)]
             .iter()
-            .any(|&(di, dj)| self.cell_at(i + di, j + dj).is_some_and(|c| self.vol0[c] > 0.0))
+            .any(|&(di, dj)| {
+                self.cell_at(i + di, j + dj)
+                    .is_some_and(|c| self.vol0[c] > 0.0)
+            })
     }
 
     fn divergence_weights(&self, k: usize) -> &[f64; 4] {
@@ -710,10 +713,10 @@ fn assemble(
         let j_cell = s.vol[c] / s.vol0[c];
         // The grid's packing: the corners' mass over a full node's.
         let masses = corners.map(|n| grid.mass[n as usize]);
-        // The packing error where all four corners are full (NaN elsewhere).
-        let measured = masses.iter().all(|&m| m >= full)
-            && (set.drift_depth == 0 || s.deep(c, set.drift_depth as i64));
-        let error = if measured {
+        // The packing error where all four corners are full, reported
+        // there; the correction reads it only `drift_depth` cells inside
+        // the fluid (NaN elsewhere).
+        let error = if masses.iter().all(|&m| m >= full) {
             let packing = masses.iter().sum::<f64>() / (4.0 * full_mass);
             let error = if incompressible {
                 packing - 1.0
@@ -722,7 +725,11 @@ fn assemble(
             };
             error_sum += error;
             error_cells += 1;
-            error
+            if set.drift_depth == 0 || s.deep(c, set.drift_depth as i64) {
+                error
+            } else {
+                f64::NAN
+            }
         } else {
             f64::NAN
         };
@@ -1325,4 +1332,3 @@ pub fn flow_dt(cfl: f64, h: f64, max_speed: f64, gravity: f64, nu: f64) -> f64 {
         cfl * h
     }
 }
-
