@@ -366,7 +366,7 @@ impl Default for ProjectionSettings {
     fn default() -> Self {
         ProjectionSettings {
             hourglass: 0.05,
-            checkerboard: 1.0,
+            checkerboard: 1.5,
             drift: 0.3,
             drift_correction: DriftCorrection::Position,
             drift_tolerance: 1e-6,
