@@ -268,19 +268,7 @@ impl Mechanisms {
             let interpolated: Vec2 = e.nodes.iter().map(|n| n.interpolated).sum();
             drift_sum += (e.v_before - interpolated).norm();
             speed_sum += e.v_before.norm();
-            let size = e.dv.norm()
-                + e.nodes
-                    .iter()
-                    .map(|n| {
-                        n.internal.norm()
-                            + n.external.norm()
-                            + n.walls.norm()
-                            + n.jump.norm()
-                            + n.hourglass.norm()
-                            + n.pressure_correction.norm()
-                            + n.extrapolation.norm()
-                    })
-                    .sum::<f64>();
+            let size = e.dv.norm() + e.nodes.iter().map(|n| n.parts_size()).sum::<f64>();
             if size > 0.0 {
                 out.rest_max = out.rest_max.max(e.rest.norm() / size);
             }

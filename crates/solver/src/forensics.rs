@@ -73,6 +73,22 @@ impl NodePart {
             + self.pressure_correction
             + self.extrapolation
     }
+
+    /// The sum of its parts' sizes (what a closure's round-off is measured against).
+    pub fn parts_size(&self) -> f64 {
+        [
+            self.internal,
+            self.external,
+            self.walls,
+            self.jump,
+            self.hourglass,
+            self.pressure_correction,
+            self.extrapolation,
+        ]
+        .iter()
+        .map(|v| v.norm())
+        .sum()
+    }
 }
 
 /// What one stress-carrying particle gave an explained particle through

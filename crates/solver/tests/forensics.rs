@@ -37,11 +37,7 @@ fn methods() -> Vec<(String, Method)> {
 
 /// The magnitude round-off is measured against: every part's size.
 fn scale(e: &Explained) -> f64 {
-    e.dv.norm()
-        + e.nodes
-            .iter()
-            .map(|n| n.internal.norm() + n.external.norm() + n.walls.norm() + n.jump.norm())
-            .sum::<f64>()
+    e.dv.norm() + e.nodes.iter().map(|n| n.parts_size()).sum::<f64>()
 }
 
 /// Away from the walls: every stencil node is an ordinary inside node.
@@ -150,15 +146,6 @@ fn incompressible() -> Material {
     }
 }
 
-/// Every part's size, the projection's parts included.
-fn implicit_scale(e: &Explained) -> f64 {
-    scale(e)
-        + e.nodes
-            .iter()
-            .map(|n| n.hourglass.norm() + n.pressure_correction.norm() + n.extrapolation.norm())
-            .sum::<f64>()
-}
-
 /// Under implicit pressure the pressure is no nodal force: in an
 /// incompressible column at rest (linear shapes, whose projection balances
 /// the weight exactly) each particle's gravity is cancelled by the pressure
@@ -176,7 +163,7 @@ fn under_implicit_pressure_the_pressure_correction_holds_the_column_not_the_wall
     let gravity_dv = 9.81 * step.dt;
     let mut interior_seen = 0;
     for e in &step.explained {
-        let sc = implicit_scale(e);
+        let sc = scale(e);
         assert!(e.rest.norm() <= 1e-9 * sc, "rest {} of {sc}", e.rest.norm());
         assert!(e.dv.norm() <= 1e-9 * gravity_dv, "dv {}", e.dv);
         assert!((e.external().y + gravity_dv).abs() <= 1e-12 * gravity_dv);
@@ -237,7 +224,7 @@ fn under_implicit_pressure_the_parts_add_up_and_the_step_is_the_step() {
         assert_eq!(a.state_hash(), b.state_hash(), "{surface:?}");
         let (mut extrapolated, mut corrected) = (0, 0);
         for e in &step.explained {
-            let sc = implicit_scale(e);
+            let sc = scale(e);
             assert!(sc > 0.0);
             assert!(
                 e.rest.norm() <= 1e-9 * sc,
