@@ -471,8 +471,8 @@ fn reconstruct(s: &mut Scratch, h: f64, ghost: bool) {
 /// in no fluid cell: no pressure holds them, and left alone they would fall
 /// freely and drag the surface particles with them. Each takes the mean
 /// velocity of its fluid neighbours (the eight around it), as fluid codes
-/// extrapolate the velocity into the air band. Only nodes of cells without
-/// particles (the B-splines' reach) are overwritten.
+/// extrapolate the velocity into the air band. A node of a cell that holds
+/// particles and at least `light` of mass keeps its own u*.
 fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64, light: f64) {
     let nx = grid.dims[0] as i64;
     let mut changed = false;
@@ -485,7 +485,7 @@ fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64, light: f64) {
         // ghost surface's thin surface cells and spray; under the cell
         // surface every such cell is fluid) carries its own momentum and
         // keeps u*, in free flight: overwriting it with its neighbours'
-        // velocity is what injected energy at the ghost surface.
+        // velocity drove the ghost surface's injections (session 38).
         if grid.mass[n] >= light && s.holds_material_around(grid, n) {
             continue;
         }
