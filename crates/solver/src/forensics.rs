@@ -37,8 +37,9 @@ pub struct NodePart {
     /// Folded nodal mass, and its share of a full node rho0 h^2.
     pub mass: f64,
     pub mass_share: f64,
-    /// Folded nodal force (internal + gravity) and the node's velocity
-    /// change as G2P reads it.
+    /// Folded nodal force (internal + gravity; under the pressure-implicit
+    /// formulation plus the pressure's, m du / dt of its correction) and
+    /// the node's velocity change as G2P reads it.
     pub force: Vec2,
     pub dv_node: Vec2,
     /// N dt (f / m - g): the internal force's part of dv_p.
@@ -271,13 +272,12 @@ impl Solver {
                 let n = node as usize;
                 let m = grid.mass[n];
                 let dv_node = grid.vel_new[n] - grid.vel[n];
-                let [hourglass, pressure_correction, extrapolation] = if implicit && m > 0.0 {
-                    self.projection
-                        .node_changes(grid, dt, n)
-                        .map(|change| w * change)
+                let changes = if implicit && m > 0.0 {
+                    self.projection.node_changes(grid, dt, n)
                 } else {
                     [Vec2::zeros(); 3]
                 };
+                let [hourglass, pressure_correction, extrapolation] = changes.map(|c| w * c);
                 let projected = hourglass + pressure_correction + extrapolation;
                 let (internal, external, walls) = if m > 0.0 {
                     let by_force = dt * grid.force[n] / m;
@@ -295,7 +295,8 @@ impl Solver {
                     weight: w,
                     mass: m,
                     mass_share: m / full,
-                    force: grid.force[n],
+                    // With the pressure's (the momentum its correction gave the node).
+                    force: grid.force[n] + m * changes[1] / dt,
                     dv_node,
                     internal,
                     external,

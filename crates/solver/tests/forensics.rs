@@ -190,6 +190,14 @@ fn under_implicit_pressure_the_pressure_correction_holds_the_column_not_the_wall
                 "pressure correction {} against g dt {gravity_dv}",
                 e.pressure_correction()
             );
+            // The nodal force the picture draws holds the pressure's: it balances.
+            for n in &e.nodes {
+                assert!(
+                    n.force.norm() <= 1e-8 * n.mass * 9.81,
+                    "node force {}",
+                    n.force
+                );
+            }
         }
     }
     assert!(

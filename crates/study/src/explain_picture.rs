@@ -1,7 +1,8 @@
 //! `kick explain`'s picture: the event's cells at the onset window's start
 //! and at the event's first step, with the event particles' stencil nodes
 //! (disc area by mass share, red below the small-mass share), their net
-//! nodal forces (internal + gravity, scaled to the largest) as arrows, and
+//! nodal forces (internal + gravity, and the pressure under the
+//! pressure-implicit formulation; scaled to the largest) as arrows, and
 //! the particles whose stress reached them coloured by pressure; the
 //! event's particles ringed in black.
 
