@@ -12,8 +12,9 @@
 //! may overlap.
 //!
 //! - M1, small-mass node: every nodal part but gravity (internal force,
-//!   walls, jump and the projection's parts) of the nodes lighter than `SMALL_NODE_SHARE` of a full node rho0 h^2 (gravity is
-//!   the same at every node and is left out).
+//!   walls, jump and the projection's parts) of the nodes lighter than
+//!   `SMALL_NODE_SHARE` of a full node rho0 h^2 (gravity is the same at
+//!   every node and is left out).
 //! - M2, cell crossing: the stress parts of the particles whose cell at
 //!   this step's P2G is not their cell at the previous step's (their
 //!   gradients jumped; linear shapes jump, uGIMP's do not).
