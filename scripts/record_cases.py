@@ -5,6 +5,7 @@ with a full event store takes about 8 core-hours, more than one sitting).
 
     python3 scripts/record_cases.py STUDY --record CSV --out RUNDIR [--kick PATH]
         [--jobs 2] [--set KEY=VALUE ...] [--shard I/N] [--until HH:MM]
+        [--only REGEX]
 
 Cases already in CSV are skipped; each case that finishes appends its row at
 once (a run stopped half way loses only the cases under way). A row holds the
@@ -15,13 +16,16 @@ takes), the events the store dropped, and the late checkerboard measures
 hydrostatic departure. A record written by an older version of this script
 keeps its columns. `--until`
 starts no case after that time of day (UTC). `--shard I/N` takes the cases
-at positions I, I + N, ... of `kick list STUDY`.
+at positions I, I + N, ... of `kick list STUDY`; `--only REGEX` the cases
+whose name it matches (two processes on one record must not share a case:
+each reads the record once, when it starts).
 """
 import argparse
 import csv
 import datetime
 import json
 import os
+import re
 import subprocess
 import threading
 from concurrent.futures import ThreadPoolExecutor
@@ -70,6 +74,7 @@ def main():
     ap.add_argument("--set", action="append", default=[])
     ap.add_argument("--shard")
     ap.add_argument("--until")
+    ap.add_argument("--only", help="regular expression: run only the cases it matches (searched in the name)")
     a = ap.parse_args()
 
     listed = subprocess.run([a.kick, "list", a.study], check=True, capture_output=True, text=True)
@@ -77,6 +82,8 @@ def main():
     if a.shard:
         i, n = (int(v) for v in a.shard.split("/"))
         cases = cases[i::n]
+    if a.only:
+        cases = [c for c in cases if re.search(a.only, c)]
     done = set()
     if os.path.exists(a.record):
         done = {r["case"] for r in csv.DictReader(open(a.record))}
