@@ -2,7 +2,7 @@
 //! characteristic function of half-width `l` (cell units, l <= 1/2), and the
 //! same convolution for any width (cpGIMP, whose particles stretch).
 
-#[inline]
+#[inline(always)]
 pub fn kernel(r: f64, l: f64) -> (f64, f64) {
     let a = r.abs();
     let s = r.signum();

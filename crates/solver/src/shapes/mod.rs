@@ -167,6 +167,13 @@ impl Shape {
                 (w[0], w[1], w[2]) = (0.5 * d0 * d0, 0.75 - d1 * d1, 0.5 * d2 * d2);
                 (dw[0], dw[1], dw[2]) = (-d0, -2.0 * d1, d2);
             }
+            // uGIMP's half-width is fixed: call its kernel directly (the
+            // general arm's dispatch per node kept it out of line).
+            ShapeKind::Gimp if W == 3 => {
+                for k in 0..3 {
+                    (w[k], dw[k]) = gimp::kernel(f - k as f64, self.gimp_half);
+                }
+            }
             _ => {
                 for k in 0..W.min(self.width()) {
                     (w[k], dw[k]) = self.kernel_with_half(f - k as f64, half);
