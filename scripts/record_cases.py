@@ -96,6 +96,9 @@ def main():
         hh, mm = (int(v) for v in a.until.split(":"))
         now = datetime.datetime.now(datetime.timezone.utc)
         deadline = now.replace(hour=hh, minute=mm, second=0, microsecond=0)
+        if deadline <= now:
+            # A time of day already past means tomorrow's (a sitting across midnight).
+            deadline += datetime.timedelta(days=1)
 
     def run(case):
         if deadline and datetime.datetime.now(datetime.timezone.utc) >= deadline:
