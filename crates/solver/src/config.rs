@@ -302,6 +302,9 @@ pub struct ProjectionSettings {
     /// Where the free surface's p = 0 sits: at the air cells' centres, or
     /// inside the cell where the grid's fluid fraction crosses a half.
     pub free_surface: FreeSurface,
+    /// What the nodes beyond the fluid cells (which take their fluid
+    /// neighbours' velocity after the solve) bring to it.
+    pub air_nodes: AirNodes,
     /// A node lighter than this share of rho0 h^2 takes that mass in the
     /// pressure operator and its velocity correction (free-surface nodes).
     pub light_node_share: f64,
@@ -351,6 +354,20 @@ pub enum FreeSurface {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+pub enum AirNodes {
+    /// Their velocity is a kinematic constraint (the mean of their fluid
+    /// neighbours'), so their mass and u* momentum join those neighbours'
+    /// before the solve, in equal shares: the weight of the material the
+    /// B-spline carries beyond the fluid cells rests on the pressure.
+    Slaved,
+    /// Their u* is overwritten after the solve: their weight is lost
+    /// (the surface's restoring force is short by the share the stencils
+    /// carry beyond the fluid cells).
+    Overwritten,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Preconditioner {
     /// The diagonal.
     Jacobi,
@@ -373,6 +390,7 @@ impl Default for ProjectionSettings {
             drift_depth: 0,
             advection: Advection::Shape,
             free_surface: FreeSurface::Cell,
+            air_nodes: AirNodes::Slaved,
             light_node_share: 0.01,
             tolerance: 1e-8,
             max_iterations: 4000,

@@ -25,7 +25,8 @@
 //! is in the checkpoint).
 
 use crate::config::{
-    Advection, DriftCorrection, FreeSurface, Material, Preconditioner, ProjectionSettings,
+    Advection, AirNodes, DriftCorrection, FreeSurface, Material, Preconditioner,
+    ProjectionSettings,
 };
 use crate::grid::{Grid, FULL_NODE_SHARE, PAD};
 use crate::par::{Pieces, CHUNK};
@@ -142,14 +143,21 @@ pub struct Scratch {
     /// The nodes around which all four cells are fluid: their unknowns in
     /// `CORNERS` order of the node's cells (SW, SE, NW, NE).
     quads: Vec<[u32; 4]>,
-    /// Per node: 1 / M' (folded mass, light nodes floored).
+    /// Per node: 1 / M' (folded mass, the slaved air nodes' shares added,
+    /// light nodes floored).
     inv_mass: Vec<f64>,
+    /// Per node: the folded mass with the slaved air nodes' shares, and
+    /// the u* momentum those shares bring.
+    operator_mass: Vec<f64>,
+    slaved_momentum: Vec<Vec2>,
     /// Per node: a corner of a fluid cell (else it takes the velocity of
     /// its fluid neighbours).
     fluid_node: Vec<bool>,
     /// Per node: G p, then M^-1 G p.
     nodal: Vec<Vec2>,
-    /// Per node: u* as the grid update left it, and after the hourglass control.
+    /// Per node: u* as the grid update left it, after the air nodes'
+    /// momentum joined (`AirNodes::Slaved`), and after the hourglass control.
+    before_merge: Vec<Vec2>,
     before_hourglass: Vec<Vec2>,
     before_projection: Vec<Vec2>,
     /// Conjugate-gradient vectors, one entry per unknown.
@@ -200,8 +208,11 @@ impl Scratch {
             shift: Vec::with_capacity(n_cells),
             quads: Vec::with_capacity(n_cells),
             inv_mass: vec![0.0; n_nodes],
+            operator_mass: vec![0.0; n_nodes],
+            slaved_momentum: vec![Vec2::zeros(); n_nodes],
             fluid_node: vec![false; n_nodes],
             nodal: vec![Vec2::zeros(); n_nodes],
+            before_merge: vec![Vec2::zeros(); n_nodes],
             before_hourglass: vec![Vec2::zeros(); n_nodes],
             before_projection: vec![Vec2::zeros(); n_nodes],
             x: Vec::with_capacity(n_cells),
@@ -225,11 +236,12 @@ impl Scratch {
     /// the force forensics: the hourglass control's change of u*, the
     /// pressure correction dt M'^-1 G p, and the extrapolation's (a node
     /// outside the fluid cells set to its fluid neighbours' mean, ghosts
-    /// filled from it). Valid between `project` and the next step.
+    /// filled from it; a fluid node's share of the air nodes' momentum).
+    /// Valid between `project` and the next step.
     pub fn node_changes(&self, grid: &Grid, dt: f64, n: usize) -> [Vec2; 3] {
         let hourglass = self.before_projection[n] - self.before_hourglass[n];
         let pressure = dt * self.nodal[n];
-        let extrapolation = grid.vel_new[n] - self.before_projection[n] - pressure;
+        let extrapolation = grid.vel_new[n] - self.before_merge[n] - hourglass - pressure;
         [hourglass, pressure, extrapolation]
     }
 
@@ -344,11 +356,19 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
     let h = grid.h;
     let full_mass = mat.rho0 * h * h;
     mark_fluid(ps, grid, s, set.free_surface, full_mass);
-    // 1 / M' on every active node (ghosts hold their partner's mass).
     let light = set.light_node_share * full_mass;
     for &n in &grid.active {
         let n = n as usize;
-        s.inv_mass[n] = 1.0 / grid.mass[n].max(light);
+        s.operator_mass[n] = grid.mass[n];
+        s.before_merge[n] = grid.vel_new[n];
+    }
+    if set.air_nodes == AirNodes::Slaved {
+        slave_air_nodes(grid, s, light);
+    }
+    // 1 / M' on every active node (ghosts hold their partner's mass).
+    for &n in &grid.active {
+        let n = n as usize;
+        s.inv_mass[n] = 1.0 / s.operator_mass[n].max(light);
     }
     s.stats = SolveStats {
         fluid_cells: s.fluid.len(),
@@ -364,7 +384,7 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
     for &n in &grid.active {
         let n = n as usize;
         s.before_projection[n] = grid.vel_new[n];
-        grid.accel[n] += (s.before_projection[n] - s.before_hourglass[n]) / dt;
+        grid.accel[n] += (s.before_projection[n] - s.before_merge[n]) / dt;
     }
     assemble(grid, s, mat, set, dt, full_mass);
     solve(
@@ -411,13 +431,16 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
     // over gravity and viscosity, the hourglass control and the projection.
     // (Against u* itself, the projection would be booked the kinetic energy
     // of the weight it cancels, 1/2 M (g dt)^2 a step for water at rest.)
+    // The air nodes' momentum joining their fluid neighbours' is booked
+    // with the projection (it is the extrapolation's constraint).
     let (mut work_hourglass, mut work_projection) = (0.0, 0.0);
     for &n in &grid.active {
         let n = n as usize;
         let m = grid.mass_raw[n];
         let mean = 0.5 * (grid.vel[n] + grid.vel_new[n]);
-        work_hourglass += m * (s.before_projection[n] - s.before_hourglass[n]).dot(&mean);
-        work_projection += m * (grid.vel_new[n] - s.before_projection[n]).dot(&mean);
+        let hourglass = s.before_projection[n] - s.before_hourglass[n];
+        work_hourglass += m * hourglass.dot(&mean);
+        work_projection += m * (grid.vel_new[n] - s.before_merge[n] - hourglass).dot(&mean);
     }
     s.stats.dissipated_hourglass = -work_hourglass;
     // What the pressure's work did not put into stored energy.
@@ -467,37 +490,91 @@ fn reconstruct(s: &mut Scratch, h: f64, ghost: bool) {
     }
 }
 
+/// Whether in-box node `n` is an air node: in no fluid cell, so that it
+/// takes its fluid neighbours' velocity after the solve (`extrapolate`).
+/// A corner of a cell that holds material but is counted as air (the
+/// ghost surface's thin surface cells and spray; under the cell surface
+/// every such cell is fluid) carries its own momentum and keeps u*, in
+/// free flight: overwriting it with its neighbours' velocity drove the
+/// ghost surface's injections (session 38).
+fn is_air_node(grid: &Grid, s: &Scratch, n: usize, light: f64) -> bool {
+    !s.fluid_node[n] && !(grid.mass[n] >= light && s.holds_material_around(grid, n))
+}
+
+/// The padded nodes among the eight around in-box node `n` whose owners
+/// are fluid nodes.
+fn fluid_neighbours<'a>(grid: &'a Grid, s: &'a Scratch, n: usize) -> impl Iterator<Item = usize> + 'a {
+    let nx = grid.dims[0] as i64;
+    (-1..=1i64)
+        .flat_map(move |dj| (-1..=1i64).map(move |di| (di, dj)))
+        .filter(|&d| d != (0, 0))
+        .map(move |(di, dj)| (n as i64 + di + dj * nx) as usize)
+        .filter(move |&m| s.fluid_node[owner(grid, m)])
+}
+
+/// The air nodes' velocity is a constraint, v = the mean of their fluid
+/// neighbours' (`extrapolate`); as for any node slaved to others, each of
+/// those neighbours takes an equal share of its mass and of its u*
+/// momentum (gravity's impulse included) before the solve. Without it the
+/// weight of the material the B-spline carries above the top fluid cells
+/// is lost when their velocity is overwritten, and a wave's restoring
+/// force is short by the share of the mass it lifts that lands there.
+fn slave_air_nodes(grid: &mut Grid, s: &mut Scratch, light: f64) {
+    for &n in &grid.active {
+        s.slaved_momentum[n as usize] = Vec2::zeros();
+    }
+    for &n in &grid.inside {
+        let n = n as usize;
+        if !is_air_node(grid, s, n, light) {
+            continue;
+        }
+        let (mut masters, mut count) = ([0usize; 8], 0);
+        for m in fluid_neighbours(grid, s, n) {
+            masters[count] = owner(grid, m);
+            count += 1;
+        }
+        if count == 0 {
+            continue;
+        }
+        let share = grid.mass[n] / count as f64;
+        let momentum = share * grid.vel_new[n];
+        for &o in &masters[..count] {
+            s.operator_mass[o] += share;
+            s.slaved_momentum[o] += momentum;
+        }
+    }
+    for &n in &grid.inside {
+        let n = n as usize;
+        if !s.fluid_node[n] || s.operator_mass[n] == grid.mass[n] {
+            continue;
+        }
+        let v = (grid.mass[n] * grid.vel_new[n] + s.slaved_momentum[n]) / s.operator_mass[n];
+        grid.vel_new[n] = grid.project_walls(n, v);
+    }
+    let mut vel = std::mem::take(&mut grid.vel_new);
+    grid.fill(&mut vel);
+    grid.vel_new = vel;
+    let mut mass = std::mem::take(&mut s.operator_mass);
+    grid.fill(&mut mass);
+    s.operator_mass = mass;
+}
+
 /// The nodes a particle reaches beyond its cell's corners (B-splines) are
 /// in no fluid cell: no pressure holds them, and left alone they would fall
 /// freely and drag the surface particles with them. Each takes the mean
 /// velocity of its fluid neighbours (the eight around it), as fluid codes
-/// extrapolate the velocity into the air band. A node of a cell that holds
-/// particles and at least `light` of mass keeps its own u*.
+/// extrapolate the velocity into the air band (`is_air_node` says which).
 fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64, light: f64) {
-    let nx = grid.dims[0] as i64;
     let mut changed = false;
     for &n in &grid.inside {
         let n = n as usize;
-        if s.fluid_node[n] {
-            continue;
-        }
-        // A corner of a cell that holds material but is counted as air (the
-        // ghost surface's thin surface cells and spray; under the cell
-        // surface every such cell is fluid) carries its own momentum and
-        // keeps u*, in free flight: overwriting it with its neighbours'
-        // velocity drove the ghost surface's injections (session 38).
-        if grid.mass[n] >= light && s.holds_material_around(grid, n) {
+        if !is_air_node(grid, s, n, light) {
             continue;
         }
         let (mut sum, mut count) = (Vec2::zeros(), 0u32);
-        for dj in -1..=1i64 {
-            for di in -1..=1i64 {
-                let m = (n as i64 + di + dj * nx) as usize;
-                if (di, dj) != (0, 0) && s.fluid_node[owner(grid, m)] {
-                    sum += grid.vel_new[m];
-                    count += 1;
-                }
-            }
+        for m in fluid_neighbours(grid, s, n) {
+            sum += grid.vel_new[m];
+            count += 1;
         }
         if count > 0 {
             let v = grid.project_walls(n, sum / count as f64);
