@@ -186,6 +186,46 @@ impl Grid {
             )
     }
 
+    /// The in-box node whose value padded node `node` holds (itself, or its
+    /// partner across a periodic edge or a wall), and `v` as `node` holds
+    /// it given the partner's value: mirrored across each wall `node` lies
+    /// beyond (every component reversed for a no-slip wall), unchanged
+    /// across a periodic edge. The image is its own inverse, so it also
+    /// carries a value at `node` onto the partner.
+    pub fn partner_image<T: Mirrored>(&self, node: usize, mut v: T) -> (usize, T) {
+        let (mut i, mut j) = self.coords(node);
+        for axis in 0..2 {
+            let k = if axis == 0 { &mut i } else { &mut j };
+            if let NodeRole::Ghost { partner, flip } = self.roles[axis][*k] {
+                if flip {
+                    v = if self.no_slip_at(axis, *k) {
+                        v.point_mirror()
+                    } else {
+                        v.mirror(axis)
+                    };
+                }
+                *k = partner;
+            }
+        }
+        (self.index(i, j), v)
+    }
+
+    /// The share of a folded nodal value that is the node's own: 1/2 per
+    /// wall the node lies on (folding adds its mirror image, the other
+    /// half), 1 elsewhere. A node's kinetic energy in the box is
+    /// 1/2 share m |v|^2 with m its folded mass.
+    pub fn own_share(&self, node: usize) -> f64 {
+        let (i, j) = self.coords(node);
+        let half = |axis: usize, k: usize| {
+            if self.roles[axis][k] == NodeRole::Wall {
+                0.5
+            } else {
+                1.0
+            }
+        };
+        half(0, i) * half(1, j)
+    }
+
     /// `v` with its wall-normal components set to zero at `node`: the
     /// symmetry-plane condition that folding imposes on a wall node's
     /// momentum and force (periodic axes have no wall nodes).

@@ -89,12 +89,12 @@ pub struct SolveStats {
     pub packing_error: f64,
     /// Conjugate-gradient iterations of the drift correction by position.
     pub shift_iterations: u32,
-    /// The change of the nodes' kinetic energy 1/2 sum m |u|^2 (P2G
-    /// masses) that the pressure correction du made, before the velocities
-    /// beyond the fluid are extrapolated (J/m): sum m du . u^{n+1} - 1/2
-    /// sum m |du|^2.
+    /// The change of the nodes' kinetic energy 1/2 sum M' |u|^2 (the
+    /// operator's masses: P2G's, the slaved air nodes' shares in) that the
+    /// pressure correction du made, before the velocities beyond the fluid
+    /// are extrapolated (J/m): sum M' du . u^{n+1} - 1/2 sum M' |du|^2.
     pub kinetic_change: f64,
-    /// Its first part, sum m du . u^{n+1} (J/m): zero to the solve's
+    /// Its first part, sum M' du . u^{n+1} (J/m): zero to the solve's
     /// residual for a projection orthogonal in the nodal masses (the cell
     /// and `ghost_orthogonal` surfaces, without the checkerboard control,
     /// whose exchange lets D u depart from 0, and with no light node
@@ -146,9 +146,10 @@ pub struct Scratch {
     /// Per node: 1 / M' (folded mass, the slaved air nodes' shares added,
     /// light nodes floored).
     inv_mass: Vec<f64>,
-    /// Per node: the folded mass with the slaved air nodes' shares, and
-    /// the u* momentum those shares bring.
+    /// Per node: the folded mass with the slaved air nodes' shares; those
+    /// shares and the u* momentum they bring, in the box's own masses.
     operator_mass: Vec<f64>,
+    slaved_mass: Vec<f64>,
     slaved_momentum: Vec<Vec2>,
     /// Per node: a corner of a fluid cell (else it takes the velocity of
     /// its fluid neighbours).
@@ -209,6 +210,7 @@ impl Scratch {
             quads: Vec::with_capacity(n_cells),
             inv_mass: vec![0.0; n_nodes],
             operator_mass: vec![0.0; n_nodes],
+            slaved_mass: vec![0.0; n_nodes],
             slaved_momentum: vec![Vec2::zeros(); n_nodes],
             fluid_node: vec![false; n_nodes],
             nodal: vec![Vec2::zeros(); n_nodes],
@@ -400,20 +402,31 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
         s.pressure[c as usize] = s.x[k];
     }
     apply_g(grid, s, |s, k| s.x[k]);
-    let (mut kinetic_change, mut cross_work) = (0.0, 0.0);
     for &n in &grid.active {
         let n = n as usize;
         let a = s.nodal[n];
         grid.vel_new[n] += dt * a;
         grid.accel[n] += a;
-        let (m, du) = (grid.mass_raw[n], dt * a);
+    }
+    // In the masses the solve used (the slaved air nodes' shares in), over
+    // the padded nodes as P2G left them (the fold's images included).
+    let (mut kinetic_change, mut cross_work) = (0.0, 0.0);
+    for &n in &grid.active {
+        let n = n as usize;
+        let raw = grid.mass_raw[n];
+        let m = if grid.mass[n] > 0.0 {
+            raw + raw * (s.operator_mass[n] - grid.mass[n]) / grid.mass[n]
+        } else {
+            0.0
+        };
+        let du = dt * s.nodal[n];
         let cross = m * du.dot(&grid.vel_new[n]);
         cross_work += cross;
         kinetic_change += cross - 0.5 * m * du.norm_squared();
     }
     s.stats.kinetic_change = kinetic_change;
     s.stats.cross_work = cross_work;
-    extrapolate(grid, s, dt, light);
+    extrapolate(grid, s, dt, light, set.air_nodes == AirNodes::Slaved);
     // The J rate e = D u^{n+1} + (dt / h^2) S p - r, and the pressure's work.
     let n = s.fluid.len();
     s.q[..n].fill(0.0);
@@ -501,26 +514,47 @@ fn is_air_node(grid: &Grid, s: &Scratch, n: usize, light: f64) -> bool {
     !s.fluid_node[n] && !(grid.mass[n] >= light && s.holds_material_around(grid, n))
 }
 
-/// The padded nodes among the eight around in-box node `n` whose owners
-/// are fluid nodes.
-fn fluid_neighbours<'a>(grid: &'a Grid, s: &'a Scratch, n: usize) -> impl Iterator<Item = usize> + 'a {
+/// The fluid nodes an air node's velocity is the mean of: among the eight
+/// padded nodes around in-box node `n`, each whose in-box node is a fluid
+/// node, as (padded node, in-box node). Under `mirrored` a node beyond a
+/// wall counts as its mirror partner (the wall's symmetry, as the fold
+/// has it); else only across a periodic edge (the step to session 39).
+fn masters(grid: &Grid, s: &Scratch, n: usize, mirrored: bool) -> ([(usize, usize); 8], usize) {
     let nx = grid.dims[0] as i64;
-    (-1..=1i64)
-        .flat_map(move |dj| (-1..=1i64).map(move |di| (di, dj)))
-        .filter(|&d| d != (0, 0))
-        .map(move |(di, dj)| (n as i64 + di + dj * nx) as usize)
-        .filter(move |&m| s.fluid_node[owner(grid, m)])
+    let (mut found, mut count) = ([(0, 0); 8], 0);
+    for dj in -1..=1i64 {
+        for di in -1..=1i64 {
+            if (di, dj) == (0, 0) {
+                continue;
+            }
+            let m = (n as i64 + di + dj * nx) as usize;
+            let o = if mirrored {
+                grid.partner_image(m, 0.0).0
+            } else {
+                owner(grid, m)
+            };
+            if s.fluid_node[o] {
+                found[count] = (m, o);
+                count += 1;
+            }
+        }
+    }
+    (found, count)
 }
 
 /// The air nodes' velocity is a constraint, v = the mean of their fluid
 /// neighbours' (`extrapolate`); as for any node slaved to others, each of
 /// those neighbours takes an equal share of its mass and of its u*
-/// momentum (gravity's impulse included) before the solve. Without it the
-/// weight of the material the B-spline carries above the top fluid cells
-/// is lost when their velocity is overwritten, and a wave's restoring
-/// force is short by the share of the mass it lifts that lands there.
+/// momentum (gravity's impulse included) before the solve, lumped. Without
+/// it the weight of the material the B-spline carries above the top fluid
+/// cells is lost when their velocity is overwritten, and a wave's
+/// restoring force is short by the share of the mass it lifts that lands
+/// there. The shares are taken in the box's own masses (a wall node owns
+/// half its folded mass) and a neighbour beyond a wall is its partner's
+/// image, so that a flat layer gives every surface node the same share.
 fn slave_air_nodes(grid: &mut Grid, s: &mut Scratch, light: f64) {
     for &n in &grid.active {
+        s.slaved_mass[n as usize] = 0.0;
         s.slaved_momentum[n as usize] = Vec2::zeros();
     }
     for &n in &grid.inside {
@@ -528,27 +562,27 @@ fn slave_air_nodes(grid: &mut Grid, s: &mut Scratch, light: f64) {
         if !is_air_node(grid, s, n, light) {
             continue;
         }
-        let (mut masters, mut count) = ([0usize; 8], 0);
-        for m in fluid_neighbours(grid, s, n) {
-            masters[count] = owner(grid, m);
-            count += 1;
-        }
+        let (found, count) = masters(grid, s, n, true);
         if count == 0 {
             continue;
         }
-        let share = grid.mass[n] / count as f64;
-        let momentum = share * grid.vel_new[n];
-        for &o in &masters[..count] {
-            s.operator_mass[o] += share;
-            s.slaved_momentum[o] += momentum;
+        let mass = grid.own_share(n) * grid.mass[n] / count as f64;
+        let momentum = mass * grid.vel_new[n];
+        for &(m, o) in &found[..count] {
+            s.slaved_mass[o] += mass;
+            s.slaved_momentum[o] += grid.partner_image(m, momentum).1;
         }
     }
     for &n in &grid.inside {
         let n = n as usize;
-        if !s.fluid_node[n] || s.operator_mass[n] == grid.mass[n] {
+        if s.slaved_mass[n] == 0.0 {
             continue;
         }
-        let v = (grid.mass[n] * grid.vel_new[n] + s.slaved_momentum[n]) / s.operator_mass[n];
+        // Back to folded values.
+        let share = grid.own_share(n);
+        let mass = grid.mass[n] + s.slaved_mass[n] / share;
+        let v = (grid.mass[n] * grid.vel_new[n] + s.slaved_momentum[n] / share) / mass;
+        s.operator_mass[n] = mass;
         grid.vel_new[n] = grid.project_walls(n, v);
     }
     let mut vel = std::mem::take(&mut grid.vel_new);
@@ -562,19 +596,23 @@ fn slave_air_nodes(grid: &mut Grid, s: &mut Scratch, light: f64) {
 /// The nodes a particle reaches beyond its cell's corners (B-splines) are
 /// in no fluid cell: no pressure holds them, and left alone they would fall
 /// freely and drag the surface particles with them. Each takes the mean
-/// velocity of its fluid neighbours (the eight around it), as fluid codes
+/// velocity of its fluid neighbours (`masters`), as fluid codes
 /// extrapolate the velocity into the air band (`is_air_node` says which).
-fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64, light: f64) {
+fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64, light: f64, mirrored: bool) {
     let mut changed = false;
     for &n in &grid.inside {
         let n = n as usize;
         if !is_air_node(grid, s, n, light) {
             continue;
         }
-        let (mut sum, mut count) = (Vec2::zeros(), 0u32);
-        for m in fluid_neighbours(grid, s, n) {
-            sum += grid.vel_new[m];
-            count += 1;
+        let (found, count) = masters(grid, s, n, mirrored);
+        let mut sum = Vec2::zeros();
+        for &(m, o) in &found[..count] {
+            sum += if mirrored {
+                grid.partner_image(m, grid.vel_new[o]).1
+            } else {
+                grid.vel_new[m]
+            };
         }
         if count > 0 {
             let v = grid.project_walls(n, sum / count as f64);
