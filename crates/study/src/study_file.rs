@@ -1106,6 +1106,21 @@ mod tests {
             toml::from_str::<solver::Method>("[projection]\nfree_surface = \"level_set\"\n")
                 .is_err()
         );
+        assert_eq!(
+            solver::Method::default().projection.air_nodes,
+            solver::AirNodes::Slaved
+        );
+        for (text, air_nodes) in [
+            ("slaved", solver::AirNodes::Slaved),
+            ("overwritten", solver::AirNodes::Overwritten),
+        ] {
+            let method: solver::Method =
+                toml::from_str(&format!("[projection]\nair_nodes = \"{text}\"\n")).unwrap();
+            assert_eq!(method.projection.air_nodes, air_nodes);
+        }
+        assert!(
+            toml::from_str::<solver::Method>("[projection]\nair_nodes = \"dropped\"\n").is_err()
+        );
         for text in ["K = \"inf\"", "K = inf"] {
             let m: solver::Material = toml::from_str(text).unwrap();
             assert_eq!(m.k, f64::INFINITY, "{text}");

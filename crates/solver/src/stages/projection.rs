@@ -25,8 +25,7 @@
 //! is in the checkpoint).
 
 use crate::config::{
-    Advection, AirNodes, DriftCorrection, FreeSurface, Material, Preconditioner,
-    ProjectionSettings,
+    Advection, AirNodes, DriftCorrection, FreeSurface, Material, Preconditioner, ProjectionSettings,
 };
 use crate::grid::{Grid, FULL_NODE_SHARE, PAD};
 use crate::par::{Pieces, CHUNK};
@@ -511,7 +510,8 @@ fn reconstruct(s: &mut Scratch, h: f64, ghost: bool) {
 /// free flight: overwriting it with its neighbours' velocity drove the
 /// ghost surface's injections (session 38).
 fn is_air_node(grid: &Grid, s: &Scratch, n: usize, light: f64) -> bool {
-    !s.fluid_node[n] && !(grid.mass[n] >= light && s.holds_material_around(grid, n))
+    let free_flight = grid.mass[n] >= light && s.holds_material_around(grid, n);
+    !s.fluid_node[n] && !free_flight
 }
 
 /// The fluid nodes an air node's velocity is the mean of: among the eight
