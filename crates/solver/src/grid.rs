@@ -376,6 +376,18 @@ impl Grid {
             values[op.node as usize] = op.image(values[op.other as usize]);
         }
     }
+
+    /// `fill` of the updated velocities (and of the accelerations with them).
+    pub fn fill_vel_new(&mut self, with_accel: bool) {
+        let mut vel = std::mem::take(&mut self.vel_new);
+        self.fill(&mut vel);
+        self.vel_new = vel;
+        if with_accel {
+            let mut accel = std::mem::take(&mut self.accel);
+            self.fill(&mut accel);
+            self.accel = accel;
+        }
+    }
 }
 
 /// One wall or ghost operation: fold adds `node` (mirrored if `flip`) onto

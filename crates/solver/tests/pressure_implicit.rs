@@ -439,6 +439,18 @@ fn slosh_theory(depth: f64) -> f64 {
     2.0 * std::f64::consts::PI / (9.81 * k * (k * depth).tanh()).sqrt()
 }
 
+/// The slosh tank filled to `depth` under the quadratic B-spline APIC
+/// implicit step with its projection settings as `adjust` leaves them:
+/// the period's error against linear theory and the decay rate over 5 s.
+fn slosh_at(depth: f64, adjust: impl Fn(&mut ProjectionSettings)) -> (f64, f64) {
+    let mut scene = slosh_tank();
+    scene.bodies[0].rect[3] = depth;
+    let mut method = implicit(ShapeKind::Bspline2, TransferKind::Apic);
+    adjust(&mut method.projection);
+    let (period, decay) = slosh_wave(common::solver(scene, method), 5.0);
+    (period / slosh_theory(depth) - 1.0, decay)
+}
+
 /// Under the cell surface a surface node's acceleration is p / (rho h s),
 /// s its mass share (the ghost-fluid gradient with theta = s); the nodes
 /// over the surface cells hold from a sixth (surface mid-row) to a half
@@ -453,14 +465,7 @@ fn slosh_theory(depth: f64) -> f64 {
 #[test]
 fn a_light_node_floor_under_the_surface_nodes_damps_the_slosh() {
     for depth in [DEPTH, DEPTH + 0.005] {
-        let mut scene = slosh_tank();
-        scene.bodies[0].rect[3] = depth;
-        let wave = |share: f64| {
-            let mut method = implicit(ShapeKind::Bspline2, TransferKind::Apic);
-            method.projection.light_node_share = share;
-            let (period, decay) = slosh_wave(common::solver(scene.clone(), method), 5.0);
-            (period / slosh_theory(depth) - 1.0, decay)
-        };
+        let wave = |share: f64| slosh_at(depth, |p| p.light_node_share = share);
         let (default, old) = (
             wave(ProjectionSettings::default().light_node_share),
             wave(0.25),
@@ -496,14 +501,7 @@ fn a_light_node_floor_under_the_surface_nodes_damps_the_slosh() {
 #[test]
 fn the_air_nodes_weight_rests_on_the_pressure_so_the_slosh_keeps_its_period() {
     for depth in [DEPTH, DEPTH + 0.005] {
-        let mut scene = slosh_tank();
-        scene.bodies[0].rect[3] = depth;
-        let wave = |air_nodes: AirNodes| {
-            let mut method = implicit(ShapeKind::Bspline2, TransferKind::Apic);
-            method.projection.air_nodes = air_nodes;
-            let (period, decay) = slosh_wave(common::solver(scene.clone(), method), 5.0);
-            (period / slosh_theory(depth) - 1.0, decay)
-        };
+        let wave = |air_nodes: AirNodes| slosh_at(depth, |p| p.air_nodes = air_nodes);
         let (slaved, overwritten) = (wave(AirNodes::Slaved), wave(AirNodes::Overwritten));
         let label = format!("depth {depth}: period error and decay (1/s)");
         assert!(slaved.0.abs() < 0.01, "{label}: slaved {slaved:?}");

@@ -78,12 +78,7 @@ impl Remedy for MinNodeMass {
             }
         }
         if guarded {
-            let mut accel = std::mem::take(&mut grid.accel);
-            grid.fill(&mut accel);
-            grid.accel = accel;
-            let mut vel_new = std::mem::take(&mut grid.vel_new);
-            grid.fill(&mut vel_new);
-            grid.vel_new = vel_new;
+            grid.fill_vel_new(true);
         }
         EnergyChange {
             work,

@@ -63,12 +63,7 @@ pub fn update(grid: &mut Grid, dt: f64) {
         grid.vel_new[n] = grid.vel[n] + a * dt;
     }
     grid.force = force;
-    let mut accel = std::mem::take(&mut grid.accel);
-    grid.fill(&mut accel);
-    grid.accel = accel;
-    let mut vel_new = std::mem::take(&mut grid.vel_new);
-    grid.fill(&mut vel_new);
-    grid.vel_new = vel_new;
+    grid.fill_vel_new(true);
 }
 
 /// sum over the active nodes (ghosts included: they carry the real

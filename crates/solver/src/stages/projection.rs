@@ -585,12 +585,8 @@ fn slave_air_nodes(grid: &mut Grid, s: &mut Scratch, light: f64) {
         s.operator_mass[n] = mass;
         grid.vel_new[n] = grid.project_walls(n, v);
     }
-    let mut vel = std::mem::take(&mut grid.vel_new);
-    grid.fill(&mut vel);
-    grid.vel_new = vel;
-    let mut mass = std::mem::take(&mut s.operator_mass);
-    grid.fill(&mut mass);
-    s.operator_mass = mass;
+    grid.fill_vel_new(false);
+    grid.fill(&mut s.operator_mass);
 }
 
 /// The nodes a particle reaches beyond its cell's corners (B-splines) are
@@ -622,12 +618,7 @@ fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64, light: f64, mirrored: bool
         }
     }
     if changed {
-        let mut vel = std::mem::take(&mut grid.vel_new);
-        grid.fill(&mut vel);
-        grid.vel_new = vel;
-        let mut accel = std::mem::take(&mut grid.accel);
-        grid.fill(&mut accel);
-        grid.accel = accel;
+        grid.fill_vel_new(true);
     }
 }
 
@@ -1220,9 +1211,7 @@ fn damp_hourglass(grid: &mut Grid, s: &Scratch, share: f64) {
             grid.vel_new[n] = grid.project_walls(n, grid.vel_new[n] + dv);
         }
     }
-    let mut vel = std::mem::take(&mut grid.vel_new);
-    grid.fill(&mut vel);
-    grid.vel_new = vel;
+    grid.fill_vel_new(false);
 }
 
 /// The node a cell corner's value lives on: itself, or across a periodic edge.
