@@ -210,6 +210,14 @@ impl Grid {
         (self.index(i, j), v)
     }
 
+    /// The node lies on a no-slip wall: its velocity is held at zero.
+    pub fn is_pinned(&self, node: usize) -> bool {
+        let (i, j) = self.coords(node);
+        [(0, i), (1, j)]
+            .into_iter()
+            .any(|(axis, k)| self.roles[axis][k] == NodeRole::Wall && self.no_slip_at(axis, k))
+    }
+
     /// The share of a folded nodal value that is the node's own: 1/2 per
     /// wall the node lies on (folding adds its mirror image, the other
     /// half), 1 elsewhere. A node's kinetic energy in the box is

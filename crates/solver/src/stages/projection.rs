@@ -552,6 +552,10 @@ fn masters(grid: &Grid, s: &Scratch, n: usize, mirrored: bool) -> ([(usize, usiz
 /// there. The shares are taken in the box's own masses (a wall node owns
 /// half its folded mass) and a neighbour beyond a wall is its partner's
 /// image, so that a flat layer gives every surface node the same share.
+/// A node on a no-slip wall is held at rest by the wall, not by its
+/// neighbours: the wall takes its momentum. (The share is one mass for
+/// both directions: a slave on a free-slip wall also hands its neighbours
+/// the wall-normal inertia the wall holds.)
 fn slave_air_nodes(grid: &mut Grid, s: &mut Scratch, light: f64) {
     for &n in &grid.active {
         s.slaved_mass[n as usize] = 0.0;
@@ -559,7 +563,7 @@ fn slave_air_nodes(grid: &mut Grid, s: &mut Scratch, light: f64) {
     }
     for &n in &grid.inside {
         let n = n as usize;
-        if !is_air_node(grid, s, n, light) {
+        if !is_air_node(grid, s, n, light) || grid.is_pinned(n) {
             continue;
         }
         let (found, count) = masters(grid, s, n, true);
