@@ -3,6 +3,7 @@
 //! keep zero velocity.
 
 use crate::grid::Grid;
+use crate::particles::Vec2;
 
 /// v^n = p / m from the folded P2G sums; also returns the grid kinetic energy
 /// of the real particles' mass (sum over nodes of m_raw |v|^2 / 2).
@@ -47,10 +48,12 @@ pub fn project_momentum(grid: &mut Grid) {
     grid.mass = mass;
 }
 
-/// v^{n+1} = v^n + dt f / m from the folded nodal force (gravity included).
-pub fn update(grid: &mut Grid, dt: f64) {
+/// v^{n+1} = v^n + dt f / m from the folded nodal force (gravity included,
+/// its images at no-slip walls corrected).
+pub fn update(grid: &mut Grid, dt: f64, gravity: Vec2) {
     let mut force = std::mem::take(&mut grid.force);
     grid.fold(&mut force);
+    grid.correct_weight_images(&mut force, gravity);
     for &n in &grid.inside {
         let n = n as usize;
         let m = grid.mass[n];

@@ -138,8 +138,8 @@ fn project(s: &mut Solver, clock: &mut Instant) {
 }
 
 fn grid_update(s: &mut Solver, clock: &mut Instant) {
-    let (grid, dt) = (&mut s.grid, s.dt);
-    par::keep_warm(|| grid_update::update(grid, dt));
+    let (grid, dt, gravity) = (&mut s.grid, s.dt, s.gravity);
+    par::keep_warm(|| grid_update::update(grid, dt, gravity));
     if !s.remedies.is_empty() {
         let mut g = GridStep {
             grid: &mut s.grid,
