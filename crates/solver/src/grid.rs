@@ -376,8 +376,13 @@ impl Grid {
     /// Adds every active ghost node's (mirrored) value onto its partner and
     /// self-mirrors wall nodes, x first, then y over in-box columns.
     pub fn fold<T: Mirrored>(&self, values: &mut [T]) {
+        self.fold_by(values, BoundaryOp::image);
+    }
+
+    /// `fold` with the images `image` gives each operation's value.
+    fn fold_by<T: Mirrored>(&self, values: &mut [T], image: impl Fn(&BoundaryOp, T) -> T) {
         for op in self.fold_ops.iter().flatten() {
-            let v = op.image(values[op.node as usize]);
+            let v = image(op, values[op.node as usize]);
             values[op.other as usize] += v;
         }
     }
@@ -403,17 +408,14 @@ impl Grid {
             free[n] = gravity * self.mass_raw[n];
             walls[n] = free[n];
         }
-        for op in self.fold_ops.iter().flatten() {
-            let (node, other) = (op.node as usize, op.other as usize);
-            let image = if op.flip {
-                free[node].mirror(op.axis as usize)
+        self.fold_by(&mut free, |op, v| {
+            if op.flip {
+                v.mirror(op.axis as usize)
             } else {
-                free[node]
-            };
-            free[other] += image;
-            let image = op.image(walls[node]);
-            walls[other] += image;
-        }
+                v
+            }
+        });
+        self.fold(&mut walls);
         for &n in &self.inside {
             let n = n as usize;
             let correction = free[n] - walls[n];
