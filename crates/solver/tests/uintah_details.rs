@@ -105,6 +105,35 @@ fn the_substepped_f_update_is_the_plain_one_below_one() {
     assert!(sub.determinant() > 0.0, "{sub}");
 }
 
+/// The stress stage skips `substepped` when `needs_substeps` says one
+/// substep: over |L| dt swept through 0.85 .. 1.05, wherever it skips,
+/// `substepped` is bit for bit the plain update, and it skips below 0.9.
+#[test]
+fn the_substep_shortcut_never_changes_the_f_update() {
+    use solver::stages::stress::{needs_substeps, substepped};
+    let f = Mat2::new(1.1, 0.05, -0.02, 0.93);
+    let l = Mat2::new(-3.0, 1.0, 0.5, 2.0);
+    let norm = l.norm();
+    let (mut skipped, mut taken) = (0, 0);
+    for i in 0..=20_000 {
+        let dt = (0.85 + 0.2 * i as f64 / 20_000.0) / norm;
+        if needs_substeps(l, dt) {
+            taken += 1;
+        } else {
+            skipped += 1;
+            assert_eq!(
+                substepped(l, dt, f),
+                (Mat2::identity() + dt * l) * f,
+                "dt {dt}"
+            );
+        }
+        if norm * dt < 0.9 {
+            assert!(!needs_substeps(l, dt), "|L| dt = {}", norm * dt);
+        }
+    }
+    assert!(skipped > 0 && taken > 0);
+}
+
 /// Under on_inversion = "delete" a particle whose J passes scene.max_j is
 /// deleted at the end of the step and counted as inverted; without
 /// max_j it stays. One whose J is not a number is deleted either way

@@ -149,6 +149,8 @@ fn run<const W: usize>(
                     let det = f_new.determinant();
                     let (f_next, j_next) = match j_update {
                         JUpdate::Det => (f_new, det),
+                        // One substep is the plain update: reuse it.
+                        JUpdate::Substeps if !needs_substeps(l, dt) => (f_new, det),
                         JUpdate::Substeps => {
                             let f_sub = substepped(l, dt, f[k]);
                             (f_sub, f_sub.determinant())
@@ -231,6 +233,14 @@ fn run<const W: usize>(
         *w = parts.iter().map(|p| p[1 + r]).sum();
     }
     (parts.iter().map(|p| p[0]).sum(), rule_work)
+}
+
+/// False when `substepped` takes one substep (|L| dt < 1), decided without
+/// its square root: |L|^2 dt^2 < 0.81 keeps |L| dt below 0.91 whatever the
+/// rounding, so the answer never differs from `substepped`'s own count.
+#[inline]
+pub fn needs_substeps(l: Mat2, dt: f64) -> bool {
+    l.norm_squared() * (dt * dt) >= 0.81
 }
 
 /// Uintah's F update: (I + dt L / n)^n F with n = min(max(1, 2 floor(|L|
