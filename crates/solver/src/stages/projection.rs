@@ -77,8 +77,9 @@ pub struct SolveStats {
     pub residual: f64,
     pub converged: bool,
     /// Energy the projection removed: minus its velocity change's work at
-    /// the time-centred velocity, less the pressure's work into the stored
-    /// energy, plus the gravitational energy the drift correction by
+    /// the time-centred velocity, less what the step's mean pressure put
+    /// into the stored energy (the compression's backward-Euler loss
+    /// counted), plus the gravitational energy the drift correction by
     /// position took out (J/m).
     pub dissipated_projection: f64,
     /// Energy the hourglass control removed: minus its velocity change's
@@ -430,13 +431,19 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
     let n = s.fluid.len();
     s.q[..n].fill(0.0);
     add_checkerboard(&s.quads, &s.x, set.checkerboard / mat.rho0, &mut s.q);
-    let mut pressure_work = 0.0;
+    let (mut pressure_work, mut compression_loss) = (0.0, 0.0);
     for (k, &c) in s.fluid.iter().enumerate() {
         let c = c as usize;
         let div = divergence(&s.corners[k], s.divergence_weights(k), &grid.vel_new, h);
         let e = div + dt / (h * h) * s.q[k] - s.target[k];
         s.rate[c] = e;
         pressure_work += s.x[k] * s.vol[c] * dt * e;
+        // The stored energy gains the mean pressure's work over the step,
+        // p^{n+1} + K_t dt e / 2: the end pressure's work exceeds it by
+        // K_t (dt e)^2 V / 2 (backward Euler's loss, the sound it damps).
+        if s.alpha[k] > 0.0 {
+            compression_loss += h * h * s.vol[c] * e * e / (2.0 * s.alpha[k]);
+        }
     }
     // The work of each velocity change at the time-centred velocity
     // (v^n + v^{n+1}) / 2: the kinetic energy's change telescopes exactly
@@ -456,7 +463,7 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
     }
     s.stats.dissipated_hourglass = -work_hourglass;
     // What the pressure's work did not put into stored energy.
-    s.stats.dissipated_projection = -work_projection + pressure_work;
+    s.stats.dissipated_projection = -work_projection + pressure_work + compression_loss;
     reconstruct(s, h, set.free_surface != FreeSurface::Cell);
 }
 
