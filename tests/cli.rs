@@ -995,7 +995,18 @@ fn explain_splits_an_injected_kick_and_replays_single_changes() {
     );
     let half = rows.iter().find(|r| r["change"] == "half dt").unwrap();
     assert!(half["steps"].as_u64().unwrap() > control["steps"].as_u64().unwrap());
-    assert_eq!(rows.len(), 9, "{rows:?}");
+    assert_eq!(rows.len(), 10, "{rows:?}");
+    // The pressure-implicit formulation is switched to mid-run: its step
+    // follows the flow, so it crosses the window in fewer steps.
+    let implicit = rows
+        .iter()
+        .find(|r| r["change"] == "pressure implicit")
+        .unwrap();
+    assert!(implicit["refused"].is_null(), "{implicit}");
+    assert!(
+        implicit["steps"].as_u64().unwrap() < control["steps"].as_u64().unwrap(),
+        "{implicit}"
+    );
     for f in [
         "explain_steps.csv",
         "explain_steps.parquet",

@@ -405,7 +405,28 @@ fn changes(method: &Method) -> Vec<(String, Vec<String>)> {
             "shifting".into(),
             vec!["method.shifting={ time = 0.02 }".into()],
         ),
+        pressure_implicit(method),
     ]
+}
+
+/// The pressure-implicit formulation: the cell pressure solved each step
+/// in place of the particles' EOS stress in the nodal force. It takes no
+/// remedy (its controls are its own), so the method's remedies go with it.
+fn pressure_implicit(method: &Method) -> (String, Vec<String>) {
+    let mut overrides = vec!["method.formulation=\"pressure_implicit\"".to_string()];
+    let remedies: Vec<&str> = method
+        .remedies
+        .active()
+        .iter()
+        .map(|r| r.descriptor().key)
+        .collect();
+    overrides.extend(remedies.iter().map(|key| format!("method.{key}=false")));
+    let name = if remedies.is_empty() {
+        "pressure implicit".to_string()
+    } else {
+        format!("pressure implicit (without {})", remedies.join(", "))
+    };
+    (name, overrides)
 }
 
 /// A solver that changes its method once, at the onset window's start,
