@@ -361,72 +361,76 @@ pub struct CounterfactualRow {
     pub steps: u64,
 }
 
-const HALF_DT: &str = "half dt";
-
-/// The default list: (name, study-file overrides of `[method]`).
-fn changes(method: &Method) -> Vec<(String, Vec<String>)> {
-    let xpic = if method.transfer == solver::TransferKind::Xpic {
-        (
-            "xpic off".to_string(),
-            vec!["method.transfer=\"flip\"".to_string()],
-        )
-    } else {
-        (
-            "xpic on".to_string(),
-            vec![
-                "method.transfer=\"xpic\"".into(),
-                "method.xpic_order=5".into(),
-            ],
-        )
-    };
-    vec![
-        ("unchanged".into(), vec![]),
-        ("pic".into(), vec!["method.transfer=\"pic\"".into()]),
-        (
-            "flip 0.99".into(),
-            vec![
-                "method.transfer=\"flip\"".into(),
-                "method.flip_alpha=0.99".into(),
-            ],
-        ),
-        // Halved from the solver's own step when the change is made.
-        (HALF_DT.into(), vec![]),
-        (
-            "min node mass 0.01".into(),
-            vec!["method.min_node_mass={ share = 0.01 }".into()],
-        ),
-        ("j-bar".into(), vec!["method.j_bar=true".into()]),
-        (
-            "pressure smoothing".into(),
-            vec!["method.pressure_smoothing=true".into()],
-        ),
-        xpic,
-        (
-            "shifting".into(),
-            vec!["method.shifting={ time = 0.02 }".into()],
-        ),
-        pressure_implicit(method),
-    ]
+/// What a counterfactual changes, from the onset window's start.
+enum Change {
+    /// Study-file overrides of `[method]` (none: the control).
+    Overrides(Vec<String>),
+    /// The solver's own step halved when the change is made.
+    HalfDt,
+    /// The pressure-implicit formulation (docs/physics.md section 8) in
+    /// place of the particles' EOS stress; built from the case's method,
+    /// since its study file may set keys the formulation refuses.
+    PressureImplicit,
 }
 
-/// The pressure-implicit formulation: the cell pressure solved each step
-/// in place of the particles' EOS stress in the nodal force. It takes no
-/// remedy (its controls are its own), so the method's remedies go with it.
-fn pressure_implicit(method: &Method) -> (String, Vec<String>) {
-    let mut overrides = vec!["method.formulation=\"pressure_implicit\"".to_string()];
+/// The default list: (name, change).
+fn changes(method: &Method) -> Vec<(String, Change)> {
+    let overrides = |keys: &[&str]| Change::Overrides(keys.iter().map(|k| k.to_string()).collect());
+    let xpic = if method.transfer == solver::TransferKind::Xpic {
+        ("xpic off", overrides(&["method.transfer=\"flip\""]))
+    } else {
+        (
+            "xpic on",
+            overrides(&["method.transfer=\"xpic\"", "method.xpic_order=5"]),
+        )
+    };
     let remedies: Vec<&str> = method
         .remedies
         .active()
         .iter()
         .map(|r| r.descriptor().key)
         .collect();
-    overrides.extend(remedies.iter().map(|key| format!("method.{key}=false")));
-    let name = if remedies.is_empty() {
+    // It takes no remedy (its controls are its own): the method's go with it.
+    let implicit = if remedies.is_empty() {
         "pressure implicit".to_string()
     } else {
         format!("pressure implicit (without {})", remedies.join(", "))
     };
-    (name, overrides)
+    vec![
+        ("unchanged".into(), Change::Overrides(vec![])),
+        ("pic".into(), overrides(&["method.transfer=\"pic\""])),
+        (
+            "flip 0.99".into(),
+            overrides(&["method.transfer=\"flip\"", "method.flip_alpha=0.99"]),
+        ),
+        ("half dt".into(), Change::HalfDt),
+        (
+            "min node mass 0.01".into(),
+            overrides(&["method.min_node_mass={ share = 0.01 }"]),
+        ),
+        ("j-bar".into(), overrides(&["method.j_bar=true"])),
+        (
+            "pressure smoothing".into(),
+            overrides(&["method.pressure_smoothing=true"]),
+        ),
+        (xpic.0.into(), xpic.1),
+        (
+            "shifting".into(),
+            overrides(&["method.shifting={ time = 0.02 }"]),
+        ),
+        (implicit, Change::PressureImplicit),
+    ]
+}
+
+/// The case's method under the pressure-implicit formulation: no remedy,
+/// and the step from the flow (a fixed explicit step would be kept).
+fn pressure_implicit(method: &Method) -> Method {
+    Method {
+        formulation: solver::Formulation::PressureImplicit,
+        remedies: Default::default(),
+        dt_value: None,
+        ..method.clone()
+    }
 }
 
 /// A solver that changes its method once, at the onset window's start,
@@ -515,32 +519,33 @@ fn overlaps(a: CellRange, b: CellRange) -> bool {
 fn counterfactuals(loaded: &Loaded, window: Window) -> Vec<CounterfactualRow> {
     changes(&loaded.case.solver.method)
         .into_iter()
-        .map(|(change, overrides)| counterfactual(loaded, window, change, &overrides))
+        .map(|(name, change)| counterfactual(loaded, window, name, &change))
         .collect()
 }
 
 fn counterfactual(
     loaded: &Loaded,
     window: Window,
-    change: String,
-    overrides: &[String],
+    name: String,
+    change: &Change,
 ) -> CounterfactualRow {
     let floor = loaded.logged.evidence.energy_floor;
     let refused = |why: String| CounterfactualRow {
-        change: change.clone(),
+        change: name.clone(),
         refused: Some(why),
         injected: f64::NAN,
         floor,
         event_happens: false,
         steps: 0,
     };
-    let method = if overrides.is_empty() {
-        None
-    } else {
-        match changed_method(&loaded.study_path, overrides) {
+    let method = match change {
+        Change::Overrides(o) if o.is_empty() => None,
+        Change::Overrides(o) => match changed_method(&loaded.study_path, o) {
             Ok(m) => Some(m),
             Err(e) => return refused(e),
-        }
+        },
+        Change::HalfDt => None,
+        Change::PressureImplicit => Some(pressure_implicit(&loaded.case.solver.method)),
     };
     let case = &loaded.case;
     let solver = match Solver::new(case.solver.clone()) {
@@ -553,7 +558,7 @@ fn counterfactual(
         at: window.onset_from,
         until: window.last_t,
         method,
-        halve_dt: change == HALF_DT,
+        halve_dt: matches!(change, Change::HalfDt),
         refused: None,
     };
     if let Err(e) = stepper.load(&loaded.checkpoint, &mut watches) {
@@ -583,7 +588,7 @@ fn counterfactual(
         return refused(e.to_string());
     }
     CounterfactualRow {
-        change,
+        change: name,
         refused: None,
         injected: measured.injected,
         floor,
