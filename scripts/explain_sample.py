@@ -85,19 +85,19 @@ def main():
         with ThreadPoolExecutor(a.jobs) as ex:
             results = list(ex.map(lambda c: explain(a.kick, c[1], c[2]["id"], a.counterfactual), chosen))
     keys = ["internal", "external", "walls", "jump", "small_mass_node", "cell_crossing", "stress_outlier"]
-    print("| case | event | K (Pa) | t (s) | stratum | matched | closure | largest part | internal | jump | M1 small-mass | M2 crossing | M3 outlier | M4 drift | M5 Courant | prevented by |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| case | event | K (Pa) | t (s) | stratum | hallmark | matched | closure | largest part | internal | jump | M1 small-mass | M2 crossing | M3 outlier | M4 drift | M5 Courant | prevented by |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     prevented_by = {}
     by = {}
     for (k, case, e), j in zip(chosen, results):
         if j is None:
-            print(f"| {os.path.basename(case)} | {e['id']} | {k[0]:g} | {e['t']:.3f} | {k[1]} | not explained | | | | | | | | | | |")
+            print(f"| {os.path.basename(case)} | {e['id']} | {k[0]:g} | {e['t']:.3f} | {k[1]} | {hallmark(e)} | not explained | | | | | | | | | | |")
             continue
         sh = j["shares"]
         by.setdefault(k[1], []).append(sh)
         # JSON writes NaN (no step before the onset window) as null.
         f2 = lambda x: "-" if x is None else f"{x:.2f}"
-        print(f"| {os.path.basename(case)} | {e['id']} | {k[0]:g} | {e['t']:.3f} | {k[1]} | {j['matched']} | {j['closure_rest_max']:.1e} | "
+        print(f"| {os.path.basename(case)} | {e['id']} | {k[0]:g} | {e['t']:.3f} | {k[1]} | {hallmark(e)} | {j['matched']} | {j['closure_rest_max']:.1e} | "
               f"{j['largest_part']['part']} | {f2(sh['internal'])} | {f2(sh['jump'])} | {f2(sh['small_mass_node'])} | "
               f"{f2(sh['cell_crossing'])} | {f2(sh['stress_outlier'])} | {f2(j['m4_ringing']['drift_over_speed'])} | "
               f"{f2(j['m5_time_step']['courant_before'])} | {prevents(j, prevented_by)} |")
@@ -119,11 +119,22 @@ def main():
         print(f"| {s} | {len(lst)} | " + " | ".join(cells) + " |")
 
 
+def hallmark(e):
+    """The monitor's hallmark (monitor::Event::hallmark): quiet before, and
+    most of its particles past the strain-rate threshold earlier (a large
+    distortion of F alone does not count)."""
+    return "yes" if e["quiescent_before"] and "strain_rate" in e["deformed_by"] else "no"
+
+
 def prevents(j, tally):
-    """The counterfactual changes after which the event did not happen."""
+    """The counterfactual changes after which the event did not happen; none
+    when the unchanged replay itself missed the event (inconclusive)."""
     cf = j.get("counterfactual") or []
     if not cf:
         return "-"
+    control = [c for c in cf if c["change"] == "unchanged"]
+    if control and control[0]["event_happens"] is False:
+        return "(control did not reproduce the event: inconclusive)"
     names = [c["change"] for c in cf if c["change"] != "unchanged" and c["event_happens"] is False and not c.get("refused")]
     for n in names:
         tally[n] = tally.get(n, 0) + 1

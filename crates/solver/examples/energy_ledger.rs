@@ -1,0 +1,118 @@
+//! Where a run's energy budget fails to close: the released water column
+//! of studies/energy_booking.toml (0.2 x 0.4 m in a 0.2 m wide box, Tait
+//! 1.5 MPa, 0.5 Pa s, quadratic B-splines, USL, dynamic dt), its drift split
+//! per stage of every step:
+//!
+//! - transfers: particles before P2G minus the grid after it, and the
+//!   updated grid minus the particles after G2P (the monitor's transfer loss
+//!   under APIC and PIC);
+//! - gravity: the particles' potential energy change plus gravity's work on
+//!   v^{n+1} (zero to round-off when positions move with v^{n+1});
+//! - stress against work: the stored and dissipated energy's change (the
+//!   remedies' booked changes taken out) plus the grid forces' work on
+//!   v^{n+1}, the first half of symplectic Euler's error;
+//! - symplectic: -sum m |a|^2 dt^2 / 2 on the grid, the other half, split
+//!   by the node's mass against a full node's (< 0.01, < 0.1, < 0.5, more).
+//!
+//! The drift is the sum of the last three. Usage:
+//! `cargo run --release -p kick-solver --example energy_ledger -- apic|pic|flip
+//! [volume_relaxation_time] [cfl] [t_end]` (docs/findings/energy_booking.md).
+
+use solver::remedies::volume_relaxation;
+use solver::*;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let transfer = match args.get(1).map(String::as_str).unwrap_or("apic") {
+        "pic" => TransferKind::Pic,
+        "flip" => TransferKind::Flip,
+        _ => TransferKind::Apic,
+    };
+    let arg = |i: usize, default: f64| args.get(i).map_or(default, |s| s.parse().unwrap());
+    let relaxation = arg(2, 0.0);
+    let cfl = arg(3, 0.2);
+    let t_end = arg(4, 1.0);
+
+    let mut material = Material::tait(1.5e6);
+    material.viscosity = 0.5;
+    let scene = Scene {
+        size: [0.2, 0.6],
+        cell: 0.01,
+        ppc: 2,
+        t_end,
+        gravity: 9.81,
+        initial: InitialState::ZeroStress,
+        bodies: vec![Body {
+            rect: [0.0, 0.0, 0.2, 0.4],
+            material: String::new(),
+            velocity: [0.0, 0.0],
+            fraction: 1.0,
+            phase: None,
+            flow: None,
+        }],
+        materials: vec![material],
+        ..Scene::default()
+    };
+    let mut method = Method {
+        shape: ShapeKind::Bspline2,
+        transfer,
+        flip_alpha: 1.0,
+        scheme: SchemeKind::Usl,
+        cfl,
+        dt: DtMode::Dynamic,
+        ..Method::default()
+    };
+    if relaxation > 0.0 {
+        method.remedies.volume_relaxation = Some(volume_relaxation::Settings { time: relaxation });
+    }
+    let mut s = Solver::new(SolverConfig {
+        scene,
+        method,
+        perturb: vec![],
+    })
+    .expect("valid config");
+
+    let gravity = Vec2::new(0.0, -9.81);
+    let full_node = 1000.0 * 0.01 * 0.01;
+    let (mut p2g, mut g2p, mut gravity_part, mut stress_part) = (0.0, 0.0, 0.0, 0.0);
+    let mut symplectic = [0.0f64; 4];
+    let mut booked_total = 0.0;
+    while !s.finished() {
+        let before = s.energy();
+        s.step().unwrap();
+        let booked: f64 = s.remedy_energy().map(|(_, e)| e.total()).sum();
+        booked_total += booked;
+        let v = s.view();
+        let after = v.energy;
+        p2g += v.ke_particles_p2g - v.ke_grid_p2g;
+        g2p += v.ke_grid_updated - after.kinetic_with_affine();
+        let (mut gravity_work, mut force_work) = (0.0, 0.0);
+        let g = v.grid;
+        for &n in g.active {
+            let n = n as usize;
+            let (m, v1, a) = (g.mass_raw[n], g.velocity[n], g.acceleration[n]);
+            gravity_work += m * gravity.dot(&v1) * v.dt;
+            force_work += m * (a - gravity).dot(&v1) * v.dt;
+            let share = g.mass[n] / full_node;
+            let class = [0.01, 0.1, 0.5, f64::INFINITY]
+                .iter()
+                .position(|&limit| share < limit)
+                .unwrap();
+            symplectic[class] -= 0.5 * m * a.norm_squared() * v.dt * v.dt;
+        }
+        gravity_part += after.gravitational - before.gravitational + gravity_work;
+        stress_part += after.stored - before.stored - booked + after.dissipated - before.dissipated
+            + force_work;
+    }
+    let drift = gravity_part + stress_part + symplectic.iter().sum::<f64>();
+    println!("{transfer:?}, volume relaxation time {relaxation} s (0: off), CFL {cfl}, to {t_end} s, {} steps (J/m)", s.view().step);
+    println!("drift                     {drift:+.4e}");
+    println!("  gravity                 {gravity_part:+.4e}");
+    println!("  stress against work     {stress_part:+.4e}");
+    println!(
+        "  symplectic by node mass {:+.4e} (< 0.01 full) {:+.4e} (< 0.1) {:+.4e} (< 0.5) {:+.4e} (more)",
+        symplectic[0], symplectic[1], symplectic[2], symplectic[3]
+    );
+    println!("transfer losses           {p2g:.4e} (P2G) {g2p:.4e} (G2P)");
+    println!("remedies' booked change   {booked_total:+.4e}");
+}
