@@ -16,9 +16,11 @@
 //!
 //! The drift is the sum of the last three. Usage:
 //! `cargo run --release -p kick-solver --example energy_ledger -- apic|pic|flip
-//! [volume_relaxation_time] [cfl] [t_end]` (docs/findings/energy_booking.md).
+//! [REMEDY] [cfl] [t_end]` (docs/findings/energy_booking.md), REMEDY one of
+//! `0` (none), a volume relaxation time in seconds, `jbar` (the constant
+//! fit) or `jbar-linear`.
 
-use solver::remedies::volume_relaxation;
+use solver::remedies::{j_bar, volume_relaxation};
 use solver::*;
 
 fn main() {
@@ -29,7 +31,7 @@ fn main() {
         _ => TransferKind::Apic,
     };
     let arg = |i: usize, default: f64| args.get(i).map_or(default, |s| s.parse().unwrap());
-    let relaxation = arg(2, 0.0);
+    let remedy = args.get(2).cloned().unwrap_or_else(|| "0".into());
     let cfl = arg(3, 0.2);
     let t_end = arg(4, 1.0);
 
@@ -62,8 +64,22 @@ fn main() {
         dt: DtMode::Dynamic,
         ..Method::default()
     };
-    if relaxation > 0.0 {
-        method.remedies.volume_relaxation = Some(volume_relaxation::Settings { time: relaxation });
+    match remedy.as_str() {
+        "jbar" => method.remedies.j_bar = Some(j_bar::Settings::default()),
+        "jbar-linear" => {
+            method.remedies.j_bar = Some(j_bar::Settings {
+                fit: solver::choices::JBarFit::Linear,
+                ..j_bar::Settings::default()
+            })
+        }
+        time => {
+            let time: f64 = time
+                .parse()
+                .expect("REMEDY: 0, a relaxation time, jbar or jbar-linear");
+            if time > 0.0 {
+                method.remedies.volume_relaxation = Some(volume_relaxation::Settings { time });
+            }
+        }
     }
     let mut s = Solver::new(SolverConfig {
         scene,
@@ -105,7 +121,10 @@ fn main() {
             + force_work;
     }
     let drift = gravity_part + stress_part + symplectic.iter().sum::<f64>();
-    println!("{transfer:?}, volume relaxation time {relaxation} s (0: off), CFL {cfl}, to {t_end} s, {} steps (J/m)", s.view().step);
+    println!(
+        "{transfer:?}, remedy {remedy}, CFL {cfl}, to {t_end} s, {} steps (J/m)",
+        s.view().step
+    );
     println!("drift                     {drift:+.4e}");
     println!("  gravity                 {gravity_part:+.4e}");
     println!("  stress against work     {stress_part:+.4e}");
