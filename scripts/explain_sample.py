@@ -3,6 +3,7 @@
 
     python3 scripts/explain_sample.py MATRIX_DIR [--n 30] [--kick PATH] [--jobs 2] [--table-only]
         [--causes injection,inversion] [--counterfactual] [--max-window-steps N]
+    python3 scripts/explain_sample.py MATRIX_DIR --all-explained
 
 Picks kicks of cause `injection` (or the `--causes` given) from every
 case's summary.json (events open for at most `--max-window-steps` steps
@@ -57,6 +58,19 @@ def pick(matrix, n, causes=("injection",), max_window=None):
     return out, {k: len(v) for k, v in strata.items()}
 
 
+def explained_events(matrix):
+    """Every event of the matrix with an explain.json, as `pick` returns them."""
+    out = []
+    for d in sorted(glob.glob(os.path.join(matrix, "*", "summary.json"))):
+        s = json.load(open(d))
+        k = s["params"].get("materials.water.K")
+        case = os.path.dirname(d)
+        for e in sorted(s["events"], key=lambda e: e["id"]):
+            if os.path.exists(os.path.join(case, "explain", f"event_{e['id']}", "explain.json")):
+                out.append(((k, stratum(e["t"])), case, e))
+    return out
+
+
 def explain(kick, case, event, counterfactual=False):
     out = os.path.join(case, "explain", f"event_{event}", "explain.json")
     if not os.path.exists(out):
@@ -76,10 +90,15 @@ def main():
     ap.add_argument("--causes", default="injection")
     ap.add_argument("--counterfactual", action="store_true")
     ap.add_argument("--max-window-steps", type=int, default=None)
+    ap.add_argument("--all-explained", action="store_true",
+                    help="table every event of the matrix already explained (picked or not); runs nothing")
     a = ap.parse_args()
-    chosen, sizes = pick(a.matrix, a.n, tuple(a.causes.split(",")), a.max_window_steps)
-    print(f"injection kicks per (K, time) stratum: {sizes}", file=sys.stderr)
-    if a.table_only:
+    if a.all_explained:
+        chosen = explained_events(a.matrix)
+    else:
+        chosen, sizes = pick(a.matrix, a.n, tuple(a.causes.split(",")), a.max_window_steps)
+        print(f"injection kicks per (K, time) stratum: {sizes}", file=sys.stderr)
+    if a.table_only or a.all_explained:
         results = [explain_done(case, e["id"]) for _, case, e in chosen]
     else:
         with ThreadPoolExecutor(a.jobs) as ex:
