@@ -37,24 +37,10 @@ fn main() {
 
     let mut material = Material::tait(1.5e6);
     material.viscosity = 0.5;
-    let scene = Scene {
-        size: [0.2, 0.6],
-        cell: 0.01,
-        ppc: 2,
-        t_end,
-        gravity: 9.81,
-        initial: InitialState::ZeroStress,
-        bodies: vec![Body {
-            rect: [0.0, 0.0, 0.2, 0.4],
-            material: String::new(),
-            velocity: [0.0, 0.0],
-            fraction: 1.0,
-            phase: None,
-            flow: None,
-        }],
-        materials: vec![material],
-        ..Scene::default()
-    };
+    // The dam break's column, in a box as wide as the column.
+    let mut scene = Scene::dam_break(material);
+    scene.size = [0.2, 0.6];
+    scene.t_end = t_end;
     let mut method = Method {
         shape: ShapeKind::Bspline2,
         transfer,
