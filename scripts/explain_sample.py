@@ -30,15 +30,21 @@ def stratum(t):
     return "collapse" if t < 0.15 else ("impact" if t < 0.6 else "late")
 
 
-def pick(matrix, n, causes=("injection",), max_window=None):
-    strata = {}
+def events(matrix):
+    """(K, case folder, event) of every case's events, cases and events in name and id order."""
     for d in sorted(glob.glob(os.path.join(matrix, "*", "summary.json"))):
         s = json.load(open(d))
         k = s["params"].get("materials.water.K")
         for e in sorted(s["events"], key=lambda e: e["id"]):
-            short = max_window is None or e["last_step"] - e["first_step"] <= max_window
-            if e["cause"] in causes and e.get("checkpoint") and short:
-                strata.setdefault((k, stratum(e["t"])), []).append((os.path.dirname(d), e))
+            yield k, os.path.dirname(d), e
+
+
+def pick(matrix, n, causes=("injection",), max_window=None):
+    strata = {}
+    for k, case, e in events(matrix):
+        short = max_window is None or e["last_step"] - e["first_step"] <= max_window
+        if e["cause"] in causes and e.get("checkpoint") and short:
+            strata.setdefault((k, stratum(e["t"])), []).append((case, e))
     keys = sorted(strata, key=lambda k: (k[0], ["collapse", "impact", "late"].index(k[1])))
     chosen, round_ = [], 0
     while len(chosen) < n and any(round_ < len(strata[k]) for k in keys):
@@ -60,15 +66,8 @@ def pick(matrix, n, causes=("injection",), max_window=None):
 
 def explained_events(matrix):
     """Every event of the matrix with an explain.json, as `pick` returns them."""
-    out = []
-    for d in sorted(glob.glob(os.path.join(matrix, "*", "summary.json"))):
-        s = json.load(open(d))
-        k = s["params"].get("materials.water.K")
-        case = os.path.dirname(d)
-        for e in sorted(s["events"], key=lambda e: e["id"]):
-            if os.path.exists(os.path.join(case, "explain", f"event_{e['id']}", "explain.json")):
-                out.append(((k, stratum(e["t"])), case, e))
-    return out
+    return [((k, stratum(e["t"])), case, e) for k, case, e in events(matrix)
+            if explain_done(case, e["id"]) is not None]
 
 
 def explain(kick, case, event, counterfactual=False):

@@ -37,6 +37,7 @@ fn main() {
 
     let mut material = Material::tait(1.5e6);
     material.viscosity = 0.5;
+    let material_rho0 = material.rho0;
     // The dam break's column, in a box as wide as the column.
     let mut scene = Scene::dam_break(material);
     scene.size = [0.2, 0.6];
@@ -67,6 +68,8 @@ fn main() {
             }
         }
     }
+    let gravity = Vec2::new(0.0, -scene.gravity);
+    let full_node = material_rho0 * scene.cell * scene.cell;
     let mut s = Solver::new(SolverConfig {
         scene,
         method,
@@ -74,8 +77,6 @@ fn main() {
     })
     .expect("valid config");
 
-    let gravity = Vec2::new(0.0, -9.81);
-    let full_node = 1000.0 * 0.01 * 0.01;
     let (mut p2g, mut g2p, mut gravity_part, mut stress_part) = (0.0, 0.0, 0.0, 0.0);
     let mut symplectic = [0.0f64; 4];
     let mut booked_total = 0.0;
