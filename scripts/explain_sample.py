@@ -71,12 +71,14 @@ def explained_events(matrix):
 
 
 def explain(kick, case, event, counterfactual=False):
-    out = os.path.join(case, "explain", f"event_{event}", "explain.json")
-    if not os.path.exists(out):
+    """Explains the event unless it already is; its explain.json (None if it failed)."""
+    done = explain_done(case, event)
+    if done is None:
         extra = ["--counterfactual"] if counterfactual else []
         subprocess.run([kick, "explain", case, "--event", str(event), "--threads", "1", *extra],
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return json.load(open(out)) if os.path.exists(out) else None
+        done = explain_done(case, event)
+    return done
 
 
 def main():
