@@ -19,6 +19,14 @@
 //! [REMEDY] [cfl] [t_end]` (docs/findings/energy_booking.md), REMEDY one of
 //! `0` (none), a volume relaxation time in seconds, `jbar` (the constant
 //! fit) or `jbar-linear`.
+//!
+//! With a remedy that changes J (J-bar, relaxation) it also replays every
+//! step without the remedies from the same state (a clone), so that J_new,
+//! the flow's J before the remedy, is known: it prints the booked change
+//! W(J_after) - W(J_new) beside the same J change's work at the step's
+//! start pressure, -sum p^n V0 (J_after - J_new), the rule by which the
+//! forces' work books the flow's own J change, and the drift either way.
+//! It also prints the kinetic energy's mean over the run's second half.
 
 use solver::remedies::{j_bar, volume_relaxation};
 use solver::*;
@@ -68,6 +76,10 @@ fn main() {
             }
         }
     }
+    let free_method = Method {
+        remedies: Default::default(),
+        ..method.clone()
+    };
     let gravity = Vec2::new(0.0, -scene.gravity);
     let full_node = material_rho0 * scene.cell * scene.cell;
     let mut s = Solver::new(SolverConfig {
@@ -80,13 +92,45 @@ fn main() {
     let (mut p2g, mut g2p, mut gravity_part, mut stress_part) = (0.0, 0.0, 0.0, 0.0);
     let mut symplectic = [0.0f64; 4];
     let mut booked_total = 0.0;
+    let changes_j = remedy != "0";
+    // Sums over steps: the remedy's J change at the start pressure, its
+    // exact stored change, and sum V0 (J_after - J_new)^2.
+    let (mut at_start_pressure, mut exact, mut squared) = (0.0, 0.0, 0.0);
+    let mut pressure_before = Vec::new();
+    // The kinetic energy's mean over the last half of the run.
+    let (mut late_kinetic, mut late_steps) = (0.0, 0.0);
     while !s.finished() {
         let before = s.energy();
-        s.step().unwrap();
+        let dt = s.next_dt().min(t_end - s.time());
+        let free = changes_j.then(|| {
+            let mut free = s.clone();
+            free.set_method(free_method.clone()).unwrap();
+            free.step_with_dt(dt).unwrap();
+            free
+        });
+        pressure_before.clear();
+        pressure_before.extend_from_slice(s.view().pressure);
+        s.step_with_dt(dt).unwrap();
         let booked: f64 = s.remedy_energy().map(|(_, e)| e.total()).sum();
         booked_total += booked;
+        if let Some(free) = &free {
+            let (a, b) = (s.view(), free.view());
+            exact += a.energy.stored - b.energy.stored;
+            let j_free = b.j.iter();
+            for (((&j, j_free), &v0), &p0) in
+                a.j.iter().zip(j_free).zip(a.volume0).zip(&pressure_before)
+            {
+                let dj = j - j_free;
+                at_start_pressure -= p0 * v0 * dj;
+                squared += v0 * dj * dj;
+            }
+        }
         let v = s.view();
         let after = v.energy;
+        if v.time > 0.5 * t_end {
+            late_kinetic += after.kinetic_with_affine();
+            late_steps += 1.0;
+        }
         p2g += v.ke_particles_p2g - v.ke_grid_p2g;
         g2p += v.ke_grid_updated - after.kinetic_with_affine();
         let (mut gravity_work, mut force_work) = (0.0, 0.0);
@@ -121,4 +165,22 @@ fn main() {
     );
     println!("transfer losses           {p2g:.4e} (P2G) {g2p:.4e} (G2P)");
     println!("remedies' booked change   {booked_total:+.4e}");
+    println!(
+        "kinetic energy, mean over the second half {:.4e}",
+        late_kinetic / late_steps
+    );
+    if changes_j {
+        let steps = s.view().step as f64;
+        println!("J change against the run without remedies, summed over steps:");
+        println!("  stored, exact           {exact:+.4e}");
+        println!("  at the start pressure   {at_start_pressure:+.4e}");
+        println!(
+            "  drift were it booked so {:+.4e}",
+            drift + booked_total - at_start_pressure
+        );
+        println!(
+            "  rms J change per step   {:.4e} (sum V0 dJ^2 over steps {squared:.4e})",
+            (squared / steps / (0.2 * 0.4)).sqrt()
+        );
+    }
 }
