@@ -147,18 +147,26 @@ def hallmark(e):
 
 
 def prevents(j, tally):
-    """The counterfactual changes after which the event did not happen; none
-    when the unchanged replay itself missed the event (inconclusive)."""
+    """The counterfactual changes that prevented the event (verdict
+    `prevented`: it did not happen again over its cells, the replay completed
+    the window, and no other non-physical event opened); none when the
+    unchanged replay itself missed the event (inconclusive). Each other
+    change is listed by its verdict: blew up, moved, again."""
     cf = j.get("counterfactual") or []
     if not cf:
         return "-"
+    if any("verdict" not in c for c in cf):
+        return "(replayed before verdicts: rerun with --counterfactual)"
     control = [c for c in cf if c["change"] == "unchanged"]
-    if control and control[0]["event_happens"] is False:
+    if control and control[0]["verdict"] != "again":
         return "(control did not reproduce the event: inconclusive)"
-    names = [c["change"] for c in cf if c["change"] != "unchanged" and c["event_happens"] is False and not c.get("refused")]
+    names = [c["change"] for c in cf if c["change"] != "unchanged" and c["verdict"] == "prevented"]
     for n in names:
         tally[n] = tally.get(n, 0) + 1
-    return ", ".join(names) if names else "none"
+    others = [f'{c["change"]}: {c["verdict"]}' for c in cf
+              if c["change"] != "unchanged" and c["verdict"] not in ("prevented", "again")]
+    text = ", ".join(names) if names else "none"
+    return text + (f" (not: {'; '.join(others)})" if others else "")
 
 
 def explain_done(case, event):

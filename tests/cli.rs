@@ -987,6 +987,16 @@ fn explain_splits_an_injected_kick_and_replays_single_changes() {
     let control = &rows[0];
     assert_eq!(control["change"], "unchanged");
     assert_eq!(control["event_happens"], true);
+    assert_eq!(control["verdict"], "again", "{control}");
+    assert_eq!(control["outcome"], "completed", "{control}");
+    // A row is "prevented" only when the replay completed the window with no
+    // other non-physical event.
+    for r in rows.iter().filter(|r| r["refused"].is_null()) {
+        let prevented = r["event_happens"] == false
+            && r["outcome"] == "completed"
+            && r["other_events"].as_array().unwrap().is_empty();
+        assert_eq!(r["verdict"] == "prevented", prevented, "{r}");
+    }
     let injected = control["injected"].as_f64().unwrap();
     assert!(
         (injected - event.energy_injected).abs() <= 1e-9 * event.energy_injected,

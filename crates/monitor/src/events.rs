@@ -15,6 +15,19 @@ pub enum EventKind {
     Inversion,
 }
 
+impl EventKind {
+    /// The kind's name as summaries spell it (its serde name).
+    pub fn name(self) -> &'static str {
+        match self {
+            EventKind::Kick => "kick",
+            EventKind::BlowOut => "blow_out",
+            EventKind::EnergyInjection => "energy_injection",
+            EventKind::NonFinite => "non_finite",
+            EventKind::Inversion => "inversion",
+        }
+    }
+}
+
 /// Inclusive cell range.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct CellRange {
@@ -437,6 +450,19 @@ pub enum Outcome {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn kind_names_are_the_serde_names() {
+        for kind in [
+            EventKind::Kick,
+            EventKind::BlowOut,
+            EventKind::EnergyInjection,
+            EventKind::NonFinite,
+            EventKind::Inversion,
+        ] {
+            assert_eq!(serde_json::to_value(kind).unwrap(), kind.name());
+        }
+    }
 
     fn event() -> Event {
         let cells = CellRange::of(3, 4);

@@ -13,10 +13,10 @@ use crate::probes::replay::{Found, Replay as ReplayChecks};
 use crate::run_case::{watches, with_threads};
 use crate::runner::{Probe, Rows, Run, RunOptions, Runner, Stepper, Watch};
 use crate::study_file::{self, Case};
-use crate::summary::Summary;
+use crate::summary::{Status, Summary};
 use crate::tables;
 use monitor::mechanisms::{Mechanisms, Shares, StepParts};
-use monitor::{CellRange, Event};
+use monitor::{Cause, CellRange, Event};
 use serde::Serialize;
 use serde_json::json;
 use solver::forensics::ExplainedStep;
@@ -359,6 +359,32 @@ pub struct CounterfactualRow {
     /// An event of the same kind opened in the window over the event's cells.
     pub event_happens: bool,
     pub steps: u64,
+    /// How the replay ended: `completed` (it reached the window's end) or
+    /// `blew up: REASON`.
+    pub outcome: String,
+    /// Events the replay opened in the window that are not physics (cause
+    /// other than impact) and are not the event itself: "KIND (CAUSE) at T s".
+    pub other_events: Vec<String>,
+    /// `again` (the event happened), `blew up`, `moved` (no event over its
+    /// cells, but another non-physical one), `prevented` (none of these) or
+    /// `refused`.
+    pub verdict: &'static str,
+}
+
+/// A counterfactual's verdict: an event that did not open again over its
+/// cells is prevented only when the replay also completed the window and
+/// raised no other non-physical event (else the change moved or hastened
+/// the failure, it did not cure it).
+pub fn verdict(event_happens: bool, blew_up: bool, other_events: usize) -> &'static str {
+    if event_happens {
+        "again"
+    } else if blew_up {
+        "blew up"
+    } else if other_events > 0 {
+        "moved"
+    } else {
+        "prevented"
+    }
 }
 
 /// What a counterfactual changes, from the onset window's start.
@@ -537,6 +563,9 @@ fn counterfactual(
         floor,
         event_happens: false,
         steps: 0,
+        outcome: String::new(),
+        other_events: vec![],
+        verdict: "refused",
     };
     let method = match change {
         Change::Overrides(o) if o.is_empty() => None,
@@ -584,9 +613,21 @@ fn counterfactual(
     if let Some(why) = why_refused {
         return refused(why);
     }
-    if let Err(e) = ran {
-        return refused(e.to_string());
-    }
+    let simulated = match ran {
+        Ok(simulated) => simulated,
+        Err(e) => return refused(e.to_string()),
+    };
+    let other_events: Vec<String> = simulated
+        .events
+        .iter()
+        .filter(|e| {
+            e.first_step > start && e.t >= window.onset_from && e.t <= window.last_t + 1e-12
+        })
+        .filter(|e| e.cause != Cause::Impact)
+        .filter(|e| !(e.kind == loaded.logged.kind && overlaps(e.cells, loaded.logged.cells)))
+        .map(|e| format!("{} ({}) at {:.4} s", e.kind.name(), e.cause.name(), e.t))
+        .collect();
+    let blew_up = simulated.status == Status::BlewUp;
     CounterfactualRow {
         change: name,
         refused: None,
@@ -594,6 +635,13 @@ fn counterfactual(
         floor,
         event_happens: measured.happens,
         steps,
+        outcome: if blew_up {
+            format!("blew up: {}", simulated.reason)
+        } else {
+            "completed".into()
+        },
+        verdict: verdict(measured.happens, blew_up, other_events.len()),
+        other_events,
     }
 }
 
@@ -732,4 +780,18 @@ fn write_steps(rows: &[StepRow], out: &Path) -> std::io::Result<()> {
     ];
     let refs: Vec<(&str, &[f64])> = columns.iter().map(|(n, v)| (*n, v.as_slice())).collect();
     tables::write_columns(&refs, out, "explain_steps", true)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::verdict;
+
+    #[test]
+    fn a_change_prevents_only_what_it_does_not_move_or_hasten() {
+        assert_eq!(verdict(true, false, 0), "again");
+        assert_eq!(verdict(true, true, 3), "again");
+        assert_eq!(verdict(false, true, 0), "blew up");
+        assert_eq!(verdict(false, false, 1), "moved");
+        assert_eq!(verdict(false, false, 0), "prevented");
+    }
 }
