@@ -973,6 +973,22 @@ fn explain_splits_an_injected_kick_and_replays_single_changes() {
         serde_json::from_str(&std::fs::read_to_string(folder.join("explain.json")).unwrap())
             .unwrap();
     assert_eq!(json["matched"], true, "{json}");
+    // The event's own checkpoint (step 200 or 300, checkpoints every 100
+    // steps) lies inside its quiet window: the replays start from the
+    // latest one before it, here step 0's.
+    assert_eq!(
+        json["checkpoint"], "checkpoints/ring_000000000.ckpt",
+        "{json}"
+    );
+    assert_ne!(
+        event.checkpoint.as_deref(),
+        Some("checkpoints/ring_000000000.ckpt")
+    );
+    let explain_from = json["window"]["explain_from"].as_f64().unwrap();
+    assert!(
+        json["checkpoint_t"].as_f64().unwrap() <= explain_from.max(0.0),
+        "{json}"
+    );
     // The parts close to round-off, and the push is the impulse.
     assert!(json["closure_rest_max"].as_f64().unwrap() < 1e-9, "{json}");
     assert_eq!(json["largest_part"]["part"], "impulse", "{json}");

@@ -139,3 +139,19 @@ fn each_cause_has_its_own_message() {
         assert!(!all[i + 1..].contains(m), "{m} is not specific");
     }
 }
+
+#[test]
+fn the_clock_is_read_without_restoring() {
+    let s = stepped_solver();
+    let bytes = s.checkpoint();
+    assert_eq!(checkpoint::clock(&bytes), Ok((s.step_count(), s.time())));
+    assert!(s.step_count() > 0);
+    // A corrupted byte is caught by the seal, as a restore would catch it.
+    let mut bad = bytes.clone();
+    let mid = bad.len() / 2;
+    bad[mid] ^= 1;
+    assert!(matches!(
+        checkpoint::clock(&bad),
+        Err(CheckpointError::Checksum { .. })
+    ));
+}

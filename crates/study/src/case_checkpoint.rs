@@ -18,6 +18,12 @@ pub fn save(solver: &Solver, monitor: &Monitor) -> Vec<u8> {
     w.seal()
 }
 
+/// The step and time of a single-phase case checkpoint, without restoring it.
+pub fn clock(bytes: &[u8]) -> Result<(u64, f64), CheckpointError> {
+    let mut r = Reader(unseal(bytes, MAGIC)?);
+    solver::checkpoint::clock(r.bytes()?)
+}
+
 /// Restores both; on error neither is trusted.
 pub fn load(
     bytes: &[u8],

@@ -7,6 +7,7 @@
 //! With `--counterfactual` it restarts from the same checkpoint once per
 //! single change, applied from the onset window's start.
 
+use crate::case_checkpoint;
 use crate::explain_picture;
 use crate::output_files::write_atomic;
 use crate::probes::replay::{Found, Replay as ReplayChecks};
@@ -186,6 +187,8 @@ struct Loaded {
     case: Case,
     checkpoint: Vec<u8>,
     checkpoint_name: String,
+    /// The time the replays start from.
+    checkpoint_t: f64,
 }
 
 fn load(case_dir: &Path, id: u32) -> Result<Loaded, ExplainError> {
@@ -218,16 +221,69 @@ fn load(case_dir: &Path, id: u32) -> Result<Loaded, ExplainError> {
             study_path.display()
         )));
     }
-    let ckpt_path = case_dir.join(&checkpoint_name);
-    let checkpoint = std::fs::read(&ckpt_path)
-        .map_err(|e| ExplainError(format!("{}: cannot read: {e}", ckpt_path.display())))?;
+    let from = logged.t - case.monitor.quiet_seconds;
+    let (checkpoint_name, checkpoint, checkpoint_t) =
+        replay_checkpoint(case_dir, &checkpoint_name, from)?;
     Ok(Loaded {
         study_path,
         logged,
         case,
         checkpoint,
         checkpoint_name,
+        checkpoint_t,
     })
+}
+
+/// The checkpoint the replays start from: the latest of the case's ring
+/// checkpoints, up to the event's own, whose time is at or before `from`
+/// (the quiet window's start). The event's own checkpoint is only the last
+/// one before the event: with a dense ring it falls inside the window, and
+/// a replay from it would shorten the quiet window and switch every
+/// counterfactual late. Without one early enough, the earliest there is.
+fn replay_checkpoint(
+    case_dir: &Path,
+    logged: &str,
+    from: f64,
+) -> Result<(String, Vec<u8>, f64), ExplainError> {
+    let read = |name: &str| {
+        let path = case_dir.join(name);
+        let bytes = std::fs::read(&path)
+            .map_err(|e| ExplainError(format!("{}: cannot read: {e}", path.display())))?;
+        let (_, t) = case_checkpoint::clock(&bytes)
+            .map_err(|e| ExplainError(format!("{}: {e}", path.display())))?;
+        Ok::<_, ExplainError>((bytes, t))
+    };
+    let step_of = |name: &str| -> Option<u64> {
+        let file = Path::new(name).file_name()?.to_str()?;
+        file.strip_prefix("ring_")?
+            .strip_suffix(".ckpt")?
+            .parse()
+            .ok()
+    };
+    let mut candidates: Vec<(u64, String)> = vec![];
+    if let (Some(last), Ok(entries)) = (
+        step_of(logged),
+        std::fs::read_dir(case_dir.join("checkpoints")),
+    ) {
+        for entry in entries.flatten() {
+            let name = format!("checkpoints/{}", entry.file_name().to_string_lossy());
+            if let Some(step) = step_of(&name).filter(|&s| s <= last) {
+                candidates.push((step, name));
+            }
+        }
+    }
+    candidates.sort();
+    for (_, name) in candidates.iter().rev() {
+        let (bytes, t) = read(name)?;
+        if t <= from + 1e-12 {
+            return Ok((name.clone(), bytes, t));
+        }
+    }
+    let name = candidates
+        .first()
+        .map_or(logged.to_string(), |(_, n)| n.clone());
+    let (bytes, t) = read(&name)?;
+    Ok((name, bytes, t))
 }
 
 pub fn explain(case_dir: &Path, id: u32, opts: &ExplainOptions) -> Result<Outcome, ExplainError> {
@@ -685,6 +741,7 @@ fn finish(
         "case_dir": case_dir.display().to_string(),
         "event": logged.id,
         "checkpoint": loaded.checkpoint_name,
+        "checkpoint_t": loaded.checkpoint_t,
         "replayed_state_hash": found.hash_at_first,
         "logged_state_hash": logged.state_hash,
         "matched": matched,
@@ -722,15 +779,22 @@ fn finish(
         let h = loaded.case.solver.scene.cell;
         explain_picture::write(b, o, h, out).map_err(std::io::Error::other)?;
     }
-    let message = format!(
-        "event {}: {} (hash {}); largest part {largest} {:.3}; leading mechanism {leading} {:.3}; closure {:.1e}",
+    let mut message = format!(
+        "event {}: {} from {} (hash {}); largest part {largest} {:.3}; leading mechanism {leading} {:.3}; closure {:.1e}",
         logged.id,
         if matched { "replayed" } else { "DIVERGED" },
+        loaded.checkpoint_name,
         found.hash_at_first.as_deref().unwrap_or("-"),
         largest_share,
         leading_share,
         rest_max
     );
+    if loaded.checkpoint_t > window.explain_from + 1e-12 {
+        message += &format!(
+            "; note: no checkpoint precedes the quiet window (from t = {:.4} s): the replays start at t = {:.4} s",
+            window.explain_from, loaded.checkpoint_t
+        );
+    }
     Ok(Outcome {
         matched,
         message,

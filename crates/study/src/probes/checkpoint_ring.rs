@@ -43,9 +43,12 @@ impl CheckpointRing {
 
 impl<S: Stepper> Probe<S> for CheckpointRing {
     /// The first checkpoint precedes any event, even one at the first step.
+    /// It is kept for good: a replay of any event can start from it when no
+    /// later checkpoint precedes the event's window.
     fn begin(&mut self, run: &Run<S>) -> std::io::Result<()> {
         if self.every > 0 {
             self.save(run)?;
+            self.pinned.insert(run.step());
         }
         Ok(())
     }
