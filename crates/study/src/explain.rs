@@ -524,12 +524,15 @@ struct Switching {
     method: Option<Method>,
     halve_dt: bool,
     refused: Option<String>,
+    /// The step count when the change was made.
+    switched_at: Option<u64>,
 }
 
 impl Stepper for Switching {
     fn advance(&mut self) -> Result<(), String> {
         let s = &mut self.solver;
         if s.time() + s.next_dt() >= self.at {
+            self.switched_at.get_or_insert(s.step_count());
             if std::mem::take(&mut self.halve_dt) {
                 let mut m = s.config().method.clone();
                 match m.dt {
@@ -645,6 +648,7 @@ fn counterfactual(
         method,
         halve_dt: matches!(change, Change::HalfDt),
         refused: None,
+        switched_at: None,
     };
     if let Err(e) = stepper.load(&loaded.checkpoint, &mut watches) {
         return refused(e.to_string());
@@ -665,6 +669,7 @@ fn counterfactual(
     let ran = runner.run();
     let steps = runner.stepper().step_count().saturating_sub(start);
     let why_refused = runner.stepper().refused.clone();
+    let switched_at = runner.stepper().switched_at.unwrap_or(start);
     drop(runner);
     if let Some(why) = why_refused {
         return refused(why);
@@ -676,9 +681,11 @@ fn counterfactual(
     let other_events: Vec<String> = simulated
         .events
         .iter()
-        .filter(|e| {
-            e.first_step > start && e.t >= window.onset_from && e.t <= window.last_t + 1e-12
-        })
+        .filter(|e| e.t >= window.onset_from && e.t <= window.last_t + 1e-12)
+        // Not at the change's own step: a new transfer counts the kinetic
+        // energy and the transfer loss its own way from there, and the
+        // budget's step at the switch reads as an injection.
+        .filter(|e| e.first_step > switched_at + 1)
         .filter(|e| e.cause != Cause::Impact)
         .filter(|e| !(e.kind == loaded.logged.kind && overlaps(e.cells, loaded.logged.cells)))
         .map(|e| format!("{} ({}) at {:.4} s", e.kind.name(), e.cause.name(), e.t))

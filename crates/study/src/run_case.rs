@@ -158,6 +158,7 @@ fn case_runner<'p, S: Stepper>(
     runner.attach(CheckpointRing::new(
         dir.to_path_buf(),
         case.output.checkpoint_every,
+        case.monitor.quiet_seconds,
     ));
     runner
 }

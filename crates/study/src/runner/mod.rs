@@ -568,6 +568,35 @@ mod tests {
         assert_eq!(r.run().unwrap().status, Status::Completed);
     }
 
+    /// Besides step 0 and the 3 newest, the ring keeps the latest checkpoint
+    /// at least `keep_seconds` older than the newest (where an event's quiet
+    /// window would start), and no older one.
+    #[test]
+    fn the_ring_keeps_a_checkpoint_from_before_the_quiet_window() {
+        let dir = std::env::temp_dir().join(format!("kick-ring-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut r = runner(60, 10);
+        let keep = 22.0 * r.stepper.next_dt();
+        r.attach(CheckpointRing::new(dir.clone(), 5, keep));
+        r.run().unwrap();
+        let mut kept: Vec<(u64, f64)> = std::fs::read_dir(dir.join("checkpoints"))
+            .unwrap()
+            .map(|e| {
+                let bytes = std::fs::read(e.unwrap().path()).unwrap();
+                crate::case_checkpoint::clock(&bytes).unwrap()
+            })
+            .collect();
+        kept.sort_by_key(|k| k.0);
+        let steps: Vec<u64> = kept.iter().map(|k| k.0).collect();
+        assert_eq!(steps[0], 0);
+        assert_eq!(&steps[steps.len() - 3..], [50, 55, 60]);
+        let newest = kept.last().unwrap().1;
+        let (early, next) = (kept[1], kept[2]);
+        assert!(early.1 <= newest - keep, "{kept:?}");
+        assert!(next.1 > newest - keep, "{kept:?}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
     /// A run restarted from a ring checkpoint continues bit for bit: the
     /// same state hash, events and timeseries rows as the run it came from.
     #[test]
@@ -575,7 +604,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("kick-runner-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let mut whole = runner(60, 10);
-        whole.attach(CheckpointRing::new(dir.clone(), 20));
+        whole.attach(CheckpointRing::new(dir.clone(), 20, 0.0));
         let a = whole.run().unwrap();
         let bytes = std::fs::read(dir.join(ring_name(40))).unwrap();
         let mut resumed = runner(60, 10);
