@@ -422,22 +422,37 @@ pub struct CounterfactualRow {
     /// other than impact) and are not the event itself: "KIND (CAUSE) at T s".
     pub other_events: Vec<String>,
     /// `again` (the event happened), `blew up`, `moved` (no event over its
-    /// cells, but another non-physical one), `prevented` (none of these) or
-    /// `refused`.
+    /// cells, but another non-physical one), `injected` (none, but the
+    /// window gained at least the event's injection), `prevented` (none of
+    /// these) or `refused`.
     pub verdict: &'static str,
 }
 
+/// What a counterfactual replay did, for its verdict.
+#[derive(Clone, Copy, Debug)]
+pub struct Replayed {
+    pub event_happens: bool,
+    pub blew_up: bool,
+    pub other_events: usize,
+    /// The window's injection (J/m), and the logged event's.
+    pub injected: f64,
+    pub event_injected: f64,
+}
+
 /// A counterfactual's verdict: an event that did not open again over its
-/// cells is prevented only when the replay also completed the window and
-/// raised no other non-physical event (else the change moved or hastened
-/// the failure, it did not cure it).
-pub fn verdict(event_happens: bool, blew_up: bool, other_events: usize) -> &'static str {
-    if event_happens {
+/// cells is prevented only when the replay also completed the window,
+/// raised no other non-physical event, and gained less energy over the
+/// window than the event injected (else the change moved or hastened the
+/// failure, or hid it from the detector: it did not cure it).
+pub fn verdict(r: Replayed) -> &'static str {
+    if r.event_happens {
         "again"
-    } else if blew_up {
+    } else if r.blew_up {
         "blew up"
-    } else if other_events > 0 {
+    } else if r.other_events > 0 {
         "moved"
+    } else if r.event_injected > 0.0 && !(r.injected < r.event_injected) {
+        "injected"
     } else {
         "prevented"
     }
@@ -703,7 +718,13 @@ fn counterfactual(
         } else {
             "completed".into()
         },
-        verdict: verdict(measured.happens, blew_up, other_events.len()),
+        verdict: verdict(Replayed {
+            event_happens: measured.happens,
+            blew_up,
+            other_events: other_events.len(),
+            injected: measured.injected,
+            event_injected: loaded.logged.energy_injected,
+        }),
         other_events,
     }
 }
@@ -855,14 +876,25 @@ fn write_steps(rows: &[StepRow], out: &Path) -> std::io::Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::verdict;
+    use super::{verdict, Replayed};
 
     #[test]
-    fn a_change_prevents_only_what_it_does_not_move_or_hasten() {
-        assert_eq!(verdict(true, false, 0), "again");
-        assert_eq!(verdict(true, true, 3), "again");
-        assert_eq!(verdict(false, true, 0), "blew up");
-        assert_eq!(verdict(false, false, 1), "moved");
-        assert_eq!(verdict(false, false, 0), "prevented");
+    fn a_change_prevents_only_what_it_does_not_move_hasten_or_hide() {
+        let r = |event_happens, blew_up, other_events, injected| {
+            verdict(Replayed {
+                event_happens,
+                blew_up,
+                other_events,
+                injected,
+                event_injected: 1.0,
+            })
+        };
+        assert_eq!(r(true, false, 0, 0.0), "again");
+        assert_eq!(r(true, true, 3, 9.0), "again");
+        assert_eq!(r(false, true, 0, 0.0), "blew up");
+        assert_eq!(r(false, false, 1, 0.0), "moved");
+        assert_eq!(r(false, false, 0, 1.0), "injected");
+        assert_eq!(r(false, false, 0, f64::NAN), "injected");
+        assert_eq!(r(false, false, 0, 0.5), "prevented");
     }
 }
