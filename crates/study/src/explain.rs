@@ -451,7 +451,7 @@ pub fn verdict(r: Replayed) -> &'static str {
         "blew up"
     } else if r.other_events > 0 {
         "moved"
-    } else if r.event_injected > 0.0 && !(r.injected < r.event_injected) {
+    } else if r.event_injected > 0.0 && (r.injected >= r.event_injected || r.injected.is_nan()) {
         "injected"
     } else {
         "prevented"
