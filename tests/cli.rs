@@ -1006,12 +1006,12 @@ fn explain_splits_an_injected_kick_and_replays_single_changes() {
     assert_eq!(control["verdict"], "again", "{control}");
     assert_eq!(control["outcome"], "completed", "{control}");
     // A row is "prevented" only when the replay completed the window with no
-    // other non-physical event and gained less than the event injected.
+    // other non-physical event and gained less than the control.
     for r in rows.iter().filter(|r| r["refused"].is_null()) {
         let prevented = r["event_happens"] == false
             && r["outcome"] == "completed"
             && r["other_events"].as_array().unwrap().is_empty()
-            && r["injected"].as_f64().unwrap() < event.energy_injected;
+            && r["injected"].as_f64().unwrap() < control["injected"].as_f64().unwrap();
         assert_eq!(r["verdict"] == "prevented", prevented, "{r}");
     }
     let injected = control["injected"].as_f64().unwrap();

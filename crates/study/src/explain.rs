@@ -423,7 +423,7 @@ pub struct CounterfactualRow {
     pub other_events: Vec<String>,
     /// `again` (the event happened), `blew up`, `moved` (no event over its
     /// cells, but another non-physical one), `injected` (none, but the
-    /// window gained at least the event's injection), `prevented` (none of
+    /// window gained at least the control's injection), `prevented` (none of
     /// these) or `refused`.
     pub verdict: &'static str,
 }
@@ -434,7 +434,7 @@ pub struct Replayed {
     pub event_happens: bool,
     pub blew_up: bool,
     pub other_events: usize,
-    /// The window's injection (J/m), and the logged event's.
+    /// The window's injection (J/m), and the control replay's (the event's).
     pub injected: f64,
     pub event_injected: f64,
 }
@@ -442,7 +442,7 @@ pub struct Replayed {
 /// A counterfactual's verdict: an event that did not open again over its
 /// cells is prevented only when the replay also completed the window,
 /// raised no other non-physical event, and gained less energy over the
-/// window than the event injected (else the change moved or hastened the
+/// window than the unchanged control did (else the change moved or hastened the
 /// failure, or hid it from the detector: it did not cure it).
 pub fn verdict(r: Replayed) -> &'static str {
     if r.event_happens {
@@ -616,11 +616,17 @@ fn overlaps(a: CellRange, b: CellRange) -> bool {
     a.i_min <= b.i_max && b.i_min <= a.i_max && a.j_min <= b.j_max && b.j_min <= a.j_max
 }
 
+/// The control (unchanged) first: each change's window injection is judged
+/// against the control's, the same measure over the same window.
 fn counterfactuals(loaded: &Loaded, window: Window) -> Vec<CounterfactualRow> {
-    changes(&loaded.case.solver.method)
-        .into_iter()
-        .map(|(name, change)| counterfactual(loaded, window, name, &change))
-        .collect()
+    let mut rows: Vec<CounterfactualRow> = vec![];
+    for (name, change) in changes(&loaded.case.solver.method) {
+        let control = rows
+            .first()
+            .map_or(loaded.logged.energy_injected, |c| c.injected);
+        rows.push(counterfactual(loaded, window, name, &change, control));
+    }
+    rows
 }
 
 fn counterfactual(
@@ -628,6 +634,7 @@ fn counterfactual(
     window: Window,
     name: String,
     change: &Change,
+    control_injected: f64,
 ) -> CounterfactualRow {
     let floor = loaded.logged.evidence.energy_floor;
     let refused = |why: String| CounterfactualRow {
@@ -723,7 +730,7 @@ fn counterfactual(
             blew_up,
             other_events: other_events.len(),
             injected: measured.injected,
-            event_injected: loaded.logged.energy_injected,
+            event_injected: control_injected,
         }),
         other_events,
     }
