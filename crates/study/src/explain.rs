@@ -681,7 +681,11 @@ fn counterfactual(
         injected: 0.0,
         happens: false,
     };
-    let mut runner = Runner::new(stepper, watches, RunOptions::new(None, Rows::every_step()));
+    // A change whose step collapses stops as a blow-up, as a case does,
+    // instead of crawling to the window's end.
+    let mut opts = RunOptions::new(None, Rows::every_step());
+    opts.collapse_from = Some(stepper.solver.next_dt());
+    let mut runner = Runner::new(stepper, watches, opts);
     runner.attach(WindowInjection {
         from: window.onset_from,
         until: window.last_t,
