@@ -93,6 +93,7 @@ fn main() {
     let mut symplectic = [0.0f64; 4];
     let mut booked_total = 0.0;
     let changes_j = remedy != "0";
+    let water_area: f64 = s.view().volume0.iter().sum();
     // Sums over steps: the remedy's J change at the start pressure, its
     // exact stored change, and sum V0 (J_after - J_new)^2.
     let (mut at_start_pressure, mut exact, mut squared) = (0.0, 0.0, 0.0);
@@ -180,7 +181,7 @@ fn main() {
         );
         println!(
             "  rms J change per step   {:.4e} (sum V0 dJ^2 over steps {squared:.4e})",
-            (squared / steps / (0.2 * 0.4)).sqrt()
+            (squared / steps / water_area).sqrt()
         );
     }
 }

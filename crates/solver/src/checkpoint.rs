@@ -308,41 +308,21 @@ pub fn save(s: &Solver) -> Vec<u8> {
     w.seal()
 }
 
-/// A checkpoint's step and time, read from its header without restoring it
-/// (to choose which of a case's checkpoints a replay starts from).
-pub fn clock(bytes: &[u8]) -> Result<(u64, f64), CheckpointError> {
-    let mut r = Reader(unseal(bytes, MAGIC)?);
-    let version = r.u64()? as u32;
-    if version != VERSION {
-        return Err(CheckpointError::Version(version));
-    }
-    // n_initial, n, escaped, inverted, mass_escaped, mass_inverted, drained,
-    // mass_drained, injected, mass_injected: as `save` writes them.
-    for _ in 0..10 {
-        r.u64()?;
-    }
-    r.bool()?;
-    r.f64()?;
-    let step = r.u64()?;
-    let time = r.f64()?;
-    Ok((step, time))
+/// What `save` writes before the dynamic fields.
+struct Header {
+    n_initial: u64,
+    n: u64,
+    losses: crate::Losses,
+    step: u64,
+    time: f64,
 }
 
-pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
-    let body = unseal(bytes, MAGIC)?;
-    let mut r = Reader(body);
+fn read_header(r: &mut Reader) -> Result<Header, CheckpointError> {
     let version = r.u64().map(|w| w as u32)?;
     if version != VERSION {
         return Err(CheckpointError::Version(version));
     }
     let n_initial = r.u64()?;
-    let expected = s.n_initial as u64;
-    if n_initial != expected {
-        return Err(CheckpointError::ParticleCount {
-            stored: n_initial,
-            expected,
-        });
-    }
     let n = r.u64()?;
     let escaped = r.u64()?;
     let inverted = r.u64()?;
@@ -352,21 +332,9 @@ pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
     let mass_drained = r.f64()?;
     let injected = r.u64()?;
     let mass_injected = r.f64()?;
-    let accounted = [escaped, inverted, drained]
-        .into_iter()
-        .try_fold(n, |sum, k| sum.checked_add(k));
-    if accounted != n_initial.checked_add(injected) {
-        return Err(CheckpointError::ParticleCount {
-            stored: n
-                .saturating_add(escaped)
-                .saturating_add(inverted)
-                .saturating_add(drained),
-            expected,
-        });
-    }
     let has_first = r.bool()?;
     let t_first = r.f64()?;
-    s.losses = crate::Losses {
+    let losses = crate::Losses {
         escaped,
         inverted,
         mass_escaped,
@@ -377,9 +345,58 @@ pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
         injected,
         mass_injected,
     };
+    let step = r.u64()?;
+    let time = r.f64()?;
+    Ok(Header {
+        n_initial,
+        n,
+        losses,
+        step,
+        time,
+    })
+}
+
+/// A checkpoint's step and time, read from its header without restoring it
+/// (to choose which of a case's checkpoints a replay starts from).
+pub fn clock(bytes: &[u8]) -> Result<(u64, f64), CheckpointError> {
+    let h = read_header(&mut Reader(unseal(bytes, MAGIC)?))?;
+    Ok((h.step, h.time))
+}
+
+pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
+    let body = unseal(bytes, MAGIC)?;
+    let mut r = Reader(body);
+    let Header {
+        n_initial,
+        n,
+        losses,
+        step,
+        time,
+    } = read_header(&mut r)?;
+    let expected = s.n_initial as u64;
+    if n_initial != expected {
+        return Err(CheckpointError::ParticleCount {
+            stored: n_initial,
+            expected,
+        });
+    }
+    let (escaped, inverted, drained) = (losses.escaped, losses.inverted, losses.drained);
+    let accounted = [escaped, inverted, drained]
+        .into_iter()
+        .try_fold(n, |sum, k| sum.checked_add(k));
+    if accounted != n_initial.checked_add(losses.injected) {
+        return Err(CheckpointError::ParticleCount {
+            stored: n
+                .saturating_add(escaped)
+                .saturating_add(inverted)
+                .saturating_add(drained),
+            expected,
+        });
+    }
+    s.losses = losses;
     s.culled.clear();
-    s.step = r.u64()?;
-    s.time = r.f64()?;
+    s.step = step;
+    s.time = time;
     s.dt = r.f64()?;
     s.dt_fixed = r.f64()?;
     s.dissipated = r.f64()?;

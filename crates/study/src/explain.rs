@@ -10,6 +10,7 @@
 use crate::case_checkpoint;
 use crate::explain_picture;
 use crate::output_files::write_atomic;
+use crate::probes::checkpoint_ring::ring_step;
 use crate::probes::replay::{Found, Replay as ReplayChecks};
 use crate::run_case::{watches, with_threads};
 use crate::runner::{Probe, Rows, Run, RunOptions, Runner, Stepper, Watch};
@@ -253,21 +254,14 @@ fn replay_checkpoint(
             .map_err(|e| ExplainError(format!("{}: {e}", path.display())))?;
         Ok::<_, ExplainError>((bytes, t))
     };
-    let step_of = |name: &str| -> Option<u64> {
-        let file = Path::new(name).file_name()?.to_str()?;
-        file.strip_prefix("ring_")?
-            .strip_suffix(".ckpt")?
-            .parse()
-            .ok()
-    };
     let mut candidates: Vec<(u64, String)> = vec![];
     if let (Some(last), Ok(entries)) = (
-        step_of(logged),
+        ring_step(logged),
         std::fs::read_dir(case_dir.join("checkpoints")),
     ) {
         for entry in entries.flatten() {
             let name = format!("checkpoints/{}", entry.file_name().to_string_lossy());
-            if let Some(step) = step_of(&name).filter(|&s| s <= last) {
+            if let Some(step) = ring_step(&name).filter(|&s| s <= last) {
                 candidates.push((step, name));
             }
         }

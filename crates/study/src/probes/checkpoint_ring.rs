@@ -21,6 +21,15 @@ pub fn ring_name(step: u64) -> String {
     format!("checkpoints/ring_{step:09}.ckpt")
 }
 
+/// The step of a ring checkpoint named by `ring_name` (folder optional).
+pub fn ring_step(name: &str) -> Option<u64> {
+    let file = std::path::Path::new(name).file_name()?.to_str()?;
+    file.strip_prefix("ring_")?
+        .strip_suffix(".ckpt")?
+        .parse()
+        .ok()
+}
+
 pub struct CheckpointRing {
     dir: PathBuf,
     every: u64,

@@ -442,7 +442,7 @@ impl<'p, S: Stepper> Runner<'p, S> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::probes::checkpoint_ring::{ring_name, CheckpointRing};
+    use crate::probes::checkpoint_ring::{ring_name, ring_step, CheckpointRing};
     use monitor::MonitorConfig;
     use solver::{ShapeKind, Solver, SolverConfig, TransferKind};
 
@@ -589,6 +589,7 @@ mod tests {
         kept.sort_by_key(|k| k.0);
         let steps: Vec<u64> = kept.iter().map(|k| k.0).collect();
         assert_eq!(steps[0], 0);
+        assert_eq!(ring_step(&ring_name(steps[1])), Some(steps[1]));
         assert_eq!(&steps[steps.len() - 3..], [50, 55, 60]);
         let newest = kept.last().unwrap().1;
         let (early, next) = (kept[1], kept[2]);
