@@ -154,6 +154,12 @@ class Plan:
         self.require(sel, "ablation.toml", "K1.5MPa_tait_mu0_*_e0")
         for c in sel:
             self.add("7 ablation", "ablation.toml", c, 0.2)
+        # 8. pressure-implicit dam break at h = 1 cm, 1.5 MPa Tait, to 1 s.
+        sel = [c for c in self.names("pressure_implicit.toml")
+               if c.startswith("h1cm_tait-K1.5MPa_")]
+        self.require(sel, "pressure_implicit.toml", "h1cm_tait-K1.5MPa_*")
+        for c in sel:
+            self.add("8 pressure_implicit", "pressure_implicit.toml", c, 1.0)
         if self.errors:
             raise SystemExit("case list does not match `kick list`:\n  " + "\n  ".join(self.errors))
         return self

@@ -6,6 +6,7 @@
 
 use crate::cells::CellBins;
 use crate::geometry::Geometry;
+use crate::stats::median_and_mad;
 
 /// Most values a window's median and MAD are estimated from.
 pub const MAX_SAMPLES: usize = 128;
@@ -85,20 +86,6 @@ impl WindowStats {
                 }
             }
         }
-        let median = median_in_place(&mut self.values);
-        for v in self.values.iter_mut() {
-            *v = (*v - median).abs();
-        }
-        let mad = median_in_place(&mut self.values);
-        (median, mad)
+        median_and_mad(&mut self.values)
     }
-}
-
-/// Lower median (reorders `values`).
-pub fn median_in_place(values: &mut [f64]) -> f64 {
-    if values.is_empty() {
-        return 0.0;
-    }
-    let mid = (values.len() - 1) / 2;
-    *values.select_nth_unstable_by(mid, f64::total_cmp).1
 }

@@ -187,7 +187,7 @@ impl FromIterator<Rule> for Rules {
 impl Serialize for Rules {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         use serde::ser::SerializeSeq;
-        // The length up front: binary formats (bincode) need it.
+        // The length up front: the checkpoint codec needs it.
         let mut seq = s.serialize_seq(Some(self.len()))?;
         for r in self.iter() {
             seq.serialize_element(&r)?;

@@ -27,6 +27,7 @@
 //! - M5, time step (a flag with its value): the event's Courant number and
 //!   nodal advective number, as the event logged them.
 
+use crate::stats::median_and_mad;
 use solver::forensics::ExplainedStep;
 use solver::Vec2;
 use std::collections::HashMap;
@@ -317,15 +318,8 @@ impl Mechanisms {
         if near.len() < 3 || !pressure[q].is_finite() {
             return false;
         }
-        let median = lower_median(&mut near);
-        let mut dev: Vec<f64> = near.iter().map(|p| (p - median).abs()).collect();
-        let mad = lower_median(&mut dev);
+        let (median, mad) = median_and_mad(&mut near);
         let sigma = (1.4826 * mad).max(OUTLIER_FLOOR * self.pressure_unit);
         (pressure[q] - median).abs() > OUTLIER_SIGMAS * sigma
     }
-}
-
-fn lower_median(v: &mut [f64]) -> f64 {
-    let k = (v.len() - 1) / 2;
-    *v.select_nth_unstable_by(k, |a, b| a.total_cmp(b)).1
 }

@@ -5,66 +5,34 @@
 
 use crate::events::Event;
 use crate::Monitor;
-use bincode::Options;
-use solver::checkpoint::{unseal, CheckpointError, Reader, Writer};
+use solver::checkpoint::{decode, encode, unseal, CheckpointError, Reader, Writer};
 
 // 9: B-spline APIC's transfer loss is measured on the grid and added (an
 // older checkpoint's sum is the particle measure, which was not).
 // A (10): an eleventh remedy (Uintah's artificial viscosity) lengthens the
 // per-remedy booking.
-const MAGIC: &[u8; 8] = b"KICKMONA";
-
-/// The events' encoding: bincode (little-endian, varint integers, f64 bits as
-/// they are) through `Event`'s serde derive, so the checkpoint and the summary
-/// share one schema.
-fn codec() -> impl Options {
-    bincode::DefaultOptions::new()
-}
+// B (11): the events and the step history through the solver's checkpoint
+// codec (solver::checkpoint::encode), where bincode wrote them.
+const MAGIC: &[u8; 8] = b"KICKMONB";
 
 fn encode_events(events: &[Event]) -> Vec<u8> {
-    codec()
-        .serialize(events)
-        .expect("events serialise: known lengths, no maps")
+    encode(events).expect("events serialise: known lengths, no maps")
 }
 
-fn decode_events(mut bytes: &[u8]) -> Result<Vec<Event>, CheckpointError> {
-    let events = codec()
-        .allow_trailing_bytes()
-        .deserialize_from(&mut bytes)
-        .map_err(|e| decode_error(&e))?;
-    match bytes.len() {
-        0 => Ok(events),
-        count => Err(CheckpointError::TrailingBytes { count }),
-    }
-}
-
-/// A bincode decode error as the checkpoint error it amounts to.
-fn decode_error(e: &bincode::ErrorKind) -> CheckpointError {
-    use bincode::ErrorKind as K;
-    match e {
-        K::Io(_) => CheckpointError::Truncated,
-        K::InvalidUtf8Encoding(_) | K::InvalidCharEncoding => CheckpointError::BadUtf8,
-        K::InvalidBoolEncoding(code) => CheckpointError::UnknownCode {
-            what: "event flag",
-            code: (*code).into(),
+/// The events `bytes` hold; the codec's codes named as the events' own.
+fn decode_events(bytes: &[u8]) -> Result<Vec<Event>, CheckpointError> {
+    decode(bytes).map_err(|e| match e {
+        CheckpointError::UnknownCode { what, code } => CheckpointError::UnknownCode {
+            what: match what {
+                "variant" => "event variant",
+                "flag" => "event flag",
+                "option tag" => "event option tag",
+                other => other,
+            },
+            code,
         },
-        K::InvalidTagEncoding(code) => CheckpointError::UnknownCode {
-            what: "event option tag",
-            code: *code as u64,
-        },
-        // serde's own errors: an enum variant (event kind, rule, deformation)
-        // this build does not know; serde keeps its index only in the message
-        // ("invalid value: integer `7`, expected variant index 0 <= i < 4").
-        other => CheckpointError::UnknownCode {
-            what: "event variant",
-            code: other
-                .to_string()
-                .split('`')
-                .nth(1)
-                .and_then(|c| c.parse().ok())
-                .unwrap_or(u64::MAX),
-        },
-    }
+        other => other,
+    })
 }
 
 impl Monitor {
@@ -94,11 +62,7 @@ impl Monitor {
         w.f64(self.prev_vertical_speed);
         w.u64(self.events_dropped);
         w.bytes(&encode_events(&self.events));
-        w.bytes(
-            &codec()
-                .serialize(&self.steps)
-                .expect("step history serialises"),
-        );
+        w.bytes(&encode(&self.steps).expect("step history serialises"));
         // Beside the events: monitor bookkeeping kept out of their serde form.
         for e in &self.events {
             w.f64(e.injected_at_open);
@@ -158,9 +122,7 @@ impl Monitor {
         self.prev_vertical_speed = r.f64()?;
         self.events_dropped = r.u64()?;
         let mut events = decode_events(r.bytes()?)?;
-        let steps: crate::step_history::StepHistory = codec()
-            .deserialize(r.bytes()?)
-            .map_err(|e| decode_error(&e))?;
+        let steps: crate::step_history::StepHistory = decode(r.bytes()?)?;
         if !steps.is_whole() {
             return Err(CheckpointError::Truncated);
         }

@@ -160,6 +160,14 @@ fn damaged_state_is_refused() {
         Err(CheckpointError::TrailingBytes { count: 1 })
     );
     let mut old = body.to_vec();
-    old[..8].copy_from_slice(b"KICKMON1");
+    old[..8].copy_from_slice(b"KICKMONA");
+    assert_eq!(
+        restore(&reseal(&old)),
+        Err(CheckpointError::Format {
+            found: "KICKMONA".into(),
+            reads: "KICKMONB".into()
+        })
+    );
+    old[..8].copy_from_slice(b"NOTKICK!");
     assert_eq!(restore(&reseal(&old)), Err(CheckpointError::BadMagic));
 }

@@ -582,52 +582,60 @@ impl SolverConfig {
             "at least one [[scene.body]] is required",
         )?;
         for (i, b) in s.bodies.iter().enumerate() {
-            let key = format!("scene.body[{i}].rect");
-            ordered_rect(&b.rect, &key)?;
-            check(
-                b.rect[0] >= s.origin[0] - 1e-12
-                    && b.rect[1] >= s.origin[1] - 1e-12
-                    && b.rect[2] <= s.origin[0] + s.size[0] + 1e-12
-                    && b.rect[3] <= s.origin[1] + s.size[1] + 1e-12,
-                &key,
-                "must lie inside the box",
-            )?;
-            check(
-                b.fraction > 0.0 && b.fraction <= 1.0,
-                &format!("scene.body[{i}].fraction"),
-                format!("{} is outside (0, 1]", b.fraction),
-            )?;
-            let names: Vec<&str> = s.materials.iter().map(|m| m.name.as_str()).collect();
-            check(
-                s.material_index(b).is_some(),
-                &format!("scene.body[{i}].material"),
-                if b.material.is_empty() {
-                    format!("is required (materials: {})", names.join(", "))
-                } else {
-                    format!(
-                        "unknown material \"{}\" (defined: {})",
-                        b.material,
-                        names.join(", ")
-                    )
-                },
-            )?;
-            check(
-                b.velocity.iter().all(|v| v.is_finite()),
-                &format!("scene.body[{i}].velocity"),
-                "must be finite",
-            )?;
-            if let Some(flow) = &b.flow {
-                let key = format!("scene.body[{i}].flow");
-                flow.check(b.rect, s.periodic, s.gravity, &key)?;
-                check(
-                    flow.drift_scale(b.velocity) > 0.0,
-                    &format!("scene.body[{i}].velocity"),
-                    "must be nonzero under a grid_seed flow (its seed is a share of it)",
-                )?;
-            }
+            self.validate_body(i, b)?;
         }
         if s.initial == InitialState::HydrostaticGate {
             self.validate_gates()?;
+        }
+        Ok(())
+    }
+
+    /// Body `i`: a rectangle inside the box, a fraction in (0, 1], a known
+    /// material, a finite velocity and a consistent initial flow.
+    fn validate_body(&self, i: usize, b: &Body) -> Result<(), ConfigError> {
+        let s = &self.scene;
+        let key = format!("scene.body[{i}].rect");
+        ordered_rect(&b.rect, &key)?;
+        check(
+            b.rect[0] >= s.origin[0] - 1e-12
+                && b.rect[1] >= s.origin[1] - 1e-12
+                && b.rect[2] <= s.origin[0] + s.size[0] + 1e-12
+                && b.rect[3] <= s.origin[1] + s.size[1] + 1e-12,
+            &key,
+            "must lie inside the box",
+        )?;
+        check(
+            b.fraction > 0.0 && b.fraction <= 1.0,
+            &format!("scene.body[{i}].fraction"),
+            format!("{} is outside (0, 1]", b.fraction),
+        )?;
+        let names: Vec<&str> = s.materials.iter().map(|m| m.name.as_str()).collect();
+        check(
+            s.material_index(b).is_some(),
+            &format!("scene.body[{i}].material"),
+            if b.material.is_empty() {
+                format!("is required (materials: {})", names.join(", "))
+            } else {
+                format!(
+                    "unknown material \"{}\" (defined: {})",
+                    b.material,
+                    names.join(", ")
+                )
+            },
+        )?;
+        check(
+            b.velocity.iter().all(|v| v.is_finite()),
+            &format!("scene.body[{i}].velocity"),
+            "must be finite",
+        )?;
+        if let Some(flow) = &b.flow {
+            let key = format!("scene.body[{i}].flow");
+            flow.check(b.rect, s.periodic, s.gravity, &key)?;
+            check(
+                flow.drift_scale(b.velocity) > 0.0,
+                &format!("scene.body[{i}].velocity"),
+                "must be nonzero under a grid_seed flow (its seed is a share of it)",
+            )?;
         }
         Ok(())
     }

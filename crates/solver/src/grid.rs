@@ -264,6 +264,13 @@ impl Grid {
     /// widened by the stencil in x with shifts, ORed into the `width` rows it
     /// covers, then mirrored onto the ghosts' partners (x, then y).
     pub(crate) fn mark_active(&mut self, occupied: impl Fn(usize) -> bool, width: usize) {
+        self.set_active_bits(occupied, width);
+        self.mirror_active_bits();
+        self.list_active();
+    }
+
+    /// One bit per node reached by the stencil of an occupied bin.
+    fn set_active_bits(&mut self, occupied: impl Fn(usize) -> bool, width: usize) {
         let [nx, ny] = self.dims;
         let words = self.row_words;
         self.active_bits.fill(0);
@@ -300,6 +307,12 @@ impl Grid {
                 }
             }
         }
+    }
+
+    /// The ghosts' partners of the active bits, so that fold and fill see both.
+    fn mirror_active_bits(&mut self) {
+        let [_, ny] = self.dims;
+        let words = self.row_words;
         // Mirror partners: ghost columns first, then whole ghost rows (which
         // carries the corner partners along). Partners are never ghosts.
         for j in 0..ny {
@@ -315,7 +328,13 @@ impl Grid {
                 self.active_bits[partner * words + k] |= self.active_bits[j * words + k];
             }
         }
+    }
 
+    /// The active and in-box lists, and the fold and fill operations in
+    /// their fixed order, from the bits.
+    fn list_active(&mut self) {
+        let [nx, ny] = self.dims;
+        let words = self.row_words;
         self.active.clear();
         self.inside.clear();
         for ops in [&mut self.fold_ops, &mut self.fill_ops] {

@@ -104,6 +104,14 @@ fn reader_reports_bad_utf8_leftovers_and_short_fields() {
     let mut r = Reader(unseal(&sealed, MAGIC).unwrap());
     assert_eq!(r.bytes(), Err(CheckpointError::Truncated));
     assert_eq!(unseal(&sealed, b"KICKSTAT"), Err(CheckpointError::BadMagic));
+    // Another version of the same format is named as such.
+    assert_eq!(
+        unseal(&sealed, b"KICKTESU"),
+        Err(CheckpointError::Format {
+            found: "KICKTEST".into(),
+            reads: "KICKTESU".into()
+        })
+    );
 }
 
 #[test]
@@ -123,6 +131,13 @@ fn each_cause_has_its_own_message() {
             "unknown event kind code 7",
         ),
         (CheckpointError::BadMagic, "bad magic"),
+        (
+            CheckpointError::Format {
+                found: "KICKMONA".into(),
+                reads: "KICKMONB".into(),
+            },
+            "format KICKMONA, this build reads KICKMONB",
+        ),
         (
             CheckpointError::Checksum {
                 stored: 1,

@@ -1,6 +1,10 @@
 //! `kick`: runs studies of the MPM kinematic anomaly.
 
-use study::{bench, explain, matrix, report, reproduce, run_case, study_file};
+mod report;
+
+use study::replay::{bench, explain, reproduce};
+use study::run::{case, matrix};
+use study::study_file;
 
 use clap::{Args, Parser, Subcommand};
 use solver::{ShapeKind, TransferKind};
@@ -225,12 +229,12 @@ fn run_command(args: RunArgs) -> ExitCode {
         return bad_input("--threads: 0 is out of range (allowed >= 1)");
     }
     let dir = out.join(&chosen.name);
-    let opts = run_case::CaseOptions {
+    let opts = case::CaseOptions {
         threads,
-        bar: Some(indicatif::ProgressBar::new(1000).with_style(run_case::progress_style())),
+        bar: Some(indicatif::ProgressBar::new(1000).with_style(case::progress_style())),
         csv,
     };
-    match run_case::run_case(chosen, &dir, &opts) {
+    match case::run_case(chosen, &dir, &opts) {
         Ok(s) => {
             println!(
                 "case {}: {} after {} steps, t = {:.4} s ({}), wall {:.1} s, {:.2} M particle-steps/s",
@@ -369,6 +373,12 @@ fn explain_command(args: ExplainArgs) -> ExitCode {
     };
     match explain::explain(&case_dir, event, &opts) {
         Ok(o) => {
+            if let Some(p) = &o.picture {
+                if let Err(e) = report::explain_picture::write(&p.before, &p.onset, p.h, &o.out) {
+                    eprintln!("kick explain: the picture in {}: {e}", o.out.display());
+                    return ExitCode::FAILURE;
+                }
+            }
             println!("{}", o.message);
             println!(
                 "explain.json, explain_steps and explain_cells in {}",
@@ -427,7 +437,7 @@ fn list_command(args: ListArgs) -> ExitCode {
             .scene
             .materials
             .iter()
-            .map(study::labels::named_material_label)
+            .map(study::study_file::labels::named_material_label)
             .collect();
         // The pressure-implicit step has its own order and a flow step.
         let stepping = match m.formulation {

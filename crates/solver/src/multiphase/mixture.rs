@@ -35,72 +35,81 @@ pub struct Mixture {
     before_exchange: [Vec<Vec2>; 2],
 }
 
+/// What a mixture needs of its phases and its drag: one box and grid,
+/// the explicit formulation, particle quadrature, no remedy that assumes a
+/// phase fills its cells, and a drag in range.
+fn check_phases(phases: &[Solver; 2], drag: &Drag) -> Result<(), ConfigError> {
+    let (a, b) = (&phases[0].cfg.scene, &phases[1].cfg.scene);
+    let same = a.origin == b.origin
+        && a.cell == b.cell
+        && a.size == b.size
+        && a.periodic == b.periodic
+        && a.no_slip == b.no_slip;
+    if !same {
+        return Err(ConfigError {
+            key: "scene".into(),
+            message: "the phases of a mixture need the same box, cell, periodic axes and walls"
+                .into(),
+        });
+    }
+    for p in phases.iter() {
+        // A phase fills only its share of each node and of the space.
+        p.config().method.remedies.refuse_in_mixture()?;
+    }
+    if phases
+        .iter()
+        .any(|p| p.config().method.formulation != crate::config::Formulation::Explicit)
+    {
+        // Its pressure solve is for one fluid filling its cells.
+        return Err(ConfigError {
+            key: "method.formulation".into(),
+            message: "\"pressure_implicit\" solves one fluid phase; a mixture needs \"explicit\""
+                .into(),
+        });
+    }
+    if phases
+        .iter()
+        .any(|p| p.config().method.quadrature == crate::config::QuadratureKind::Mixed)
+    {
+        // Its full cells are judged by one phase's density.
+        return Err(ConfigError {
+            key: "method.quadrature".into(),
+            message:
+                "\"mixed\" is for a single phase: in a mixture each phase fills only part of a cell"
+                    .into(),
+        });
+    }
+    if !(drag.coefficient >= 0.0 && drag.coefficient.is_finite()) {
+        return Err(ConfigError {
+            key: "drag.coefficient".into(),
+            message: format!("{} is not a finite number >= 0", drag.coefficient),
+        });
+    }
+    if drag.model.is_particle_based() && drag.update != DragUpdate::Explicit {
+        return Err(ConfigError {
+            key: "drag.update".into(),
+            message: format!(
+                "{:?} with the particle-based model {:?} (allowed: explicit)",
+                drag.update, drag.model
+            ),
+        });
+    }
+    if let Some(n0) = drag.kozeny_carman {
+        if !(n0 > 0.0 && n0 < 1.0) {
+            return Err(ConfigError {
+                key: "drag.kozeny_carman".into(),
+                message: format!("reference porosity {n0} is outside (0, 1)"),
+            });
+        }
+    }
+    Ok(())
+}
+
 impl Mixture {
     /// Two phases over the same box and grid (`scene.origin`, `cell`, `size`,
     /// `periodic` alike), both at t = 0.
     pub fn new(phases: [Solver; 2], drag: Drag) -> Result<Self, ConfigError> {
-        let (a, b) = (&phases[0].cfg.scene, &phases[1].cfg.scene);
-        let same = a.origin == b.origin
-            && a.cell == b.cell
-            && a.size == b.size
-            && a.periodic == b.periodic
-            && a.no_slip == b.no_slip;
-        if !same {
-            return Err(ConfigError {
-                key: "scene".into(),
-                message: "the phases of a mixture need the same box, cell, periodic axes and walls"
-                    .into(),
-            });
-        }
-        for p in phases.iter() {
-            // A phase fills only its share of each node and of the space.
-            p.config().method.remedies.refuse_in_mixture()?;
-        }
-        if phases
-            .iter()
-            .any(|p| p.config().method.formulation != crate::config::Formulation::Explicit)
-        {
-            // Its pressure solve is for one fluid filling its cells.
-            return Err(ConfigError {
-                key: "method.formulation".into(),
-                message:
-                    "\"pressure_implicit\" solves one fluid phase; a mixture needs \"explicit\""
-                        .into(),
-            });
-        }
-        if phases
-            .iter()
-            .any(|p| p.config().method.quadrature == crate::config::QuadratureKind::Mixed)
-        {
-            // Its full cells are judged by one phase's density.
-            return Err(ConfigError {
-                key: "method.quadrature".into(),
-                message: "\"mixed\" is for a single phase: in a mixture each phase fills only part of a cell".into(),
-            });
-        }
-        if !(drag.coefficient >= 0.0 && drag.coefficient.is_finite()) {
-            return Err(ConfigError {
-                key: "drag.coefficient".into(),
-                message: format!("{} is not a finite number >= 0", drag.coefficient),
-            });
-        }
-        if drag.model.is_particle_based() && drag.update != DragUpdate::Explicit {
-            return Err(ConfigError {
-                key: "drag.update".into(),
-                message: format!(
-                    "{:?} with the particle-based model {:?} (allowed: explicit)",
-                    drag.update, drag.model
-                ),
-            });
-        }
-        if let Some(n0) = drag.kozeny_carman {
-            if !(n0 > 0.0 && n0 < 1.0) {
-                return Err(ConfigError {
-                    key: "drag.kozeny_carman".into(),
-                    message: format!("reference porosity {n0} is outside (0, 1)"),
-                });
-            }
-        }
+        check_phases(&phases, &drag)?;
         let scratch = drag::Scratch::new(&phases[0].grid);
         let before_exchange = [0, 1].map(|k| vec![Vec2::zeros(); phases[k].grid.vel_new.len()]);
         let mut mixture = Mixture {

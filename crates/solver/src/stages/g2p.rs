@@ -79,41 +79,7 @@ fn run<const W: usize, const MODE: u8>(
         .into_par_iter()
         .pieces(crate::par::piece_len(stencils.len()))
         .for_each(|(x, v, affine, accel, st)| {
-            let [fx, fy] = st.frac;
-            let (wx, dwx) = shape.stencil_weights::<W>(fx, st.half[0]);
-            let (wy, dwy) = shape.stencil_weights::<W>(fy, st.half[1]);
-            let base = st.node as usize;
-            let mut v_pic = Vec2::zeros();
-            let mut dv = Vec2::zeros();
-            let (mut b0, mut b1) = (Vec2::zeros(), Vec2::zeros());
-            for c in 0..W {
-                let row = base + c * nx;
-                // s0 = sum N_x v; s1 = sum N_x a v (spline APIC) or sum dN_x v.
-                let (mut s0, mut s1, mut sd) = (Vec2::zeros(), Vec2::zeros(), Vec2::zeros());
-                for a in 0..W {
-                    let vn = vel_new[row + a];
-                    s0 += wx[a] * vn;
-                    sd += wx[a] * (vn - vel[row + a]);
-                    match MODE {
-                        APIC_SPLINE => s1 += (wx[a] * a as f64) * vn,
-                        APIC_GRADIENT => s1 += dwx[a] * vn,
-                        _ => {}
-                    }
-                }
-                v_pic += wy[c] * s0;
-                dv += wy[c] * sd;
-                match MODE {
-                    APIC_SPLINE => {
-                        b0 += wy[c] * (s1 - fx * s0);
-                        b1 += (wy[c] * (c as f64 - fy)) * s0;
-                    }
-                    APIC_GRADIENT => {
-                        b0 += wy[c] * s1;
-                        b1 += dwy[c] * s0;
-                    }
-                    _ => {}
-                }
-            }
+            let Gathered { v_pic, dv, b0, b1 } = gather::<W, MODE>(shape, st, vel, vel_new, nx);
             *accel = dv * inv_dt;
             *v = if MODE == FLIP {
                 alpha * (*v + dv) + (1.0 - alpha) * v_pic
@@ -135,4 +101,60 @@ fn run<const W: usize, const MODE: u8>(
                 }
             }
         });
+}
+
+/// What G2P gathers at a particle from its stencil: the PIC velocity, the
+/// grid's velocity change, and the affine matrix's columns before scaling.
+struct Gathered {
+    v_pic: Vec2,
+    dv: Vec2,
+    b0: Vec2,
+    b1: Vec2,
+}
+
+/// The stencil sums of G2P at one particle, row by row (x inner).
+#[inline(always)]
+fn gather<const W: usize, const MODE: u8>(
+    shape: &Shape,
+    st: &Stencil,
+    vel: &[Vec2],
+    vel_new: &[Vec2],
+    nx: usize,
+) -> Gathered {
+    let [fx, fy] = st.frac;
+    let (wx, dwx) = shape.stencil_weights::<W>(fx, st.half[0]);
+    let (wy, dwy) = shape.stencil_weights::<W>(fy, st.half[1]);
+    let base = st.node as usize;
+    let mut v_pic = Vec2::zeros();
+    let mut dv = Vec2::zeros();
+    let (mut b0, mut b1) = (Vec2::zeros(), Vec2::zeros());
+    for c in 0..W {
+        let row = base + c * nx;
+        // s0 = sum N_x v; s1 = sum N_x a v (spline APIC) or sum dN_x v.
+        let (mut s0, mut s1, mut sd) = (Vec2::zeros(), Vec2::zeros(), Vec2::zeros());
+        for a in 0..W {
+            let vn = vel_new[row + a];
+            s0 += wx[a] * vn;
+            sd += wx[a] * (vn - vel[row + a]);
+            match MODE {
+                APIC_SPLINE => s1 += (wx[a] * a as f64) * vn,
+                APIC_GRADIENT => s1 += dwx[a] * vn,
+                _ => {}
+            }
+        }
+        v_pic += wy[c] * s0;
+        dv += wy[c] * sd;
+        match MODE {
+            APIC_SPLINE => {
+                b0 += wy[c] * (s1 - fx * s0);
+                b1 += (wy[c] * (c as f64 - fy)) * s0;
+            }
+            APIC_GRADIENT => {
+                b0 += wy[c] * s1;
+                b1 += dwy[c] * s0;
+            }
+            _ => {}
+        }
+    }
+    Gathered { v_pic, dv, b0, b1 }
 }

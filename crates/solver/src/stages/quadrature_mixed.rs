@@ -116,9 +116,26 @@ fn forces_w<const W: usize>(
     rho0: f64,
     s: &mut Scratch,
 ) {
+    mark_full_cells::<W>(ps, shape, grid, rho0, s);
+    particle_forces::<W>(ps, stencils, shape, grid, s);
+    cell_point_forces::<W>(shape, grid, s);
+    for &n in &grid.active {
+        let n = n as usize;
+        grid.force[n] += gravity * grid.mass_raw[n];
+    }
+}
+
+/// `s.full`: the cells holding a particle whose fixed points' stencils
+/// reach only full nodes.
+fn mark_full_cells<const W: usize>(
+    ps: &Particles,
+    shape: &Shape,
+    grid: &Grid,
+    rho0: f64,
+    s: &mut Scratch,
+) {
     let (nx, h) = (grid.dims[0], grid.h);
     let [cx_n, cy_n] = grid.cells;
-
     // Which cells are full.
     s.node_mass.fill(0.0);
     for &n in &grid.active {
@@ -148,7 +165,18 @@ fn forces_w<const W: usize>(
             })
         };
     }
+}
 
+/// The material points' forces outside the full cells, and every
+/// particle's mass-weighted stress on the nodes.
+fn particle_forces<const W: usize>(
+    ps: &Particles,
+    stencils: &[Stencil],
+    shape: &Shape,
+    grid: &mut Grid,
+    s: &mut Scratch,
+) {
+    let (nx, h) = (grid.dims[0], grid.h);
     // Material points outside the full cells; the nodal stress from all.
     for &n in &grid.active {
         grid.force[n as usize] = Vec2::zeros();
@@ -176,7 +204,12 @@ fn forces_w<const W: usize>(
     }
     grid.fold(&mut s.node_stress);
     grid.fill(&mut s.node_stress);
+}
 
+/// The forces of the full cells' fixed points, from the nodal stress.
+fn cell_point_forces<const W: usize>(shape: &Shape, grid: &mut Grid, s: &Scratch) {
+    let (nx, h) = (grid.dims[0], grid.h);
+    let [cx_n, cy_n] = grid.cells;
     // The fixed points of the full cells.
     let weight = 0.25 * h * h;
     for c in (0..cx_n * cy_n).filter(|&c| s.full[c]) {
@@ -204,10 +237,5 @@ fn forces_w<const W: usize>(
                 }
             }
         }
-    }
-
-    for &n in &grid.active {
-        let n = n as usize;
-        grid.force[n] += gravity * grid.mass_raw[n];
     }
 }

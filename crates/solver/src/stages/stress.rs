@@ -78,26 +78,30 @@ pub(crate) fn velocity_gradient<const W: usize>(
     Mat2::from_columns(&[col0, col1]) * inv_h
 }
 
+/// One chunk of particles as the stage sees it: what it writes, then
+/// what it reads.
+struct Chunk<'a> {
+    f: &'a mut [Mat2],
+    j: &'a mut [f64],
+    vol: &'a mut [f64],
+    stress: &'a mut [Mat2],
+    pressure: &'a mut [f64],
+    dev_rate: &'a mut [f64],
+    history: &'a mut [f64],
+    wave: &'a mut [f64],
+    stored: &'a mut [f64],
+    vol0: &'a [f64],
+    material: &'a [u16],
+    stencils: &'a [Stencil],
+    affine: &'a [Mat2],
+}
+
 fn run<const W: usize>(
     inputs: &Inputs,
     particles: &mut Particles,
     partials: &mut [Partial],
 ) -> (f64, [f64; MAX_RULES]) {
-    let Inputs {
-        stencils,
-        shape,
-        grid,
-        velocity,
-        materials,
-        j_update,
-        dt,
-        mls,
-        rules,
-        drop_inverted,
-    } = *inputs;
-    let nx = grid.dims[0];
-    let inv_h = 1.0 / grid.h;
-    let solids = materials.iter().any(|m| m.shear_modulus > 0.0);
+    let solids = inputs.materials.iter().any(|m| m.shear_modulus > 0.0);
     let n_chunks = crate::par::chunk_count(particles.len());
     let piece = crate::par::piece_chunks(particles.len());
     (
@@ -114,7 +118,8 @@ fn run<const W: usize>(
         particles.stored_energy.par_chunks_mut(CHUNK),
         particles.vol0.par_chunks(CHUNK),
         particles.material.par_chunks(CHUNK),
-        stencils
+        inputs
+            .stencils
             .par_chunks(CHUNK)
             .zip(particles.affine.par_chunks(CHUNK)),
         partials[..n_chunks].par_iter_mut(),
@@ -132,96 +137,34 @@ fn run<const W: usize>(
                 wave,
                 stored,
                 vol0,
-                mat,
-                (st, affine),
+                material,
+                (stencils, affine),
                 work,
             )| {
-                let (mut acc, mut rule_acc) = (0.0, [0.0; MAX_RULES]);
+                let mut c = Chunk {
+                    f,
+                    j,
+                    vol,
+                    stress,
+                    pressure,
+                    dev_rate,
+                    history,
+                    wave,
+                    stored,
+                    vol0,
+                    material,
+                    stencils,
+                    affine,
+                };
                 // This step's history increments (softening solids only).
                 let mut dxi = [0.0; CHUNK];
-                for k in 0..f.len() {
-                    let l = if mls {
-                        affine[k]
-                    } else {
-                        velocity_gradient::<W>(shape, &st[k], velocity, nx, inv_h)
-                    };
-                    let f_new = (Mat2::identity() + dt * l) * f[k];
-                    let det = f_new.determinant();
-                    let (f_next, j_next) = match j_update {
-                        JUpdate::Det => (f_new, det),
-                        // One substep is the plain update: reuse it.
-                        JUpdate::Substeps if !needs_substeps(l, dt) => (f_new, det),
-                        JUpdate::Substeps => {
-                            let f_sub = substepped(l, dt, f[k]);
-                            (f_sub, f_sub.determinant())
-                        }
-                        JUpdate::Exp => {
-                            let jn = j[k] * (dt * l.trace()).exp();
-                            // Rescale F's volumetric part so that det F = J still holds.
-                            (f_new * (jn / det).abs().sqrt(), jn)
-                        }
-                    };
-                    let mut f_kept = f_next;
-                    for rule in rules {
-                        f_kept = rule.deformation(f_kept, j_next);
-                    }
-                    f[k] = f_kept;
-                    j[k] = j_next;
-                    vol[k] = vol0[k] * j_next;
-                    let m = &materials[mat[k] as usize];
-                    let d = 0.5 * (l + l.transpose());
-                    let visc = viscosity::newtonian(m.viscosity, &d);
-                    stress[k] = visc.stress;
-                    dev_rate[k] = visc.dev_rate;
-                    if m.softening_strain > 0.0 {
-                        dxi[k] = crate::solid_neo_hookean::history_increment(&d, dt);
-                    }
-                    acc += visc.power * vol[k] * dt;
-                    for (r, rule) in rules.iter().enumerate() {
-                        // The wave speed is the previous step's (the EOS runs below).
-                        if let Some((s, power)) = rule.extra_stress(m, wave[k], j_next, grid.h, &d)
-                        {
-                            stress[k] += s;
-                            acc += power * vol[k] * dt;
-                            if let Some(w) = rule_acc.get_mut(r) {
-                                *w += power * vol[k] * dt;
-                            }
-                        }
-                    }
-                }
-                // The EOS over the chunk in one loop per material (vectorised).
-                let out = (&mut pressure[..], &mut wave[..], &mut stored[..]);
-                if let [m] = materials {
-                    m.eval_run(j, vol0, out);
-                } else {
-                    eval_mixed(materials, mat, j, vol0, out);
-                }
-                for (s, &p) in stress.iter_mut().zip(pressure.iter()) {
-                    *s -= p * Mat2::identity();
-                }
+                let (mut acc, rule_acc) = deform::<W>(inputs, &mut c, &mut dxi);
+                pressure_from_eos(inputs.materials, &mut c);
                 if solids {
-                    for k in 0..f.len() {
-                        let m = &materials[mat[k] as usize];
-                        let (s, w, e) = (&mut stress[k], &mut wave[k], &mut stored[k]);
-                        let xi_before = history[k];
-                        history[k] += dxi[k];
-                        let xi = history[k];
-                        // The energy softening released is dissipated.
-                        acc += crate::solid_neo_hookean::add_to(
-                            m, &f[k], vol0[k], xi_before, xi, s, w, e,
-                        );
-                    }
+                    acc = soften(inputs.materials, &mut c, &dxi, acc);
                 }
-                if drop_inverted {
-                    for k in 0..f.len() {
-                        if j[k].is_nan()
-                            || j[k] <= 0.0
-                            || (j_update == JUpdate::Exp && f[k].determinant() <= 0.0)
-                        {
-                            stress[k] = Mat2::zeros();
-                            pressure[k] = 0.0;
-                        }
-                    }
+                if inputs.drop_inverted {
+                    drop_inverted_stress(inputs.j_update, &mut c);
                 }
                 work[0] = acc;
                 work[1..].copy_from_slice(&rule_acc);
@@ -233,6 +176,121 @@ fn run<const W: usize>(
         *w = parts.iter().map(|p| p[1 + r]).sum();
     }
     (parts.iter().map(|p| p[0]).sum(), rule_work)
+}
+
+/// F, J and V from the velocity gradient, the viscous stress and the
+/// rules' extra stress; returns the chunk's dissipated work and each
+/// rule's share, and leaves each softening particle's history increment.
+#[inline(always)]
+fn deform<const W: usize>(
+    inputs: &Inputs,
+    c: &mut Chunk,
+    dxi: &mut [f64; CHUNK],
+) -> (f64, [f64; MAX_RULES]) {
+    let (shape, velocity, dt, rules) = (inputs.shape, inputs.velocity, inputs.dt, inputs.rules);
+    let nx = inputs.grid.dims[0];
+    let inv_h = 1.0 / inputs.grid.h;
+    let (mut acc, mut rule_acc) = (0.0, [0.0; MAX_RULES]);
+    for k in 0..c.f.len() {
+        let l = if inputs.mls {
+            c.affine[k]
+        } else {
+            velocity_gradient::<W>(shape, &c.stencils[k], velocity, nx, inv_h)
+        };
+        let (f_next, j_next) = next_deformation(inputs.j_update, l, dt, c.f[k], c.j[k]);
+        let mut f_kept = f_next;
+        for rule in rules {
+            f_kept = rule.deformation(f_kept, j_next);
+        }
+        c.f[k] = f_kept;
+        c.j[k] = j_next;
+        c.vol[k] = c.vol0[k] * j_next;
+        let m = &inputs.materials[c.material[k] as usize];
+        let d = 0.5 * (l + l.transpose());
+        let visc = viscosity::newtonian(m.viscosity, &d);
+        c.stress[k] = visc.stress;
+        c.dev_rate[k] = visc.dev_rate;
+        if m.softening_strain > 0.0 {
+            dxi[k] = crate::solid_neo_hookean::history_increment(&d, dt);
+        }
+        acc += visc.power * c.vol[k] * dt;
+        for (r, rule) in rules.iter().enumerate() {
+            // The wave speed is the previous step's (the EOS runs below).
+            if let Some((s, power)) = rule.extra_stress(m, c.wave[k], j_next, inputs.grid.h, &d) {
+                c.stress[k] += s;
+                acc += power * c.vol[k] * dt;
+                if let Some(w) = rule_acc.get_mut(r) {
+                    *w += power * c.vol[k] * dt;
+                }
+            }
+        }
+    }
+    (acc, rule_acc)
+}
+
+/// F and J after a step with velocity gradient `l`, by the J update chosen.
+#[inline(always)]
+fn next_deformation(j_update: JUpdate, l: Mat2, dt: f64, f: Mat2, j: f64) -> (Mat2, f64) {
+    let f_new = (Mat2::identity() + dt * l) * f;
+    let det = f_new.determinant();
+    match j_update {
+        JUpdate::Det => (f_new, det),
+        // One substep is the plain update: reuse it.
+        JUpdate::Substeps if !needs_substeps(l, dt) => (f_new, det),
+        JUpdate::Substeps => {
+            let f_sub = substepped(l, dt, f);
+            (f_sub, f_sub.determinant())
+        }
+        JUpdate::Exp => {
+            let jn = j * (dt * l.trace()).exp();
+            // Rescale F's volumetric part so that det F = J still holds.
+            (f_new * (jn / det).abs().sqrt(), jn)
+        }
+    }
+}
+
+/// The EOS over the chunk in one loop per material (vectorised), and the
+/// pressure into the stress.
+#[inline(always)]
+fn pressure_from_eos(materials: &[Material], c: &mut Chunk) {
+    let out = (&mut c.pressure[..], &mut c.wave[..], &mut c.stored[..]);
+    if let [m] = materials {
+        m.eval_run(c.j, c.vol0, out);
+    } else {
+        eval_mixed(materials, c.material, c.j, c.vol0, out);
+    }
+    for (s, &p) in c.stress.iter_mut().zip(c.pressure.iter()) {
+        *s -= p * Mat2::identity();
+    }
+}
+
+/// The solids' neo-Hookean stress, softened by the history's increments
+/// `dxi`; returns `acc` plus the energy softening released (dissipated).
+#[inline(always)]
+fn soften(materials: &[Material], c: &mut Chunk, dxi: &[f64; CHUNK], mut acc: f64) -> f64 {
+    for k in 0..c.f.len() {
+        let m = &materials[c.material[k] as usize];
+        let (s, w, e) = (&mut c.stress[k], &mut c.wave[k], &mut c.stored[k]);
+        let xi_before = c.history[k];
+        c.history[k] += dxi[k];
+        let xi = c.history[k];
+        acc += crate::solid_neo_hookean::add_to(m, &c.f[k], c.vol0[k], xi_before, xi, s, w, e);
+    }
+    acc
+}
+
+/// No stress on a particle that inverted (`Inputs::drop_inverted`).
+#[inline(always)]
+fn drop_inverted_stress(j_update: JUpdate, c: &mut Chunk) {
+    for k in 0..c.f.len() {
+        if c.j[k].is_nan()
+            || c.j[k] <= 0.0
+            || (j_update == JUpdate::Exp && c.f[k].determinant() <= 0.0)
+        {
+            c.stress[k] = Mat2::zeros();
+            c.pressure[k] = 0.0;
+        }
+    }
 }
 
 /// False when `substepped` takes one substep (|L| dt < 1), decided without

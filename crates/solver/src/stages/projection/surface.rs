@@ -1,0 +1,334 @@
+//! The fluid's extent on the grid: which cells are fluid (and where the
+//! free surface sits between them and the air), the air nodes slaved to
+//! their fluid neighbours, the velocity extrapolated into the air band,
+//! and the pressure gradient the particles read.
+
+use super::{owner, Scratch, AIR, CORNERS};
+use crate::config::FreeSurface;
+use crate::grid::{Grid, PAD};
+use crate::particles::{Particles, Vec2};
+
+/// The gradient of the cell pressure at each fluid cell, by central
+/// differences where both neighbours are fluid, one-sided at a wall (no
+/// neighbour), and against -p of the cell itself at an air neighbour (p = 0
+/// on the face between; under the ghost surfaces against the ghost
+/// pressure p (theta - 1) / theta, p = 0 where the surface is): each
+/// particle reads p_c + grad . (x - x_c), exact for a linear field, so a
+/// resting layer's particles read the hydrostatic pressure where they
+/// stand and not their cell centre's (a sampling error of rho0 g h / 4).
+pub(super) fn reconstruct(s: &mut Scratch, h: f64, ghost: bool) {
+    for k in 0..s.fluid.len() {
+        let c = s.fluid[k] as usize;
+        let p0 = s.x[k];
+        let row = s.neighbours[k];
+        let side = |slot: usize, di: i64, dj: i64| -> Option<f64> {
+            let m = row[slot];
+            if m != AIR {
+                return Some(s.x[m as usize]);
+            }
+            let (ci, cj) = ((c % s.cells[0]) as i64, (c / s.cells[0]) as i64);
+            s.cell_at(ci + di, cj + dj).map(|o| {
+                if ghost {
+                    let theta = s.surface_share(c, o);
+                    p0 * (theta - 1.0) / theta
+                } else {
+                    -p0
+                }
+            })
+        };
+        let slope = |minus: Option<f64>, plus: Option<f64>| match (minus, plus) {
+            (Some(a), Some(b)) => (b - a) / (2.0 * h),
+            (None, Some(b)) => (b - p0) / h,
+            (Some(a), None) => (p0 - a) / h,
+            (None, None) => 0.0,
+        };
+        // Slots: (dx + 1) + 3 (dy + 1).
+        s.gradient[c] = Vec2::new(
+            slope(side(3, -1, 0), side(5, 1, 0)),
+            slope(side(1, 0, -1), side(7, 0, 1)),
+        );
+    }
+}
+
+/// Whether in-box node `n` is an air node: in no fluid cell, so that it
+/// takes its fluid neighbours' velocity after the solve (`extrapolate`).
+/// A corner of a cell that holds material but is counted as air (the
+/// ghost surface's thin surface cells and spray; under the cell surface
+/// every such cell is fluid) carries its own momentum and keeps u*, in
+/// free flight: overwriting it with its neighbours' velocity drove the
+/// ghost surface's injections (session 38).
+fn is_air_node(grid: &Grid, s: &Scratch, n: usize, light: f64) -> bool {
+    let free_flight = grid.mass[n] >= light && s.holds_material_around(grid, n);
+    !s.fluid_node[n] && !free_flight
+}
+
+/// The fluid nodes an air node's velocity is the mean of: among the eight
+/// padded nodes around in-box node `n`, each whose in-box node is a fluid
+/// node, as (padded node, in-box node). Under `mirrored` a node beyond a
+/// wall counts as its mirror partner (the wall's symmetry, as the fold
+/// has it); else only across a periodic edge (the step to session 39).
+fn masters(grid: &Grid, s: &Scratch, n: usize, mirrored: bool) -> ([(usize, usize); 8], usize) {
+    let nx = grid.dims[0] as i64;
+    let (mut found, mut count) = ([(0, 0); 8], 0);
+    for dj in -1..=1i64 {
+        for di in -1..=1i64 {
+            if (di, dj) == (0, 0) {
+                continue;
+            }
+            let m = (n as i64 + di + dj * nx) as usize;
+            let o = if mirrored {
+                grid.partner_image(m, 0.0).0
+            } else {
+                owner(grid, m)
+            };
+            if s.fluid_node[o] {
+                found[count] = (m, o);
+                count += 1;
+            }
+        }
+    }
+    (found, count)
+}
+
+/// The air nodes' velocity is a constraint, v = the mean of their fluid
+/// neighbours' (`extrapolate`); as for any node slaved to others, each of
+/// those neighbours takes an equal share of its mass and of its u*
+/// momentum (gravity's impulse included) before the solve, lumped. Without
+/// it the weight of the material the B-spline carries above the top fluid
+/// cells is lost when their velocity is overwritten, and a wave's
+/// restoring force is short by the share of the mass it lifts that lands
+/// there. The shares are taken in the box's own masses (a wall node owns
+/// half its folded mass) and a neighbour beyond a wall is its partner's
+/// image, so that a flat layer gives every surface node the same share.
+/// A node on a no-slip wall is held at rest by the wall, not by its
+/// neighbours: the wall takes its momentum. (The share is one mass for
+/// both directions: a slave on a free-slip wall also hands its neighbours
+/// the wall-normal inertia the wall holds.)
+pub(super) fn slave_air_nodes(grid: &mut Grid, s: &mut Scratch, light: f64) {
+    for &n in &grid.active {
+        s.slaved_mass[n as usize] = 0.0;
+        s.slaved_momentum[n as usize] = Vec2::zeros();
+    }
+    for &n in &grid.inside {
+        let n = n as usize;
+        if !is_air_node(grid, s, n, light) || grid.is_pinned(n) {
+            continue;
+        }
+        let (found, count) = masters(grid, s, n, true);
+        if count == 0 {
+            continue;
+        }
+        let mass = grid.own_share(n) * grid.mass[n] / count as f64;
+        let momentum = mass * grid.vel_new[n];
+        for &(m, o) in &found[..count] {
+            s.slaved_mass[o] += mass;
+            s.slaved_momentum[o] += grid.partner_image(m, momentum).1;
+        }
+    }
+    for &n in &grid.inside {
+        let n = n as usize;
+        if s.slaved_mass[n] == 0.0 {
+            continue;
+        }
+        // Back to folded values.
+        let share = grid.own_share(n);
+        let mass = grid.mass[n] + s.slaved_mass[n] / share;
+        let v = (grid.mass[n] * grid.vel_new[n] + s.slaved_momentum[n] / share) / mass;
+        s.operator_mass[n] = mass;
+        grid.vel_new[n] = grid.project_walls(n, v);
+    }
+    grid.fill_vel_new(false);
+    grid.fill(&mut s.operator_mass);
+}
+
+/// The nodes a particle reaches beyond its cell's corners (B-splines) are
+/// in no fluid cell: no pressure holds them, and left alone they would fall
+/// freely and drag the surface particles with them. Each takes the mean
+/// velocity of its fluid neighbours (`masters`), as fluid codes
+/// extrapolate the velocity into the air band (`is_air_node` says which).
+pub(super) fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64, light: f64, mirrored: bool) {
+    let mut changed = false;
+    for &n in &grid.inside {
+        let n = n as usize;
+        if !is_air_node(grid, s, n, light) {
+            continue;
+        }
+        let (found, count) = masters(grid, s, n, mirrored);
+        let mut sum = Vec2::zeros();
+        for &(m, o) in &found[..count] {
+            sum += if mirrored {
+                grid.partner_image(m, grid.vel_new[o]).1
+            } else {
+                grid.vel_new[m]
+            };
+        }
+        if count > 0 {
+            let v = grid.project_walls(n, sum / count as f64);
+            grid.accel[n] = (v - grid.vel[n]) / dt;
+            grid.vel_new[n] = v;
+            changed = true;
+        }
+    }
+    if changed {
+        grid.fill_vel_new(true);
+    }
+}
+
+/// Fluid cells (those holding a particle; under the ghost surface also at
+/// least half full), each particle's cell, the cells' volumes, the
+/// unknowns' corners and their ghost weights.
+pub(super) fn mark_fluid(
+    ps: &Particles,
+    grid: &Grid,
+    s: &mut Scratch,
+    surface: FreeSurface,
+    full_mass: f64,
+) {
+    bin_particles(ps, grid, s);
+    let ghost = surface != FreeSurface::Cell;
+    s.orthogonal = surface == FreeSurface::GhostOrthogonal;
+    if ghost {
+        fill_levels(grid, s, full_mass);
+    }
+    mark_cells(grid, s, ghost);
+    fill_ghost_weights(s, ghost);
+    fill_neighbour_rows(s);
+    fill_full_quads(s);
+}
+
+/// Clears the last step's fluid cells, then bins the particles: each one's
+/// cell, and the cells' sums of V and V0.
+fn bin_particles(ps: &Particles, grid: &Grid, s: &mut Scratch) {
+    for c in s.fluid.drain(..) {
+        s.unknown[c as usize] = AIR;
+        s.rate[c as usize] = 0.0;
+    }
+    s.vol.fill(0.0);
+    s.vol0.fill(0.0);
+    for p in 0..ps.len() {
+        let c = s.cell_of(grid, ps.x[p]);
+        s.particle_cell[p] = c as u32;
+        s.vol[c] += ps.vol[p];
+        s.vol0[c] += ps.vol0[p];
+    }
+}
+
+/// Cell `c`'s corners as padded nodes, in `CORNERS` order.
+fn cell_corners(s: &Scratch, grid: &Grid, c: usize) -> [u32; 4] {
+    let nx = grid.dims[0];
+    let (ci, cj) = (c % s.cells[0], c / s.cells[0]);
+    let base = (ci + PAD) + (cj + PAD) * nx;
+    CORNERS.map(|(a, b, _, _)| (base + a + b * nx) as u32)
+}
+
+/// The fluid fraction less a half, per cell: the corners' folded mass
+/// over four full nodes' (the B-spline smears the surface over about a
+/// cell, evenly about it, so a half marks where it is), times J for the
+/// volume.
+fn fill_levels(grid: &Grid, s: &mut Scratch, full_mass: f64) {
+    for c in 0..s.level.len() {
+        let mass: f64 = cell_corners(s, grid, c)
+            .iter()
+            .map(|&n| {
+                let n = n as usize;
+                if grid.is_active(n) {
+                    grid.mass[n]
+                } else {
+                    0.0
+                }
+            })
+            .sum();
+        let j = if s.vol0[c] > 0.0 {
+            s.vol[c] / s.vol0[c]
+        } else {
+            1.0
+        };
+        s.level[c] = mass / (4.0 * full_mass) * j - 0.5;
+    }
+}
+
+/// The unknowns: each fluid cell numbered, its corners kept and flagged as
+/// fluid nodes; a cell left out reads p = 0.
+fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool) {
+    // The flags live on the owner nodes (a periodic edge's two sides are one node).
+    for c in &s.corners {
+        for &n in c {
+            s.fluid_node[owner(grid, n as usize)] = false;
+        }
+    }
+    s.corners.clear();
+    for c in 0..s.unknown.len() {
+        let corners = cell_corners(s, grid, c);
+        // A cell whose corners the particles' stencils do not all reach (a
+        // particle clamped into it from outside the box) has no operator row.
+        let reached = corners.iter().all(|&n| grid.is_active(n as usize));
+        if s.vol0[c] > 0.0 && reached && (!ghost || s.level[c] >= 0.0) {
+            s.unknown[c] = s.fluid.len() as u32;
+            s.fluid.push(c as u32);
+            for n in corners {
+                s.fluid_node[owner(grid, n as usize)] = true;
+            }
+            s.corners.push(corners);
+        } else {
+            // No row: its particles (above a ghost surface, or clamped in
+            // from outside the box) read p = 0, not a gradient left over.
+            s.pressure[c] = 0.0;
+            s.gradient[c] = Vec2::zeros();
+        }
+    }
+}
+
+/// Each unknown's corner weights: 1 / theta across a corner whose cell is
+/// air under the ghost surfaces, else 1.
+fn fill_ghost_weights(s: &mut Scratch, ghost: bool) {
+    s.ghost.clear();
+    for k in 0..s.fluid.len() {
+        let c = s.fluid[k] as usize;
+        let (ci, cj) = ((c % s.cells[0]) as i64, (c / s.cells[0]) as i64);
+        let weights = CORNERS.map(|(a, b, _, _)| {
+            if !ghost {
+                return 1.0;
+            }
+            // The cell across this corner; off a walled box the fold stands for it.
+            let across = s.cell_at(ci + 2 * a as i64 - 1, cj + 2 * b as i64 - 1);
+            match across {
+                Some(o) if s.unknown[o] == AIR => 1.0 / s.surface_share(c, o),
+                _ => 1.0,
+            }
+        });
+        s.ghost.push(weights);
+    }
+}
+
+/// Each unknown's 3 x 3 block of neighbouring unknowns (`AIR` for none).
+pub(super) fn fill_neighbour_rows(s: &mut Scratch) {
+    s.neighbours.clear();
+    for k in 0..s.fluid.len() {
+        let c = s.fluid[k] as usize;
+        let (ci, cj) = ((c % s.cells[0]) as i64, (c / s.cells[0]) as i64);
+        let row = std::array::from_fn(|slot| {
+            let (dx, dy) = (slot as i64 % 3 - 1, slot as i64 / 3 - 1);
+            s.cell_at(ci + dx, cj + dy).map_or(AIR, |c| s.unknown[c])
+        });
+        s.neighbours.push(row);
+    }
+}
+
+/// The nodes whose four cells are all fluid (walls: no image cells), as
+/// their cells' unknowns: the checkerboard control's rows.
+fn fill_full_quads(s: &mut Scratch) {
+    s.quads.clear();
+    let [cx, cy] = s.cells.map(|n| n as i64);
+    let node_range = |axis: usize, n: i64| if s.periodic[axis] { 0..n } else { 1..n };
+    for nj in node_range(1, cy) {
+        for ni in node_range(0, cx) {
+            let around = [(-1, -1), (0, -1), (-1, 0), (0, 0)]
+                .map(|(a, b)| s.cell_at(ni + a, nj + b).map(|c| s.unknown[c]));
+            if let [Some(sw), Some(se), Some(nw), Some(ne)] = around {
+                if [sw, se, nw, ne].iter().all(|&u| u != AIR) {
+                    s.quads.push([sw, se, nw, ne]);
+                }
+            }
+        }
+    }
+}

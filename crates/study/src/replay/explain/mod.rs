@@ -1,0 +1,919 @@
+//! `kick explain`: why an event kicked. Replays from the checkpoint before
+//! the event, bit for bit as `kick reproduce` does, taking the steps from
+//! `quiet_seconds` before onset to the event's last step with the solver's
+//! force forensics (`solver::forensics`), and measures the mechanisms
+//! (`monitor::mechanisms`, docs/physics.md section 4c) over the onset
+//! window (`merge_seconds` before the event's first step to its last).
+//! With `--counterfactual` it restarts from the same checkpoint once per
+//! single change, applied from the onset window's start.
+
+use crate::output::files::write_atomic;
+use crate::output::summary::{Status, Summary};
+use crate::output::tables;
+use crate::run::case::{watches, with_threads};
+use crate::run::checkpoint;
+use crate::run::probes::checkpoint_ring::ring_step;
+use crate::run::probes::replay::{Found, Replay as ReplayChecks};
+use crate::run::{Probe, Rows, Run, RunOptions, Runner, Stepper, Watch};
+use crate::study_file::{self, Case};
+use monitor::mechanisms::{Mechanisms, Shares, StepParts};
+use monitor::{Cause, CellRange, Event};
+use serde::Serialize;
+use serde_json::json;
+use solver::forensics::ExplainedStep;
+use solver::{CheckpointError, Method, Solver, Vec2};
+use std::path::{Path, PathBuf};
+
+pub struct ExplainOptions {
+    pub threads: Option<usize>,
+    pub out: Option<PathBuf>,
+    pub counterfactual: bool,
+}
+
+/// Bad input (exit 2): missing or corrupted files, unknown event, mixtures.
+#[derive(Debug)]
+pub struct ExplainError(pub String);
+
+pub struct Outcome {
+    pub matched: bool,
+    pub message: String,
+    pub out: PathBuf,
+    /// The step before onset and the onset step, for the report's picture.
+    pub picture: Option<Picture>,
+}
+
+/// What the picture of an explained event shows (drawn by the report).
+pub struct Picture {
+    pub before: ExplainedStep,
+    pub onset: ExplainedStep,
+    /// The cell size.
+    pub h: f64,
+}
+
+/// One explained step's row of the table.
+#[derive(Clone, Debug, Serialize)]
+pub struct StepRow {
+    pub step: u64,
+    pub time: f64,
+    pub dt: f64,
+    /// In the onset window (else: the quiet time before it, M4's window).
+    pub onset: bool,
+    pub parts: StepParts,
+}
+
+/// What the explained replay recorded.
+#[derive(Default)]
+struct Record {
+    rows: Vec<StepRow>,
+    /// Ids of the particles explained.
+    ids: Vec<u32>,
+    /// The explained step at the onset window's start, and at the event's first step.
+    before: Option<ExplainedStep>,
+    onset: Option<ExplainedStep>,
+}
+
+/// The window's times and steps.
+#[derive(Clone, Copy, Debug, Serialize)]
+struct Window {
+    explain_from: f64,
+    onset_from: f64,
+    first_step: u64,
+    last_step: u64,
+    last_t: f64,
+}
+
+/// The `Stepper` methods a wrapper of one `solver` hands to it.
+macro_rules! solver_stepper {
+    () => {
+        fn step_count(&self) -> u64 {
+            self.solver.step_count()
+        }
+        fn time(&self) -> f64 {
+            self.solver.time()
+        }
+        fn state_hash(&self) -> u64 {
+            self.solver.state_hash()
+        }
+        fn phase_count(&self) -> usize {
+            1
+        }
+        fn phase(&self, _k: usize) -> &Solver {
+            &self.solver
+        }
+        fn phase_name(&self, _k: usize) -> Option<&'static str> {
+            None
+        }
+        fn primary_phase(&self) -> usize {
+            0
+        }
+        fn timeseries_stem(&self, _k: usize) -> String {
+            "timeseries".into()
+        }
+        fn save(&self, watches: &[Watch]) -> Vec<u8> {
+            Stepper::save(&self.solver, watches)
+        }
+        fn load(&mut self, bytes: &[u8], watches: &mut [Watch]) -> Result<(), CheckpointError> {
+            Stepper::load(&mut self.solver, bytes, watches)
+        }
+    };
+}
+
+/// A solver whose steps in the window are explained.
+struct Explaining<'a> {
+    solver: Solver,
+    window: Window,
+    cells: CellRange,
+    mechanisms: Mechanisms,
+    primed: bool,
+    record: &'a mut Record,
+}
+
+impl Explaining<'_> {
+    fn indices(&mut self) -> Vec<usize> {
+        let v = self.solver.view();
+        if self.record.ids.is_empty() {
+            // An energy event names no particle: those in its cells, by
+            // the monitor's own cell rule.
+            let geometry = monitor::Geometry::from_scene(v.scene);
+            let c = self.cells;
+            for (p, &x) in v.x.iter().enumerate() {
+                let (i, j) = geometry.cell_of(x);
+                if (c.i_min..=c.i_max).contains(&i) && (c.j_min..=c.j_max).contains(&j) {
+                    self.record.ids.push(v.id[p]);
+                }
+            }
+        }
+        let ids = &self.record.ids;
+        (0..v.id.len())
+            .filter(|&p| ids.binary_search(&v.id[p]).is_ok())
+            .collect()
+    }
+}
+
+impl Stepper for Explaining<'_> {
+    fn advance(&mut self) -> Result<(), String> {
+        let step = self.solver.step_count() + 1;
+        let ends_at = self.solver.time() + self.solver.next_dt();
+        if ends_at < self.window.explain_from || step > self.window.last_step {
+            return Stepper::advance(&mut self.solver);
+        }
+        let particles = self.indices();
+        let explained = self
+            .solver
+            .step_explained(&particles)
+            .map_err(|e| format!("step {step}: {e}"))?;
+        let onset = explained.time >= self.window.onset_from;
+        if onset && self.record.before.is_none() {
+            self.record.before = Some(explained.clone());
+        }
+        if step == self.window.first_step {
+            self.record.onset = Some(explained.clone());
+        }
+        if !self.primed {
+            self.mechanisms.prime(&explained);
+            self.primed = true;
+            return Ok(());
+        }
+        let parts = self.mechanisms.add(&explained);
+        self.record.rows.push(StepRow {
+            step,
+            time: explained.time,
+            dt: explained.dt,
+            onset,
+            parts,
+        });
+        Ok(())
+    }
+    fn finished(&self) -> bool {
+        self.solver.finished()
+    }
+    solver_stepper!();
+}
+
+/// The logged event, its case and its checkpoint's bytes.
+struct Loaded {
+    study_path: PathBuf,
+    logged: Event,
+    case: Case,
+    checkpoint: Vec<u8>,
+    checkpoint_name: String,
+    /// The time the replays start from.
+    checkpoint_t: f64,
+}
+
+fn load(case_dir: &Path, id: u32) -> Result<Loaded, ExplainError> {
+    let summary_path = case_dir.join("summary.json");
+    let events = Summary::read(case_dir).map_err(ExplainError)?.events;
+    let Some(logged) = events.iter().find(|e| e.id == id).cloned() else {
+        let ids: Vec<String> = events.iter().map(|e| e.id.to_string()).collect();
+        return Err(ExplainError(format!(
+            "{}: no event {id} (events: {})",
+            summary_path.display(),
+            if ids.is_empty() {
+                "none".into()
+            } else {
+                ids.join(", ")
+            }
+        )));
+    };
+    let Some(checkpoint_name) = logged.checkpoint.clone() else {
+        return Err(ExplainError(format!(
+            "{}: event {id} has no checkpoint (the case ran with output.checkpoint_every = 0)",
+            summary_path.display()
+        )));
+    };
+    let study_path = case_dir.join("case.toml");
+    let study = study_file::load(&study_path, &[]).map_err(|e| ExplainError(e.to_string()))?;
+    let case = study.cases[0].clone();
+    if case.mixture.is_some() {
+        return Err(ExplainError(format!(
+            "{}: kick explain takes single-phase cases (this one is a mixture)",
+            study_path.display()
+        )));
+    }
+    let from = logged.t - case.monitor.quiet_seconds;
+    let (checkpoint_name, checkpoint, checkpoint_t) =
+        replay_checkpoint(case_dir, &checkpoint_name, from)?;
+    Ok(Loaded {
+        study_path,
+        logged,
+        case,
+        checkpoint,
+        checkpoint_name,
+        checkpoint_t,
+    })
+}
+
+/// The checkpoint the replays start from: the latest of the case's ring
+/// checkpoints, up to the event's own, whose time is at or before `from`
+/// (the quiet window's start). The event's own checkpoint is only the last
+/// one before the event: with a dense ring it falls inside the window, and
+/// a replay from it would shorten the quiet window and switch every
+/// counterfactual late. Without one early enough, the earliest there is.
+fn replay_checkpoint(
+    case_dir: &Path,
+    logged: &str,
+    from: f64,
+) -> Result<(String, Vec<u8>, f64), ExplainError> {
+    let read = |name: &str| {
+        let path = case_dir.join(name);
+        let bytes = std::fs::read(&path)
+            .map_err(|e| ExplainError(format!("{}: cannot read: {e}", path.display())))?;
+        let (_, t) = checkpoint::clock(&bytes)
+            .map_err(|e| ExplainError(format!("{}: {e}", path.display())))?;
+        Ok::<_, ExplainError>((bytes, t))
+    };
+    let mut candidates: Vec<(u64, String)> = vec![];
+    if let (Some(last), Ok(entries)) = (
+        ring_step(logged),
+        std::fs::read_dir(case_dir.join("checkpoints")),
+    ) {
+        for entry in entries.flatten() {
+            let name = format!("checkpoints/{}", entry.file_name().to_string_lossy());
+            if let Some(step) = ring_step(&name).filter(|&s| s <= last) {
+                candidates.push((step, name));
+            }
+        }
+    }
+    candidates.sort();
+    for (_, name) in candidates.iter().rev() {
+        let (bytes, t) = read(name)?;
+        if t <= from + 1e-12 {
+            return Ok((name.clone(), bytes, t));
+        }
+    }
+    let name = candidates
+        .first()
+        .map_or(logged.to_string(), |(_, n)| n.clone());
+    let (bytes, t) = read(&name)?;
+    Ok((name, bytes, t))
+}
+
+pub fn explain(case_dir: &Path, id: u32, opts: &ExplainOptions) -> Result<Outcome, ExplainError> {
+    let loaded = load(case_dir, id)?;
+    let out = opts
+        .out
+        .clone()
+        .unwrap_or_else(|| case_dir.join("explain").join(format!("event_{id}")));
+    let logged = &loaded.logged;
+    let mcfg = &loaded.case.monitor;
+    let window = Window {
+        explain_from: logged.t - mcfg.quiet_seconds,
+        onset_from: logged.t - mcfg.merge_seconds,
+        first_step: logged.first_step,
+        last_step: logged.last_step,
+        last_t: logged.last_t,
+    };
+    let at = |e: String| ExplainError(format!("{}: {e}", out.display()));
+    let mut record = Record {
+        ids: {
+            let mut ids = logged.particles.clone();
+            ids.sort_unstable();
+            ids
+        },
+        ..Record::default()
+    };
+    let found = with_threads(opts.threads, || {
+        explained_replay(&loaded, window, &out, &mut record)
+    })
+    .map_err(|e| at(e.to_string()))?
+    .map_err(|e| {
+        ExplainError(format!(
+            "{}: {e}",
+            case_dir.join(&loaded.checkpoint_name).display()
+        ))
+    })?;
+    let counterfactual = if opts.counterfactual {
+        with_threads(opts.threads, || Ok(counterfactuals(&loaded, window)))
+            .map_err(|e| at(e.to_string()))?
+    } else {
+        vec![]
+    };
+    finish(
+        case_dir,
+        &out,
+        &loaded,
+        window,
+        &record,
+        found,
+        &counterfactual,
+    )
+    .map_err(|e| at(e.to_string()))
+}
+
+fn explained_replay(
+    loaded: &Loaded,
+    window: Window,
+    out: &Path,
+    record: &mut Record,
+) -> std::io::Result<Result<Found, String>> {
+    let case = &loaded.case;
+    let solver = match Solver::new(case.solver.clone()) {
+        Ok(s) => s,
+        Err(e) => return Ok(Err(format!("setup: {e}"))),
+    };
+    let mut watches = watches(&solver, case);
+    let scene = &case.solver.scene;
+    let mut stepper = Explaining {
+        mechanisms: Mechanisms::new(
+            Vec2::from(scene.origin),
+            scene.cell,
+            case.solver.first_rho0(),
+            scene.gravity,
+        ),
+        solver,
+        window,
+        cells: loaded.logged.cells,
+        primed: false,
+        record,
+    };
+    if let Err(e) = stepper.load(&loaded.checkpoint, &mut watches) {
+        return Ok(Err(e.to_string()));
+    }
+    let start = stepper.step_count();
+    if start >= window.first_step {
+        return Ok(Err(format!(
+            "taken at step {start}, not before event {} (step {})",
+            loaded.logged.id, window.first_step
+        )));
+    }
+    let mut run_opts = RunOptions::new(Some(out.to_path_buf()), Rows::every_step());
+    run_opts.csv = true;
+    run_opts.until_step = Some(window.last_step);
+    let mut found = Found::default();
+    let mut runner = Runner::new(stepper, watches, run_opts);
+    runner.attach(ReplayChecks {
+        files_from: u64::MAX,
+        files: out.join("particles"),
+        event: &loaded.logged,
+        phase: 0,
+        found: &mut found,
+    });
+    runner.run()?;
+    drop(runner);
+    Ok(Ok(found))
+}
+
+/// The mechanisms' shares over the rows of the onset window.
+fn window_shares(rows: &[StepRow]) -> Shares {
+    let mut sum = Shares::default();
+    let mut dv2 = 0.0;
+    for r in rows.iter().filter(|r| r.onset) {
+        sum.add(&r.parts.projected);
+        dv2 += r.parts.dv2;
+    }
+    sum.over(dv2)
+}
+
+/// One single change of the counterfactual replay.
+#[derive(Clone, Debug, Serialize)]
+pub struct CounterfactualRow {
+    pub change: String,
+    /// Why it could not be made (then nothing below was measured).
+    pub refused: Option<String>,
+    /// Largest rise (J/m) over the onset window of the total the injection
+    /// test watches above its running minimum there, against the event's floor.
+    pub injected: f64,
+    pub floor: f64,
+    /// An event of the same kind opened in the window over the event's cells.
+    pub event_happens: bool,
+    pub steps: u64,
+    /// How the replay ended: `completed` (it reached the window's end) or
+    /// `blew up: REASON`.
+    pub outcome: String,
+    /// Events the replay opened in the window that are not physics (cause
+    /// other than impact) and are not the event itself: "KIND (CAUSE) at T s".
+    pub other_events: Vec<String>,
+    /// `again` (the event happened), `blew up`, `moved` (no event over its
+    /// cells, but another non-physical one), `injected` (none, but the
+    /// window gained at least the control's injection), `prevented` (none of
+    /// these) or `refused`.
+    pub verdict: &'static str,
+}
+
+/// What a counterfactual replay did, for its verdict.
+#[derive(Clone, Copy, Debug)]
+pub struct Replayed {
+    pub event_happens: bool,
+    pub blew_up: bool,
+    pub other_events: usize,
+    /// The window's injection (J/m), and the control replay's (the event's).
+    pub injected: f64,
+    pub event_injected: f64,
+}
+
+/// A counterfactual's verdict: an event that did not open again over its
+/// cells is prevented only when the replay also completed the window,
+/// raised no other non-physical event, and gained less energy over the
+/// window than the unchanged control did (else the change moved or hastened the
+/// failure, or hid it from the detector: it did not cure it).
+pub fn verdict(r: Replayed) -> &'static str {
+    if r.event_happens {
+        "again"
+    } else if r.blew_up {
+        "blew up"
+    } else if r.other_events > 0 {
+        "moved"
+    } else if r.event_injected > 0.0 && (r.injected >= r.event_injected || r.injected.is_nan()) {
+        "injected"
+    } else {
+        "prevented"
+    }
+}
+
+/// What a counterfactual changes, from the onset window's start.
+enum Change {
+    /// Study-file overrides of `[method]` (none: the control).
+    Overrides(Vec<String>),
+    /// The solver's own step halved when the change is made.
+    HalfDt,
+    /// The pressure-implicit formulation (docs/physics.md section 8) in
+    /// place of the particles' EOS stress; built from the case's method,
+    /// since its study file may set keys the formulation refuses.
+    PressureImplicit,
+}
+
+/// The default list: (name, change).
+fn changes(method: &Method) -> Vec<(String, Change)> {
+    let overrides = |keys: &[&str]| Change::Overrides(keys.iter().map(|k| k.to_string()).collect());
+    let xpic = if method.transfer == solver::TransferKind::Xpic {
+        ("xpic off", overrides(&["method.transfer=\"flip\""]))
+    } else {
+        (
+            "xpic on",
+            overrides(&["method.transfer=\"xpic\"", "method.xpic_order=5"]),
+        )
+    };
+    let remedies: Vec<&str> = method
+        .remedies
+        .active()
+        .iter()
+        .map(|r| r.descriptor().key)
+        .collect();
+    // It takes no remedy (its controls are its own): the method's go with it.
+    let implicit = if remedies.is_empty() {
+        "pressure implicit".to_string()
+    } else {
+        format!("pressure implicit (without {})", remedies.join(", "))
+    };
+    vec![
+        ("unchanged".into(), Change::Overrides(vec![])),
+        ("pic".into(), overrides(&["method.transfer=\"pic\""])),
+        (
+            "flip 0.99".into(),
+            overrides(&["method.transfer=\"flip\"", "method.flip_alpha=0.99"]),
+        ),
+        ("half dt".into(), Change::HalfDt),
+        (
+            "min node mass 0.01".into(),
+            overrides(&["method.min_node_mass={ share = 0.01 }"]),
+        ),
+        ("j-bar".into(), overrides(&["method.j_bar=true"])),
+        (
+            "pressure smoothing".into(),
+            overrides(&["method.pressure_smoothing=true"]),
+        ),
+        (xpic.0.into(), xpic.1),
+        (
+            "shifting".into(),
+            overrides(&["method.shifting={ time = 0.02 }"]),
+        ),
+        (implicit, Change::PressureImplicit),
+    ]
+}
+
+/// The case's method under the pressure-implicit formulation: no remedy,
+/// and the step from the flow (a fixed explicit step would be kept).
+fn pressure_implicit(method: &Method) -> Method {
+    Method {
+        formulation: solver::Formulation::PressureImplicit,
+        remedies: Default::default(),
+        dt_value: None,
+        ..method.clone()
+    }
+}
+
+/// A solver that changes its method once, at the onset window's start,
+/// and ends after the event's last time.
+struct Switching {
+    solver: Solver,
+    at: f64,
+    until: f64,
+    method: Option<Method>,
+    halve_dt: bool,
+    refused: Option<String>,
+    /// The step count when the change was made.
+    switched_at: Option<u64>,
+}
+
+impl Stepper for Switching {
+    fn advance(&mut self) -> Result<(), String> {
+        let s = &mut self.solver;
+        if s.time() + s.next_dt() >= self.at {
+            self.switched_at.get_or_insert(s.step_count());
+            if std::mem::take(&mut self.halve_dt) {
+                let mut m = s.config().method.clone();
+                match m.dt {
+                    solver::DtMode::Fixed => m.dt_value = Some(s.next_dt() / 2.0),
+                    solver::DtMode::Dynamic | solver::DtMode::PerAxis => m.cfl /= 2.0,
+                }
+                self.method = Some(m);
+            }
+            if let Some(m) = self.method.take() {
+                if let Err(e) = s.set_method(m) {
+                    self.refused = Some(e.to_string());
+                    return Err(format!("refused: {e}"));
+                }
+            }
+        }
+        Stepper::advance(s)
+    }
+    fn finished(&self) -> bool {
+        self.solver.finished() || self.solver.time() >= self.until
+    }
+    solver_stepper!();
+}
+
+/// What a counterfactual run did over the onset window: the running
+/// minimum of the budget the detector watches, the largest rise above it,
+/// and whether the event opened again.
+struct Measured {
+    min: f64,
+    injected: f64,
+    happens: bool,
+}
+
+struct WindowInjection<'a> {
+    from: f64,
+    until: f64,
+    logged: &'a Event,
+    measured: &'a mut Measured,
+}
+
+impl<S: Stepper> Probe<S> for WindowInjection<'_> {
+    fn after_step(&mut self, run: &Run<S>, opened: &[u32]) -> std::io::Result<()> {
+        let t = run.stepper.time();
+        if t < self.from || t > self.until + 1e-12 {
+            return Ok(());
+        }
+        let monitor = &run.watches[0].monitor;
+        let r = monitor.report();
+        let watched = r.detector_total;
+        let m = &mut *self.measured;
+        if watched.is_finite() {
+            m.min = m.min.min(watched);
+            m.injected = m.injected.max(watched - m.min);
+        }
+        for id in opened {
+            if let Some(e) = monitor.events().iter().find(|e| e.id == *id) {
+                if e.kind == self.logged.kind && overlaps(e.cells, self.logged.cells) {
+                    m.happens = true;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn overlaps(a: CellRange, b: CellRange) -> bool {
+    a.i_min <= b.i_max && b.i_min <= a.i_max && a.j_min <= b.j_max && b.j_min <= a.j_max
+}
+
+/// The control (unchanged) first: each change's window injection is judged
+/// against the control's, the same measure over the same window.
+fn counterfactuals(loaded: &Loaded, window: Window) -> Vec<CounterfactualRow> {
+    let mut rows: Vec<CounterfactualRow> = vec![];
+    for (name, change) in changes(&loaded.case.solver.method) {
+        let control = rows
+            .first()
+            .map_or(loaded.logged.energy_injected, |c| c.injected);
+        rows.push(counterfactual(loaded, window, name, &change, control));
+    }
+    rows
+}
+
+fn counterfactual(
+    loaded: &Loaded,
+    window: Window,
+    name: String,
+    change: &Change,
+    control_injected: f64,
+) -> CounterfactualRow {
+    let floor = loaded.logged.evidence.energy_floor;
+    let refused = |why: String| CounterfactualRow {
+        change: name.clone(),
+        refused: Some(why),
+        injected: f64::NAN,
+        floor,
+        event_happens: false,
+        steps: 0,
+        outcome: String::new(),
+        other_events: vec![],
+        verdict: "refused",
+    };
+    let method = match change {
+        Change::Overrides(o) if o.is_empty() => None,
+        Change::Overrides(o) => match changed_method(&loaded.study_path, o) {
+            Ok(m) => Some(m),
+            Err(e) => return refused(e),
+        },
+        Change::HalfDt => None,
+        Change::PressureImplicit => Some(pressure_implicit(&loaded.case.solver.method)),
+    };
+    let case = &loaded.case;
+    let solver = match Solver::new(case.solver.clone()) {
+        Ok(s) => s,
+        Err(e) => return refused(format!("setup: {e}")),
+    };
+    let mut watches = watches(&solver, case);
+    let mut stepper = Switching {
+        solver,
+        at: window.onset_from,
+        until: window.last_t,
+        method,
+        halve_dt: matches!(change, Change::HalfDt),
+        refused: None,
+        switched_at: None,
+    };
+    if let Err(e) = stepper.load(&loaded.checkpoint, &mut watches) {
+        return refused(e.to_string());
+    }
+    let start = stepper.step_count();
+    let mut measured = Measured {
+        min: f64::INFINITY,
+        injected: 0.0,
+        happens: false,
+    };
+    // A change whose step collapses stops as a blow-up, as a case does,
+    // instead of crawling to the window's end.
+    let mut opts = RunOptions::new(None, Rows::every_step());
+    opts.collapse_from = Some(stepper.solver.next_dt());
+    let mut runner = Runner::new(stepper, watches, opts);
+    runner.attach(WindowInjection {
+        from: window.onset_from,
+        until: window.last_t,
+        logged: &loaded.logged,
+        measured: &mut measured,
+    });
+    let ran = runner.run();
+    let steps = runner.stepper().step_count().saturating_sub(start);
+    let why_refused = runner.stepper().refused.clone();
+    let switched_at = runner.stepper().switched_at.unwrap_or(start);
+    drop(runner);
+    if let Some(why) = why_refused {
+        return refused(why);
+    }
+    let simulated = match ran {
+        Ok(simulated) => simulated,
+        Err(e) => return refused(e.to_string()),
+    };
+    let other_events: Vec<String> = simulated
+        .events
+        .iter()
+        .filter(|e| e.t >= window.onset_from && e.t <= window.last_t + 1e-12)
+        // Not at the change's own step: a new transfer counts the kinetic
+        // energy and the transfer loss its own way from there, and the
+        // budget's step at the switch reads as an injection.
+        .filter(|e| e.first_step > switched_at + 1)
+        .filter(|e| e.cause != Cause::Impact)
+        .filter(|e| !(e.kind == loaded.logged.kind && overlaps(e.cells, loaded.logged.cells)))
+        .map(|e| format!("{} ({}) at {:.4} s", e.kind.name(), e.cause.name(), e.t))
+        .collect();
+    let blew_up = simulated.status == Status::BlewUp;
+    CounterfactualRow {
+        change: name,
+        refused: None,
+        injected: measured.injected,
+        floor,
+        event_happens: measured.happens,
+        steps,
+        outcome: if blew_up {
+            format!("blew up: {}", simulated.reason)
+        } else {
+            "completed".into()
+        },
+        verdict: verdict(Replayed {
+            event_happens: measured.happens,
+            blew_up,
+            other_events: other_events.len(),
+            injected: measured.injected,
+            event_injected: control_injected,
+        }),
+        other_events,
+    }
+}
+
+/// The case's method with `overrides` applied to its study file.
+fn changed_method(study_path: &Path, overrides: &[String]) -> Result<Method, String> {
+    let study = study_file::load(study_path, overrides).map_err(|e| e.to_string())?;
+    Ok(study.cases[0].solver.method.clone())
+}
+
+fn finish(
+    case_dir: &Path,
+    out: &Path,
+    loaded: &Loaded,
+    window: Window,
+    record: &Record,
+    found: Found,
+    counterfactual: &[CounterfactualRow],
+) -> std::io::Result<Outcome> {
+    let logged = &loaded.logged;
+    let matched = found.hash_at_first.as_deref() == logged.state_hash.as_deref()
+        && found
+            .replayed
+            .as_ref()
+            .is_some_and(|e| e.first_step == logged.first_step);
+    let shares = window_shares(&record.rows);
+    let before: Vec<&StepRow> = record.rows.iter().filter(|r| !r.onset).collect();
+    let drift = if before.is_empty() {
+        f64::NAN
+    } else {
+        before.iter().map(|r| r.parts.drift).sum::<f64>() / before.len() as f64
+    };
+    let rest_max = record
+        .rows
+        .iter()
+        .map(|r| r.parts.rest_max)
+        .fold(0.0, f64::max);
+    let (leading, leading_share) = shares.leading();
+    let (largest, largest_share) = shares.largest_part();
+    let ev = &logged.evidence;
+    let record_json = json!({
+        "case_dir": case_dir.display().to_string(),
+        "event": logged.id,
+        "checkpoint": loaded.checkpoint_name,
+        "checkpoint_t": loaded.checkpoint_t,
+        "replayed_state_hash": found.hash_at_first,
+        "logged_state_hash": logged.state_hash,
+        "matched": matched,
+        "window": window,
+        "particles": record.ids,
+        "steps_explained": record.rows.len(),
+        "closure_rest_max": rest_max,
+        "shares": shares,
+        "leading": {"mechanism": leading, "share": leading_share},
+        "largest_part": {"part": largest, "share": largest_share},
+        "m4_ringing": {
+            "drift_over_speed": drift,
+            "steps": before.len(),
+            "window_s": window.onset_from - window.explain_from,
+        },
+        "m5_time_step": {
+            "courant_before": ev.courant_before,
+            "advection_before": ev.advection_before,
+            "critical_courant": ev.critical_courant,
+        },
+        "criteria": {
+            "small_node_share": monitor::mechanisms::SMALL_NODE_SHARE,
+            "outlier_sigmas": monitor::mechanisms::OUTLIER_SIGMAS,
+            "outlier_floor_rho0_g_h": monitor::mechanisms::OUTLIER_FLOOR,
+        },
+        "counterfactual": counterfactual,
+    });
+    std::fs::create_dir_all(out)?;
+    write_atomic(
+        &out.join("explain.json"),
+        serde_json::to_string_pretty(&record_json)?.as_bytes(),
+    )?;
+    write_steps(&record.rows, out)?;
+    let mut message = format!(
+        "event {}: {} from {} (hash {}); largest part {largest} {:.3}; leading mechanism {leading} {:.3}; closure {:.1e}",
+        logged.id,
+        if matched { "replayed" } else { "DIVERGED" },
+        loaded.checkpoint_name,
+        found.hash_at_first.as_deref().unwrap_or("-"),
+        largest_share,
+        leading_share,
+        rest_max
+    );
+    if loaded.checkpoint_t > window.explain_from + 1e-12 {
+        message += &format!(
+            "; note: no checkpoint precedes the quiet window (from t = {:.4} s): the replays start at t = {:.4} s",
+            window.explain_from, loaded.checkpoint_t
+        );
+    }
+    let picture = match (&record.before, &record.onset) {
+        (Some(before), Some(onset)) => Some(Picture {
+            before: before.clone(),
+            onset: onset.clone(),
+            h: loaded.case.solver.scene.cell,
+        }),
+        _ => None,
+    };
+    Ok(Outcome {
+        matched,
+        message,
+        out: out.to_path_buf(),
+        picture,
+    })
+}
+
+fn write_steps(rows: &[StepRow], out: &Path) -> std::io::Result<()> {
+    let col = |f: &dyn Fn(&StepRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
+    let share = |f: &dyn Fn(&Shares) -> f64| {
+        rows.iter()
+            .map(|r| {
+                if r.parts.dv2 > 0.0 {
+                    f(&r.parts.projected) / r.parts.dv2
+                } else {
+                    0.0
+                }
+            })
+            .collect::<Vec<f64>>()
+    };
+    let columns: Vec<(&str, Vec<f64>)> = vec![
+        ("step", col(&|r| r.step as f64)),
+        ("t", col(&|r| r.time)),
+        ("dt", col(&|r| r.dt)),
+        ("onset", col(&|r| r.onset as u8 as f64)),
+        ("dv2", col(&|r| r.parts.dv2)),
+        ("share_internal", share(&|s| s.internal)),
+        ("share_external", share(&|s| s.external)),
+        ("share_walls", share(&|s| s.walls)),
+        ("share_jump", share(&|s| s.jump)),
+        ("share_hourglass", share(&|s| s.hourglass)),
+        (
+            "share_pressure_correction",
+            share(&|s| s.pressure_correction),
+        ),
+        ("share_extrapolation", share(&|s| s.extrapolation)),
+        ("share_impulse", share(&|s| s.impulse)),
+        ("share_rest", share(&|s| s.rest)),
+        ("share_m1_small_mass_node", share(&|s| s.small_mass_node)),
+        ("share_m2_cell_crossing", share(&|s| s.cell_crossing)),
+        ("share_m3_stress_outlier", share(&|s| s.stress_outlier)),
+        ("m4_drift", col(&|r| r.parts.drift)),
+        ("rest_max", col(&|r| r.parts.rest_max)),
+        ("crossers", col(&|r| r.parts.crossers as f64)),
+        ("outliers", col(&|r| r.parts.outliers as f64)),
+        ("min_node_share", col(&|r| r.parts.min_node_share)),
+    ];
+    let refs: Vec<(&str, &[f64])> = columns.iter().map(|(n, v)| (*n, v.as_slice())).collect();
+    tables::write_columns(&refs, out, "explain_steps", true)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{verdict, Replayed};
+
+    #[test]
+    fn a_change_prevents_only_what_it_does_not_move_hasten_or_hide() {
+        let r = |event_happens, blew_up, other_events, injected| {
+            verdict(Replayed {
+                event_happens,
+                blew_up,
+                other_events,
+                injected,
+                event_injected: 1.0,
+            })
+        };
+        assert_eq!(r(true, false, 0, 0.0), "again");
+        assert_eq!(r(true, true, 3, 9.0), "again");
+        assert_eq!(r(false, true, 0, 0.0), "blew up");
+        assert_eq!(r(false, false, 1, 0.0), "moved");
+        assert_eq!(r(false, false, 0, 1.0), "injected");
+        assert_eq!(r(false, false, 0, f64::NAN), "injected");
+        assert_eq!(r(false, false, 0, 0.5), "prevented");
+    }
+}

@@ -1,0 +1,487 @@
+//! The four behaviours the bug report saw in the original codes
+//! (docs/physics.md section 3), each stated with the numbers of this matrix
+//! that show or refute it. Survival counts a completed run as t_end.
+
+use crate::report::data::{f64_column, median, read_parquet, Matrix, ParamKey, Row};
+use crate::report::html::{Cell, Page};
+use crate::report::plot::{short, Res};
+use std::collections::BTreeMap;
+use std::path::Path;
+use study::output::summary::Status;
+
+/// The window in which the bug report saw the checkerboard appear (s).
+pub const CHECKERBOARD_WINDOW: (f64, f64) = (0.01, 0.1);
+/// Behaviour 3 as numbers: above this at K >= 1.5 MPa ...
+pub const CHECKERBOARD_HIGH: f64 = 0.3;
+/// ... and below this at the smallest K, over the same window.
+pub const CHECKERBOARD_LOW: f64 = 0.1;
+
+/// The first parameter of the run whose key `is`, as a number.
+fn param(r: &Row, is: fn(&ParamKey) -> bool) -> Option<f64> {
+    r.summary
+        .params
+        .iter()
+        .find(|(k, _)| is(&ParamKey::parse(k)))
+        .and_then(|(_, v)| v.as_f64())
+}
+
+/// Largest checkerboard index over `CHECKERBOARD_WINDOW`, from the case's timeseries.
+pub fn early_checkerboard(r: &Row) -> Option<f64> {
+    let df = read_parquet(&r.dir.join("timeseries.parquet")).ok()?;
+    early_checkerboard_of(&df)
+}
+
+/// `early_checkerboard` of a timeseries already read.
+fn early_checkerboard_of(df: &polars::prelude::DataFrame) -> Option<f64> {
+    let (t, cb) = (f64_column(df, "t")?, f64_column(df, "checkerboard_means")?);
+    let (lo, hi) = CHECKERBOARD_WINDOW;
+    t.iter()
+        .zip(&cb)
+        .filter(|(t, c)| **t >= lo && **t <= hi && c.is_finite())
+        .map(|(_, c)| *c)
+        .reduce(f64::max)
+}
+
+fn verdict(shown: bool, partly: bool) -> &'static str {
+    if shown {
+        "<b>reproduced</b>"
+    } else if partly {
+        "<b>partly reproduced</b>"
+    } else {
+        "<b>not reproduced</b>"
+    }
+}
+
+fn count(rows: &[&Row], keep: impl Fn(&Row) -> bool) -> usize {
+    rows.iter().filter(|r| keep(r)).count()
+}
+
+fn median_of(values: impl Iterator<Item = f64>) -> String {
+    let v: Vec<f64> = values.filter(|v| v.is_finite()).collect();
+    median(&v).map_or("-".into(), short)
+}
+
+/// The rows at the smallest K and at the large ones (K >= 1.5 MPa, or the
+/// largest K when none is that large).
+struct ByK<'a> {
+    k_min: f64,
+    small: Vec<&'a Row>,
+    large: Vec<&'a Row>,
+}
+
+impl<'a> ByK<'a> {
+    /// None unless the matrix has at least two values of K.
+    fn of(m: &'a Matrix) -> Option<Self> {
+        let mut ks: Vec<f64> = m
+            .rows
+            .iter()
+            .filter_map(|r| param(r, ParamKey::is_bulk_modulus))
+            .collect();
+        ks.sort_by(f64::total_cmp);
+        ks.dedup();
+        let (&k_min, &k_max) = (ks.first()?, ks.last()?);
+        if ks.len() < 2 {
+            return None;
+        }
+        let at = |keep: &dyn Fn(f64) -> bool| -> Vec<&Row> {
+            m.rows
+                .iter()
+                .filter(|r| param(r, ParamKey::is_bulk_modulus).is_some_and(keep))
+                .collect()
+        };
+        Some(ByK {
+            k_min,
+            small: at(&|k| k == k_min),
+            large: at(&|k| k >= 1.5e6 || k == k_max),
+        })
+    }
+}
+
+/// The four behaviours, each with its numbers and whether this matrix
+/// reproduces it (a matrix section: `matrix::MATRIX_SECTIONS`);
+/// nothing unless K takes at least two values.
+pub fn behaviours(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
+    let Some(by_k) = ByK::of(m) else {
+        return Ok(());
+    };
+    page.h2("The four behaviours of the bug report");
+    page.p(&small_k_blows_up(&by_k));
+    page.p(&large_k_far_from_hydrostatic(&by_k));
+    page.p(&large_k_checkerboards(&by_k));
+    if let Some(text) = less_viscosity_less_stable(m) {
+        page.p(&text);
+    }
+    behaviours_by_configuration(m, page);
+    Ok(())
+}
+
+/// Behaviour 1, small K: a kick that blows most particles out within a few steps.
+fn small_k_blows_up(by_k: &ByK) -> String {
+    let ByK { k_min, small, .. } = by_k;
+    let blown: Vec<&Row> = small
+        .iter()
+        .copied()
+        .filter(|r| r.summary.status == Status::BlewUp)
+        .collect();
+    let kick_to_end =
+        |r: &Row| r.summary.t_end - r.summary.metrics.t_first_kick.unwrap_or(f64::NAN);
+    let quick = count(&blown, |r| kick_to_end(r) <= 0.05);
+    format!(
+        "1. Small K ({} Pa): a clean run ends in a kick that blows most particles out within a few steps. \
+         {} of {} runs blew up (median at {} s), {} of them within 0.05 s of their first kick \
+         (median from first kick to blow-up {} s); mass lost when they stopped: median {}, \
+         particles escaped: median {}, inverted: median {}. {}",
+        short(*k_min),
+        blown.len(),
+        small.len(),
+        median_of(blown.iter().map(|r| r.summary.t_end)),
+        quick,
+        median_of(blown.iter().map(|r| kick_to_end(r))),
+        median_of(blown.iter().map(|r| r.summary.metrics.losses.mass_lost_fraction)),
+        median_of(blown.iter().map(|r| r.summary.metrics.losses.particles_escaped as f64)),
+        median_of(blown.iter().map(|r| r.summary.metrics.losses.particles_inverted as f64)),
+        verdict(
+            2 * quick > small.len(),
+            !blown.is_empty()
+        )
+    )
+}
+
+/// Behaviour 2: larger K survives but is far from hydrostatic.
+fn large_k_far_from_hydrostatic(by_k: &ByK) -> String {
+    let large = &by_k.large;
+    let completed: Vec<&Row> = large
+        .iter()
+        .copied()
+        .filter(|r| r.summary.status == Status::Completed)
+        .collect();
+    let late: Vec<f64> = completed.iter().map(|r| r.hydro_late()).collect();
+    let far = count(&completed, |r| r.hydro_late() >= 10.0);
+    format!(
+        "2. Larger K (K &ge; {} Pa) survives to t_end with a pressure orders of magnitude off hydrostatic. \
+         {} of {} runs completed; their late hydrostatic departure (relative RMS over the last second): \
+         median {}, {} of them &ge; 10. {}",
+        short(large.iter().filter_map(|r| param(r, ParamKey::is_bulk_modulus)).fold(f64::INFINITY, f64::min)),
+        completed.len(),
+        large.len(),
+        median_of(late.iter().copied()),
+        far,
+        verdict(
+            !completed.is_empty() && 2 * far > completed.len(),
+            !completed.is_empty() && median(&late).is_some_and(|h| h >= 1.0)
+        )
+    )
+}
+
+/// Behaviour 3: larger K checkerboards immediately; the smallest K does not.
+fn large_k_checkerboards(by_k: &ByK) -> String {
+    let early =
+        |rows: &[&Row]| -> Vec<f64> { rows.iter().filter_map(|r| early_checkerboard(r)).collect() };
+    let (cb_large, cb_small) = (early(&by_k.large), early(&by_k.small));
+    let high = cb_large.iter().filter(|c| **c > CHECKERBOARD_HIGH).count();
+    let low = cb_small.iter().filter(|c| **c < CHECKERBOARD_LOW).count();
+    format!(
+        "3. Larger K: the pressure checkerboards at once (t in {}-{} s). Largest checkerboard index \
+         over that window: above {CHECKERBOARD_HIGH} in {high} of {} runs at K &ge; 1.5 MPa (median {}); \
+         below {CHECKERBOARD_LOW} in {low} of {} runs at {} Pa (median {}). {}",
+        CHECKERBOARD_WINDOW.0,
+        CHECKERBOARD_WINDOW.1,
+        cb_large.len(),
+        median_of(cb_large.iter().copied()),
+        cb_small.len(),
+        short(by_k.k_min),
+        median_of(cb_small.iter().copied()),
+        verdict(
+            2 * high > cb_large.len() && 2 * low > cb_small.len(),
+            2 * high > cb_large.len() || 2 * low > cb_small.len()
+        )
+    )
+}
+
+/// Behaviour 4: less viscosity, less stable; every case paired with its
+/// viscous twin (None without a viscosity axis).
+fn less_viscosity_less_stable(m: &Matrix) -> Option<String> {
+    let mu_axis = m.axis(ParamKey::is_viscosity)?;
+    let mut pairs: BTreeMap<Vec<String>, [Vec<f64>; 2]> = BTreeMap::new();
+    for r in &m.rows {
+        let Some(mu) = param(r, ParamKey::is_viscosity) else {
+            continue;
+        };
+        let mut key = r.params.clone();
+        key.remove(mu_axis);
+        pairs.entry(key).or_default()[usize::from(mu > 0.0)].push(r.summary.t_end);
+    }
+    let (mut shorter, mut longer, mut same) = (0, 0, 0);
+    for [inviscid, viscous] in pairs.values() {
+        let (Some(a), Some(b)) = (median(inviscid), median(viscous)) else {
+            continue;
+        };
+        if a < 0.99 * b {
+            shorter += 1;
+        } else if a > 1.01 * b {
+            longer += 1;
+        } else {
+            same += 1;
+        }
+    }
+    let total = shorter + longer + same;
+    Some(format!(
+        "4. Less viscosity, less stable. Of {total} cases paired by everything but the viscosity, the \
+         inviscid one survived a shorter time (median over its runs, 1 % margin) in {shorter}, longer in \
+         {longer}, as long in {same}. {}",
+        verdict(2 * shorter > total, shorter > longer)
+    ))
+}
+
+/// Behaviour 1 per run: half of the particles deleted within this many
+/// steps of the first kick (issue 47's measure).
+pub const BLOW_OUT_STEPS: f64 = 100.0;
+/// Behaviour 2 per run: a late hydrostatic departure of at least this.
+pub const LATE_DEPARTURE: f64 = 1.0;
+/// A run survives while it has lost less than this share of its mass (the
+/// harness's own blow-up threshold, whatever `scene.lost_mass_limit` let
+/// the run go on to).
+pub const SURVIVAL_LOSS: f64 = 0.1;
+
+/// One run's figures for the per-configuration table.
+struct RunFigures {
+    k: f64,
+    viscous: bool,
+    /// Half of its particles deleted within `BLOW_OUT_STEPS` of its first kick.
+    blown_out: bool,
+    /// Time at which it had lost `SURVIVAL_LOSS` of its mass (else its end).
+    survived: f64,
+    /// Ran to t_end without losing `SURVIVAL_LOSS` of its mass.
+    survived_to_end: bool,
+    hydro_late: f64,
+    early_checkerboard: Option<f64>,
+}
+
+impl RunFigures {
+    fn of(r: &Row, t_end: f64) -> Option<Self> {
+        let df = read_parquet(&r.dir.join("timeseries.parquet")).ok()?;
+        let t = f64_column(&df, "t")?;
+        let dt = f64_column(&df, "dt")?;
+        let lost = f64_column(&df, "particles_lost")?;
+        let first_kick = r.summary.metrics.t_first_kick;
+        let n = r.summary.particles as f64;
+        // Steps from the first kick to the row where half the particles are
+        // gone: each row's time span over its time step.
+        let blown_out = first_kick.is_some_and(|tk| {
+            let mut steps = 0.0;
+            for i in 1..t.len() {
+                if t[i] <= tk {
+                    continue;
+                }
+                steps += (t[i] - t[i - 1].max(tk)) / dt[i].max(1e-300);
+                if lost[i] >= 0.5 * n {
+                    return steps <= BLOW_OUT_STEPS;
+                }
+                if steps > BLOW_OUT_STEPS {
+                    return false;
+                }
+            }
+            false
+        });
+        let mass_lost = f64_column(&df, "mass_lost_fraction")?;
+        let loss_at = t
+            .iter()
+            .zip(&mass_lost)
+            .find(|(_, m)| **m >= SURVIVAL_LOSS)
+            .map(|(t, _)| *t);
+        let end = r.summary.t_end;
+        Some(RunFigures {
+            k: param(r, ParamKey::is_bulk_modulus)?,
+            viscous: param(r, ParamKey::is_viscosity).is_some_and(|mu| mu > 0.0),
+            blown_out,
+            survived: loss_at.unwrap_or(end),
+            survived_to_end: loss_at.is_none()
+                && r.summary.status == Status::Completed
+                && end >= t_end * (1.0 - 1e-9),
+            hydro_late: r.hydro_late(),
+            early_checkerboard: early_checkerboard_of(&df),
+        })
+    }
+}
+
+/// A configuration's label and its runs with their figures.
+type Configuration<'a> = (String, Vec<(&'a Row, RunFigures)>);
+
+/// A behaviour's score in one configuration: runs that show it of those it
+/// concerns.
+#[derive(Clone, Copy, Default)]
+struct Score {
+    shown: usize,
+    of: usize,
+}
+
+impl Score {
+    fn add(&mut self, shown: bool) {
+        self.of += 1;
+        self.shown += usize::from(shown);
+    }
+    fn holds(&self) -> bool {
+        self.of > 0 && 2 * self.shown > self.of
+    }
+    fn share(&self) -> f64 {
+        if self.of == 0 {
+            0.0
+        } else {
+            self.shown as f64 / self.of as f64
+        }
+    }
+    fn text(&self) -> String {
+        let mark = if self.holds() { "yes" } else { "no" };
+        format!("{mark} ({} of {})", self.shown, self.of)
+    }
+}
+
+/// The four behaviours scored per configuration (every axis but K and the
+/// viscosity, members pooled; a matrix section through `behaviours`):
+/// (1) at the smallest K, half of the particles deleted within 100 steps
+/// of the first kick; (2) at K >= 1.5 MPa, survival to t_end (less than
+/// 10 % of the mass lost) with a late departure of at least 1; (3) the
+/// cell-means checkerboard index above 0.3 within 0.1 s at K >= 1.5 MPa
+/// and below 0.1 at the smallest K; (4) the inviscid run survives a
+/// shorter time than its viscous twin in most pairs. A behaviour holds in
+/// a configuration when most of the runs it concerns show it.
+pub fn behaviours_by_configuration(m: &Matrix, page: &mut Page) {
+    let (Some(kx), Some(mux)) = (
+        m.axis(ParamKey::is_bulk_modulus),
+        m.axis(ParamKey::is_viscosity),
+    ) else {
+        return;
+    };
+    let others: Vec<usize> = (0..m.axes.len()).filter(|&a| a != kx && a != mux).collect();
+    if others.is_empty() {
+        return;
+    }
+    let t_end = m.rows.iter().map(|r| r.summary.t_end).fold(0.0, f64::max);
+    let k_min = m
+        .rows
+        .iter()
+        .filter_map(|r| param(r, ParamKey::is_bulk_modulus))
+        .fold(f64::INFINITY, f64::min);
+    // A remedy's settings are axes of their own (`artificial_viscosity.linear`)
+    // beside its switch: the label names the switch only, and only when on.
+    let label_axes: Vec<usize> = others
+        .iter()
+        .copied()
+        .filter(|&a| {
+            let f = m.axes[a].field();
+            !f.split_once('.')
+                .is_some_and(|(head, _)| others.iter().any(|&b| m.axes[b].field() == head))
+        })
+        .collect();
+    let config = |r: &Row| -> String {
+        let parts: Vec<String> = label_axes
+            .iter()
+            .filter_map(|&a| {
+                let (f, v) = (m.axes[a].field(), r.params[a].as_str());
+                match v {
+                    "" | "-" | "false" => None,
+                    "true" => Some(f.to_string()),
+                    _ => Some(format!("{f}={v}")),
+                }
+            })
+            .collect();
+        parts.join(" ")
+    };
+    // Grouped by every other axis; labelled by `config`.
+    let full = |r: &Row| -> Vec<String> { others.iter().map(|&a| r.params[a].clone()).collect() };
+    let mut by_config: BTreeMap<Vec<String>, Configuration> = BTreeMap::new();
+    for r in &m.rows {
+        if let Some(f) = RunFigures::of(r, t_end) {
+            by_config
+                .entry(full(r))
+                .or_insert_with(|| (config(r), vec![]))
+                .1
+                .push((r, f));
+        }
+    }
+    let mut rows = vec![];
+    let mut best: Option<(usize, f64, String)> = None;
+    for (name, runs) in by_config.values() {
+        let mut s = [Score::default(); 4];
+        for (_, f) in runs {
+            if f.k == k_min {
+                s[0].add(f.blown_out);
+            }
+            if f.k >= 1.5e6 {
+                s[1].add(f.survived_to_end && f.hydro_late >= LATE_DEPARTURE);
+            }
+        }
+        let (mut high, mut low) = (Score::default(), Score::default());
+        for (_, f) in runs {
+            match f.early_checkerboard {
+                Some(c) if f.k >= 1.5e6 => high.add(c > CHECKERBOARD_HIGH),
+                Some(c) if f.k == k_min => low.add(c < CHECKERBOARD_LOW),
+                _ => {}
+            }
+        }
+        s[2] = Score {
+            shown: usize::from(high.holds() && low.holds()),
+            of: 1,
+        };
+        // Pairs: the same run but for the viscosity (member by member).
+        let twin_key = |r: &Row| {
+            let mut k = r.params.clone();
+            k.remove(mux);
+            (k, r.summary.params.get("scene.seed").map(|v| v.to_string()))
+        };
+        let mut pairs: BTreeMap<_, [Option<f64>; 2]> = BTreeMap::new();
+        for (r, f) in runs {
+            pairs.entry(twin_key(r)).or_default()[usize::from(f.viscous)] = Some(f.survived);
+        }
+        for [inviscid, viscous] in pairs.values() {
+            if let (Some(a), Some(b)) = (inviscid, viscous) {
+                s[3].add(*a < 0.99 * b);
+            }
+        }
+        let held = s.iter().filter(|x| x.holds()).count();
+        let closeness = s.iter().map(Score::share).sum::<f64>();
+        if best.as_ref().is_none_or(|b| (held, closeness) > (b.0, b.1)) {
+            best = Some((held, closeness, name.clone()));
+        }
+        let three = format!(
+            "{} (&gt; {CHECKERBOARD_HIGH}: {} of {} at K &ge; 1.5 MPa; &lt; {CHECKERBOARD_LOW}: {} of {} at the smallest K)",
+            if s[2].holds() { "yes" } else { "no" },
+            high.shown,
+            high.of,
+            low.shown,
+            low.of
+        );
+        rows.push((
+            String::new(),
+            vec![
+                Cell::Text(crate::report::html::escape(name)),
+                Cell::Num(s[0].text()),
+                Cell::Num(s[1].text()),
+                Cell::Num(three),
+                Cell::Num(s[3].text()),
+                Cell::Num(format!("{held} of 4")),
+            ],
+        ));
+    }
+    let headers: Vec<String> = [
+        "configuration",
+        "1. half the particles deleted within 100 steps of the first kick (smallest K)",
+        "2. survives to t_end with late departure ≥ 1 (K ≥ 1.5 MPa)",
+        "3. cell-means checkerboard within 0.1 s",
+        "4. inviscid survives shorter (pairs)",
+        "behaviours shown",
+    ]
+    .map(String::from)
+    .to_vec();
+    page.p(&format!(
+        "Per configuration (every axis but K and the viscosity; runs pooled). Survival: until {:.0} % of the mass is deleted. A behaviour is shown when most of the runs it concerns show it.",
+        100.0 * SURVIVAL_LOSS
+    ));
+    page.table("behaviours_by_configuration", &headers, &rows);
+    if let Some((held, _, name)) = best {
+        page.p(&format!(
+            "Closest to the bug report: <b>{}</b> ({held} of 4 behaviours).",
+            crate::report::html::escape(&name)
+        ));
+    }
+}

@@ -1,0 +1,10 @@
+//! The study crate's integration tests, one binary: the `kick` CLI end to
+//! end (runs, matrices, reproduction, explanation, bad input), the
+//! two-phase runs, the report in a browser, and the workspace's module
+//! graph.
+
+mod cli;
+mod common;
+mod module_graph;
+mod report_browser;
+mod run_mixture;
