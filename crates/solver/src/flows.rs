@@ -36,6 +36,16 @@ pub enum Flow {
 }
 
 impl Flow {
+    /// The mode number m (None for the shear wave, which has one mode).
+    pub fn mode(&self) -> Option<u32> {
+        match *self {
+            Flow::TaylorGreen { mode, .. }
+            | Flow::StandingWave { mode, .. }
+            | Flow::GridSeed { mode, .. } => Some(mode),
+            Flow::ShearWave { .. } => None,
+        }
+    }
+
     /// The wavenumber k of the flow on a body `rect`.
     pub fn wavenumber(&self, rect: [f64; 4]) -> f64 {
         let (w, h) = (rect[2] - rect[0], rect[3] - rect[1]);

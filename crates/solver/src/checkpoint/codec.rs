@@ -86,7 +86,7 @@ impl Encoder {
 
 type Done = Result<(), CodecError>;
 
-impl<'a> ser::Serializer for &'a mut Encoder {
+impl ser::Serializer for &mut Encoder {
     type Ok = ();
     type Error = CodecError;
     type SerializeSeq = Self;

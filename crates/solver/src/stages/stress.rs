@@ -156,21 +156,38 @@ fn run<const W: usize>(
                     stencils,
                     affine,
                 };
-                // This step's history increments (softening solids only).
-                let mut dxi = [0.0; CHUNK];
-                let (mut acc, rule_acc) = deform::<W>(inputs, &mut c, &mut dxi);
-                pressure_from_eos(inputs.materials, &mut c);
-                if solids {
-                    acc = soften(inputs.materials, &mut c, &dxi, acc);
-                }
-                if inputs.drop_inverted {
-                    drop_inverted_stress(inputs.j_update, &mut c);
-                }
+                let (acc, rule_acc) = update_chunk::<W>(inputs, &mut c, solids);
                 work[0] = acc;
                 work[1..].copy_from_slice(&rule_acc);
             },
         );
-    let parts = &partials[..n_chunks];
+    sum_partials(&partials[..n_chunks])
+}
+
+/// One chunk's stage: F, J, the viscous and extra stress, the EOS, the
+/// solids' softening and the inverted particles' stress; the chunk's
+/// dissipated work and each rule's share.
+#[inline(always)]
+fn update_chunk<const W: usize>(
+    inputs: &Inputs,
+    c: &mut Chunk,
+    solids: bool,
+) -> (f64, [f64; MAX_RULES]) {
+    // This step's history increments (softening solids only).
+    let mut dxi = [0.0; CHUNK];
+    let (mut acc, rule_acc) = deform::<W>(inputs, c, &mut dxi);
+    pressure_from_eos(inputs.materials, c);
+    if solids {
+        acc = soften(inputs.materials, c, &dxi, acc);
+    }
+    if inputs.drop_inverted {
+        drop_inverted_stress(inputs.j_update, c);
+    }
+    (acc, rule_acc)
+}
+
+/// The dissipated work and each rule's share, summed over the chunks in order.
+fn sum_partials(parts: &[Partial]) -> (f64, [f64; MAX_RULES]) {
     let mut rule_work = [0.0; MAX_RULES];
     for (r, w) in rule_work.iter_mut().enumerate() {
         *w = parts.iter().map(|p| p[1 + r]).sum();
@@ -182,6 +199,7 @@ fn run<const W: usize>(
 /// rules' extra stress; returns the chunk's dissipated work and each
 /// rule's share, and leaves each softening particle's history increment.
 #[inline(always)]
+#[allow(clippy::needless_range_loop)] // k indexes a dozen parallel slices
 fn deform<const W: usize>(
     inputs: &Inputs,
     c: &mut Chunk,

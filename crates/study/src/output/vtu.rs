@@ -397,11 +397,16 @@ impl Snapshot {
                 let _ = writeln!(h, "{tag}");
             }
         }
+        let tag = |name: &str| tags.get(name).map_or("", String::as_str);
         let _ = write!(
             h,
-            "</PointData>\n<Points>\n{}\n</Points>\n<Cells>\n{}\n{}\n{}\n</Cells>\n</Piece>\n</UnstructuredGrid>\n<AppendedData encoding=\"raw\">\n_",
-            tags["Points"], tags["connectivity"], tags["offsets"], tags["types"]
+            "</PointData>\n<Points>\n{}\n</Points>\n<Cells>\n",
+            tag("Points")
         );
+        for name in ["connectivity", "offsets", "types"] {
+            let _ = writeln!(h, "{}", tag(name));
+        }
+        h.push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n<AppendedData encoding=\"raw\">\n_");
         h
     }
 

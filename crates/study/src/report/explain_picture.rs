@@ -8,6 +8,7 @@
 
 use crate::report::plot::{colour_bar, err, render, ColourScale, Figure, Res, SANS};
 use monitor::mechanisms::SMALL_NODE_SHARE;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use solver::forensics::ExplainedStep;
@@ -77,6 +78,9 @@ impl Figure for Picture<'_> {
     }
 }
 
+/// A panel's chart: metres on both axes.
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
 impl Picture<'_> {
     fn panel<DB: DrawingBackend>(
         &self,
@@ -99,7 +103,14 @@ impl Picture<'_> {
             .label_style((SANS, 12))
             .draw()
             .map_err(err)?;
-        // Cell lines.
+        self.cell_lines(&mut chart)?;
+        self.particles(&mut chart, f)?;
+        self.nodes(&mut chart, f)?;
+        Ok(())
+    }
+
+    /// The grid's cell lines over the panel.
+    fn cell_lines<DB: DrawingBackend>(&self, chart: &mut Chart<DB>) -> Res {
         let lines = |lo: f64, hi: f64| {
             let first = (lo / self.h).ceil() as i64;
             let last = (hi / self.h).floor() as i64;
@@ -118,7 +129,11 @@ impl Picture<'_> {
                 .draw_series(LineSeries::new([(self.lo.x, y), (self.hi.x, y)], grey))
                 .map_err(err)?;
         }
-        // Contributing particles by pressure; the event's particles ringed.
+        Ok(())
+    }
+
+    /// The contributing particles by pressure; the event's particles ringed.
+    fn particles<DB: DrawingBackend>(&self, chart: &mut Chart<DB>, f: &ExplainedStep) -> Res {
         let inside =
             |x: Vec2| x.x >= self.lo.x && x.x <= self.hi.x && x.y >= self.lo.y && x.y <= self.hi.y;
         for q in contributors(f) {
@@ -136,7 +151,12 @@ impl Picture<'_> {
                 .draw_series([Circle::new((x.x, x.y), 7, BLACK.stroke_width(2))])
                 .map_err(err)?;
         }
-        // Nodes: disc area by mass share; force arrows scaled to the largest.
+        Ok(())
+    }
+
+    /// The stencil nodes: disc area by mass share (red: light); force
+    /// arrows scaled to the largest.
+    fn nodes<DB: DrawingBackend>(&self, chart: &mut Chart<DB>, f: &ExplainedStep) -> Res {
         let mut nodes: Vec<(Vec2, f64, Vec2)> = vec![];
         for e in &f.explained {
             for n in &e.nodes {

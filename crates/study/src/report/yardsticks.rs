@@ -118,10 +118,11 @@ fn free_slip(s: &Summary) -> bool {
         .is_none_or(|walls| walls.is_empty())
 }
 
-/// The mode number of a case's initial flow.
+/// The mode number of a case's initial flow (its first body's).
 fn mode(s: &Summary) -> Option<u64> {
-    let body = s.params.get("scene.body")?.as_array()?.first()?;
-    body.get("flow")?.get("mode")?.as_u64()
+    let bodies: Vec<solver::Body> =
+        serde_json::from_value(s.params.get("scene.body")?.clone()).ok()?;
+    bodies.first()?.flow?.mode().map(u64::from)
 }
 
 impl Yardsticks {
@@ -281,7 +282,10 @@ pub mod test_rows {
             ("materials.water.viscosity".to_string(), json!(mu)),
             (
                 "scene.body".to_string(),
-                json!([{ "flow": { "kind": "taylor_green", "mode": mode } }]),
+                json!([{
+                    "rect": [0.0, 0.0, 0.2, 0.2],
+                    "flow": { "kind": "taylor_green", "amplitude": 0.01, "mode": mode },
+                }]),
             ),
         ]);
         let s = Summary {

@@ -328,10 +328,10 @@ mod tests {
     fn dense(s: &Scratch) -> Vec<Vec<f64>> {
         let n = s.fluid.len();
         let mut a = vec![vec![0.0; n]; n];
-        for k in 0..n {
+        for (k, row) in a.iter_mut().enumerate() {
             for (slot, &m) in s.neighbours[k].iter().enumerate() {
                 if m != AIR {
-                    a[k][m as usize] = s.matrix[k][slot];
+                    row[m as usize] = s.matrix[k][slot];
                 }
             }
         }
@@ -339,6 +339,7 @@ mod tests {
     }
 
     /// x = A^-1 b by a dense Cholesky factor A = L L^T.
+    #[allow(clippy::needless_range_loop)] // the textbook's indices
     fn cholesky_solve(a: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
         let n = b.len();
         let mut l = vec![vec![0.0; n]; n];

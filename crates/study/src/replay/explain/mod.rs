@@ -7,19 +7,20 @@
 //! With `--counterfactual` it restarts from the same checkpoint once per
 //! single change, applied from the onset window's start.
 
-use crate::output::files::write_atomic;
+pub mod record;
+
 use crate::output::summary::{Status, Summary};
 use crate::output::tables;
 use crate::run::case::{watches, with_threads};
 use crate::run::checkpoint;
 use crate::run::probes::checkpoint_ring::ring_step;
 use crate::run::probes::replay::{Found, Replay as ReplayChecks};
-use crate::run::{Probe, Rows, Run, RunOptions, Runner, Stepper, Watch};
+use crate::run::{Probe, Rows, Run, RunOptions, Runner, Simulated, Stepper, Watch};
 use crate::study_file::{self, Case};
 use monitor::mechanisms::{Mechanisms, Shares, StepParts};
 use monitor::{Cause, CellRange, Event};
+use record::{Criteria, ExplainRecord, LargestPart, Leading, Ringing, TimeStep};
 use serde::Serialize;
-use serde_json::json;
 use solver::forensics::ExplainedStep;
 use solver::{CheckpointError, Method, Solver, Vec2};
 use std::path::{Path, PathBuf};
@@ -74,12 +75,12 @@ struct Record {
 
 /// The window's times and steps.
 #[derive(Clone, Copy, Debug, Serialize)]
-struct Window {
-    explain_from: f64,
-    onset_from: f64,
-    first_step: u64,
-    last_step: u64,
-    last_t: f64,
+pub struct Window {
+    pub explain_from: f64,
+    pub onset_from: f64,
+    pub first_step: u64,
+    pub last_step: u64,
+    pub last_t: f64,
 }
 
 /// The `Stepper` methods a wrapper of one `solver` hands to it.
@@ -651,20 +652,58 @@ fn counterfactual(
         other_events: vec![],
         verdict: "refused",
     };
+    let (measured, replay) = match replay_with_change(loaded, window, change) {
+        Ok(done) => done,
+        Err(why) => return refused(why),
+    };
+    let other_events = other_events(loaded, window, &replay.simulated, replay.switched_at);
+    let blew_up = replay.simulated.status == Status::BlewUp;
+    CounterfactualRow {
+        change: name,
+        refused: None,
+        injected: measured.injected,
+        floor,
+        event_happens: measured.happens,
+        steps: replay.steps,
+        outcome: if blew_up {
+            format!("blew up: {}", replay.simulated.reason)
+        } else {
+            "completed".into()
+        },
+        verdict: verdict(Replayed {
+            event_happens: measured.happens,
+            blew_up,
+            other_events: other_events.len(),
+            injected: measured.injected,
+            event_injected: control_injected,
+        }),
+        other_events,
+    }
+}
+
+/// How a counterfactual replay ran: what it simulated, its steps, and the
+/// step of its switch.
+struct ChangedReplay {
+    simulated: Simulated,
+    steps: u64,
+    switched_at: u64,
+}
+
+/// Replays the event's window from its checkpoint with `change` switched
+/// on at onset; the window's measure and the replay, or why it was refused.
+fn replay_with_change(
+    loaded: &Loaded,
+    window: Window,
+    change: &Change,
+) -> Result<(Measured, ChangedReplay), String> {
     let method = match change {
         Change::Overrides(o) if o.is_empty() => None,
-        Change::Overrides(o) => match changed_method(&loaded.study_path, o) {
-            Ok(m) => Some(m),
-            Err(e) => return refused(e),
-        },
+        Change::Overrides(o) => Some(changed_method(&loaded.study_path, o)?),
         Change::HalfDt => None,
         Change::PressureImplicit => Some(pressure_implicit(&loaded.case.solver.method)),
     };
     let case = &loaded.case;
-    let solver = match Solver::new(case.solver.clone()) {
-        Ok(s) => s,
-        Err(e) => return refused(format!("setup: {e}")),
-    };
+    let solver = Solver::new(case.solver.clone()).map_err(|e| format!("setup: {e}"))?;
     let mut watches = watches(&solver, case);
     let mut stepper = Switching {
         solver,
@@ -675,9 +714,9 @@ fn counterfactual(
         refused: None,
         switched_at: None,
     };
-    if let Err(e) = stepper.load(&loaded.checkpoint, &mut watches) {
-        return refused(e.to_string());
-    }
+    stepper
+        .load(&loaded.checkpoint, &mut watches)
+        .map_err(|e| e.to_string())?;
     let start = stepper.step_count();
     let mut measured = Measured {
         min: f64::INFINITY,
@@ -701,46 +740,36 @@ fn counterfactual(
     let switched_at = runner.stepper().switched_at.unwrap_or(start);
     drop(runner);
     if let Some(why) = why_refused {
-        return refused(why);
+        return Err(why);
     }
-    let simulated = match ran {
-        Ok(simulated) => simulated,
-        Err(e) => return refused(e.to_string()),
+    let simulated = ran.map_err(|e| e.to_string())?;
+    let replay = ChangedReplay {
+        simulated,
+        steps,
+        switched_at,
     };
-    let other_events: Vec<String> = simulated
+    Ok((measured, replay))
+}
+
+/// The non-physical events a replay opened in the window other than the
+/// explained one (not at the change's own step: a new transfer counts the
+/// kinetic energy and the transfer loss its own way from there, and the
+/// budget's step at the switch reads as an injection).
+fn other_events(
+    loaded: &Loaded,
+    window: Window,
+    simulated: &Simulated,
+    switched_at: u64,
+) -> Vec<String> {
+    simulated
         .events
         .iter()
         .filter(|e| e.t >= window.onset_from && e.t <= window.last_t + 1e-12)
-        // Not at the change's own step: a new transfer counts the kinetic
-        // energy and the transfer loss its own way from there, and the
-        // budget's step at the switch reads as an injection.
         .filter(|e| e.first_step > switched_at + 1)
         .filter(|e| e.cause != Cause::Impact)
         .filter(|e| !(e.kind == loaded.logged.kind && overlaps(e.cells, loaded.logged.cells)))
         .map(|e| format!("{} ({}) at {:.4} s", e.kind.name(), e.cause.name(), e.t))
-        .collect();
-    let blew_up = simulated.status == Status::BlewUp;
-    CounterfactualRow {
-        change: name,
-        refused: None,
-        injected: measured.injected,
-        floor,
-        event_happens: measured.happens,
-        steps,
-        outcome: if blew_up {
-            format!("blew up: {}", simulated.reason)
-        } else {
-            "completed".into()
-        },
-        verdict: verdict(Replayed {
-            event_happens: measured.happens,
-            blew_up,
-            other_events: other_events.len(),
-            injected: measured.injected,
-            event_injected: control_injected,
-        }),
-        other_events,
-    }
+        .collect()
 }
 
 /// The case's method with `overrides` applied to its study file.
@@ -758,6 +787,54 @@ fn finish(
     found: Found,
     counterfactual: &[CounterfactualRow],
 ) -> std::io::Result<Outcome> {
+    let explained = explain_record(case_dir, loaded, window, record, found, counterfactual);
+    std::fs::create_dir_all(out)?;
+    explained.write(out)?;
+    write_steps(&record.rows, out)?;
+    let (lead, part) = (&explained.leading, &explained.largest_part);
+    let mut message = format!(
+        "event {}: {} from {} (hash {}); largest part {} {:.3}; leading mechanism {} {:.3}; closure {:.1e}",
+        explained.event,
+        if explained.matched { "replayed" } else { "DIVERGED" },
+        loaded.checkpoint_name,
+        explained.replayed_state_hash.as_deref().unwrap_or("-"),
+        part.part,
+        part.share.unwrap_or(f64::NAN),
+        lead.mechanism,
+        lead.share.unwrap_or(f64::NAN),
+        explained.closure_rest_max
+    );
+    if loaded.checkpoint_t > window.explain_from + 1e-12 {
+        message += &format!(
+            "; note: no checkpoint precedes the quiet window (from t = {:.4} s): the replays start at t = {:.4} s",
+            window.explain_from, loaded.checkpoint_t
+        );
+    }
+    let picture = match (&record.before, &record.onset) {
+        (Some(before), Some(onset)) => Some(Picture {
+            before: before.clone(),
+            onset: onset.clone(),
+            h: loaded.case.solver.scene.cell,
+        }),
+        _ => None,
+    };
+    Ok(Outcome {
+        matched: explained.matched,
+        message,
+        out: out.to_path_buf(),
+        picture,
+    })
+}
+
+/// The record of an explained replay.
+fn explain_record(
+    case_dir: &Path,
+    loaded: &Loaded,
+    window: Window,
+    record: &Record,
+    found: Found,
+    counterfactual: &[CounterfactualRow],
+) -> ExplainRecord {
     let logged = &loaded.logged;
     let matched = found.hash_at_first.as_deref() == logged.state_hash.as_deref()
         && found
@@ -779,74 +856,44 @@ fn finish(
     let (leading, leading_share) = shares.leading();
     let (largest, largest_share) = shares.largest_part();
     let ev = &logged.evidence;
-    let record_json = json!({
-        "case_dir": case_dir.display().to_string(),
-        "event": logged.id,
-        "checkpoint": loaded.checkpoint_name,
-        "checkpoint_t": loaded.checkpoint_t,
-        "replayed_state_hash": found.hash_at_first,
-        "logged_state_hash": logged.state_hash,
-        "matched": matched,
-        "window": window,
-        "particles": record.ids,
-        "steps_explained": record.rows.len(),
-        "closure_rest_max": rest_max,
-        "shares": shares,
-        "leading": {"mechanism": leading, "share": leading_share},
-        "largest_part": {"part": largest, "share": largest_share},
-        "m4_ringing": {
-            "drift_over_speed": drift,
-            "steps": before.len(),
-            "window_s": window.onset_from - window.explain_from,
-        },
-        "m5_time_step": {
-            "courant_before": ev.courant_before,
-            "advection_before": ev.advection_before,
-            "critical_courant": ev.critical_courant,
-        },
-        "criteria": {
-            "small_node_share": monitor::mechanisms::SMALL_NODE_SHARE,
-            "outlier_sigmas": monitor::mechanisms::OUTLIER_SIGMAS,
-            "outlier_floor_rho0_g_h": monitor::mechanisms::OUTLIER_FLOOR,
-        },
-        "counterfactual": counterfactual,
-    });
-    std::fs::create_dir_all(out)?;
-    write_atomic(
-        &out.join("explain.json"),
-        serde_json::to_string_pretty(&record_json)?.as_bytes(),
-    )?;
-    write_steps(&record.rows, out)?;
-    let mut message = format!(
-        "event {}: {} from {} (hash {}); largest part {largest} {:.3}; leading mechanism {leading} {:.3}; closure {:.1e}",
-        logged.id,
-        if matched { "replayed" } else { "DIVERGED" },
-        loaded.checkpoint_name,
-        found.hash_at_first.as_deref().unwrap_or("-"),
-        largest_share,
-        leading_share,
-        rest_max
-    );
-    if loaded.checkpoint_t > window.explain_from + 1e-12 {
-        message += &format!(
-            "; note: no checkpoint precedes the quiet window (from t = {:.4} s): the replays start at t = {:.4} s",
-            window.explain_from, loaded.checkpoint_t
-        );
-    }
-    let picture = match (&record.before, &record.onset) {
-        (Some(before), Some(onset)) => Some(Picture {
-            before: before.clone(),
-            onset: onset.clone(),
-            h: loaded.case.solver.scene.cell,
-        }),
-        _ => None,
-    };
-    Ok(Outcome {
+    ExplainRecord {
+        case_dir: case_dir.display().to_string(),
+        event: logged.id,
+        checkpoint: loaded.checkpoint_name.clone(),
+        checkpoint_t: loaded.checkpoint_t,
+        replayed_state_hash: found.hash_at_first,
+        logged_state_hash: logged.state_hash.clone(),
         matched,
-        message,
-        out: out.to_path_buf(),
-        picture,
-    })
+        window,
+        particles: record.ids.clone(),
+        steps_explained: record.rows.len(),
+        closure_rest_max: rest_max,
+        shares,
+        leading: Leading {
+            mechanism: leading.into(),
+            share: Some(leading_share),
+        },
+        largest_part: LargestPart {
+            part: largest.into(),
+            share: Some(largest_share),
+        },
+        m4_ringing: Ringing {
+            drift_over_speed: drift,
+            steps: before.len(),
+            window_s: window.onset_from - window.explain_from,
+        },
+        m5_time_step: TimeStep {
+            courant_before: ev.courant_before,
+            advection_before: ev.advection_before,
+            critical_courant: ev.critical_courant,
+        },
+        criteria: Criteria {
+            small_node_share: monitor::mechanisms::SMALL_NODE_SHARE,
+            outlier_sigmas: monitor::mechanisms::OUTLIER_SIGMAS,
+            outlier_floor_rho0_g_h: monitor::mechanisms::OUTLIER_FLOOR,
+        },
+        counterfactual: counterfactual.to_vec(),
+    }
 }
 
 fn write_steps(rows: &[StepRow], out: &Path) -> std::io::Result<()> {

@@ -22,6 +22,7 @@ use study::output::metrics::martin_moyce;
 use study::output::summary::Summary;
 use study::output::vtu::particle_files;
 use study::output::vtu::Snapshot;
+use study::replay::explain::record::ExplainedHead;
 use study::run::probes::surge_front::front_wall_z;
 use study::study_file;
 
@@ -286,40 +287,28 @@ fn events_section(c: &CaseInputs, page: &mut Page) {
     page.table("", &headers, &rows);
 }
 
-/// A unit enum as summary.json spells it.
-/// The record `kick explain` wrote for event `id` of the case in `dir`
-/// (CASE_DIR/explain/event_K/explain.json), if any.
-pub fn explain_record(dir: &std::path::Path, id: u32) -> Option<serde_json::Value> {
-    let file = dir
-        .join("explain")
-        .join(format!("event_{id}"))
-        .join("explain.json");
-    serde_json::from_str(&std::fs::read_to_string(file).ok()?).ok()
-}
-
 /// The events `kick explain` wrote a folder for (CASE_DIR/explain/event_K):
 /// their largest part, leading mechanism and picture, linked.
 fn explained_section(c: &CaseInputs, page: &mut Page) {
-    let found: Vec<(u32, serde_json::Value)> = c
+    let found: Vec<(u32, ExplainedHead)> = c
         .summary
         .events
         .iter()
-        .filter_map(|e| Some((e.id, explain_record(&c.dir, e.id)?)))
+        .filter_map(|e| Some((e.id, ExplainedHead::read(&c.dir, e.id)?)))
         .collect();
     if found.is_empty() {
         return;
     }
     page.h2("Explained events (kick explain)");
-    for (id, j) in found {
+    for (id, head) in found {
         let folder = format!("../explain/event_{id}");
-        let part = &j["largest_part"];
-        let lead = &j["leading"];
+        let (part, lead) = (&head.largest_part, &head.leading);
         page.p(&format!(
             "Event {id}: largest part {} ({:.3}); leading mechanism {} ({:.3}); {}.",
-            escape(part["part"].as_str().unwrap_or("-")),
-            part["share"].as_f64().unwrap_or(f64::NAN),
-            escape(lead["mechanism"].as_str().unwrap_or("-")),
-            lead["share"].as_f64().unwrap_or(f64::NAN),
+            escape(&part.part),
+            part.share.unwrap_or(f64::NAN),
+            escape(&lead.mechanism),
+            lead.share.unwrap_or(f64::NAN),
             crate::report::html::link(Some(&format!("{folder}/explain.json")), "explain.json"),
         ));
         page.image(
@@ -384,8 +373,8 @@ fn timeseries_section(c: &CaseInputs, page: &mut Page) -> Res {
     page.figure(&render(&fig, &c.out, "timeseries")?, "Energy budget, injected energy, max a/g and outlier score, checkerboard index and hydrostatic departure; event lines by cause: kicks (injection, inversion) red, time-step instability (cfl) orange, impacts grey; * marks the hallmark");
     if let (Some(z_wall), Some(ft), Some(fz)) = (
         front_wall_z(&c.scene),
-        c.series.get("front_t"),
-        c.series.get("front_z"),
+        c.series.column("front_t"),
+        c.series.column("front_z"),
     ) {
         let data = martin_moyce();
         let fig = FrontFigure {

@@ -352,9 +352,54 @@ pub fn behaviours_by_configuration(m: &Matrix, page: &mut Page) {
     ) else {
         return;
     };
+    let Some((by_config, k_min)) = configurations(m, kx, mux) else {
+        return;
+    };
+    let mut rows = vec![];
+    let mut best: Option<(usize, f64, String)> = None;
+    for (name, runs) in by_config.values() {
+        let (s, high, low) = score(runs, k_min, mux);
+        let held = s.iter().filter(|x| x.holds()).count();
+        let closeness = s.iter().map(Score::share).sum::<f64>();
+        if best.as_ref().is_none_or(|b| (held, closeness) > (b.0, b.1)) {
+            best = Some((held, closeness, name.clone()));
+        }
+        rows.push(score_row(name, &s, high, low));
+    }
+    let headers: Vec<String> = [
+        "configuration",
+        "1. half the particles deleted within 100 steps of the first kick (smallest K)",
+        "2. survives to t_end with late departure ≥ 1 (K ≥ 1.5 MPa)",
+        "3. cell-means checkerboard within 0.1 s",
+        "4. inviscid survives shorter (pairs)",
+        "behaviours shown",
+    ]
+    .map(String::from)
+    .to_vec();
+    page.p(&format!(
+        "Per configuration (every axis but K and the viscosity; runs pooled). Survival: until {:.0} % of the mass is deleted. A behaviour is shown when most of the runs it concerns show it.",
+        100.0 * SURVIVAL_LOSS
+    ));
+    page.table("behaviours_by_configuration", &headers, &rows);
+    if let Some((held, _, name)) = best {
+        page.p(&format!(
+            "Closest to the bug report: <b>{}</b> ({held} of 4 behaviours).",
+            crate::report::html::escape(&name)
+        ));
+    }
+}
+
+/// The runs grouped by configuration (every axis but K and the viscosity,
+/// labelled by the axes that name it), and the smallest K; None without
+/// another axis.
+fn configurations(
+    m: &Matrix,
+    kx: usize,
+    mux: usize,
+) -> Option<(BTreeMap<Vec<String>, Configuration<'_>>, f64)> {
     let others: Vec<usize> = (0..m.axes.len()).filter(|&a| a != kx && a != mux).collect();
     if others.is_empty() {
-        return;
+        return None;
     }
     let t_end = m.rows.iter().map(|r| r.summary.t_end).fold(0.0, f64::max);
     let k_min = m
@@ -399,51 +444,55 @@ pub fn behaviours_by_configuration(m: &Matrix, page: &mut Page) {
                 .push((r, f));
         }
     }
-    let mut rows = vec![];
-    let mut best: Option<(usize, f64, String)> = None;
-    for (name, runs) in by_config.values() {
-        let mut s = [Score::default(); 4];
-        for (_, f) in runs {
-            if f.k == k_min {
-                s[0].add(f.blown_out);
-            }
-            if f.k >= 1.5e6 {
-                s[1].add(f.survived_to_end && f.hydro_late >= LATE_DEPARTURE);
-            }
+    Some((by_config, k_min))
+}
+
+/// A configuration's scores of behaviours 1-4, and behaviour 3's two halves
+/// (high at K >= 1.5 MPa, low at the smallest K).
+fn score(runs: &[(&Row, RunFigures)], k_min: f64, mux: usize) -> ([Score; 4], Score, Score) {
+    let mut s = [Score::default(); 4];
+    for (_, f) in runs {
+        if f.k == k_min {
+            s[0].add(f.blown_out);
         }
-        let (mut high, mut low) = (Score::default(), Score::default());
-        for (_, f) in runs {
-            match f.early_checkerboard {
-                Some(c) if f.k >= 1.5e6 => high.add(c > CHECKERBOARD_HIGH),
-                Some(c) if f.k == k_min => low.add(c < CHECKERBOARD_LOW),
-                _ => {}
-            }
+        if f.k >= 1.5e6 {
+            s[1].add(f.survived_to_end && f.hydro_late >= LATE_DEPARTURE);
         }
-        s[2] = Score {
-            shown: usize::from(high.holds() && low.holds()),
-            of: 1,
-        };
-        // Pairs: the same run but for the viscosity (member by member).
-        let twin_key = |r: &Row| {
-            let mut k = r.params.clone();
-            k.remove(mux);
-            (k, r.summary.params.get("scene.seed").map(|v| v.to_string()))
-        };
-        let mut pairs: BTreeMap<_, [Option<f64>; 2]> = BTreeMap::new();
-        for (r, f) in runs {
-            pairs.entry(twin_key(r)).or_default()[usize::from(f.viscous)] = Some(f.survived);
+    }
+    let (mut high, mut low) = (Score::default(), Score::default());
+    for (_, f) in runs {
+        match f.early_checkerboard {
+            Some(c) if f.k >= 1.5e6 => high.add(c > CHECKERBOARD_HIGH),
+            Some(c) if f.k == k_min => low.add(c < CHECKERBOARD_LOW),
+            _ => {}
         }
-        for [inviscid, viscous] in pairs.values() {
-            if let (Some(a), Some(b)) = (inviscid, viscous) {
-                s[3].add(*a < 0.99 * b);
-            }
+    }
+    s[2] = Score {
+        shown: usize::from(high.holds() && low.holds()),
+        of: 1,
+    };
+    // Pairs: the same run but for the viscosity (member by member).
+    let twin_key = |r: &Row| {
+        let mut k = r.params.clone();
+        k.remove(mux);
+        (k, r.summary.params.get("scene.seed").map(|v| v.to_string()))
+    };
+    let mut pairs: BTreeMap<_, [Option<f64>; 2]> = BTreeMap::new();
+    for (r, f) in runs {
+        pairs.entry(twin_key(r)).or_default()[usize::from(f.viscous)] = Some(f.survived);
+    }
+    for [inviscid, viscous] in pairs.values() {
+        if let (Some(a), Some(b)) = (inviscid, viscous) {
+            s[3].add(*a < 0.99 * b);
         }
-        let held = s.iter().filter(|x| x.holds()).count();
-        let closeness = s.iter().map(Score::share).sum::<f64>();
-        if best.as_ref().is_none_or(|b| (held, closeness) > (b.0, b.1)) {
-            best = Some((held, closeness, name.clone()));
-        }
-        let three = format!(
+    }
+    (s, high, low)
+}
+
+/// A configuration's row of the table.
+fn score_row(name: &str, s: &[Score; 4], high: Score, low: Score) -> (String, Vec<Cell>) {
+    let held = s.iter().filter(|x| x.holds()).count();
+    let three = format!(
             "{} (&gt; {CHECKERBOARD_HIGH}: {} of {} at K &ge; 1.5 MPa; &lt; {CHECKERBOARD_LOW}: {} of {} at the smallest K)",
             if s[2].holds() { "yes" } else { "no" },
             high.shown,
@@ -451,37 +500,15 @@ pub fn behaviours_by_configuration(m: &Matrix, page: &mut Page) {
             low.shown,
             low.of
         );
-        rows.push((
-            String::new(),
-            vec![
-                Cell::Text(crate::report::html::escape(name)),
-                Cell::Num(s[0].text()),
-                Cell::Num(s[1].text()),
-                Cell::Num(three),
-                Cell::Num(s[3].text()),
-                Cell::Num(format!("{held} of 4")),
-            ],
-        ));
-    }
-    let headers: Vec<String> = [
-        "configuration",
-        "1. half the particles deleted within 100 steps of the first kick (smallest K)",
-        "2. survives to t_end with late departure ≥ 1 (K ≥ 1.5 MPa)",
-        "3. cell-means checkerboard within 0.1 s",
-        "4. inviscid survives shorter (pairs)",
-        "behaviours shown",
-    ]
-    .map(String::from)
-    .to_vec();
-    page.p(&format!(
-        "Per configuration (every axis but K and the viscosity; runs pooled). Survival: until {:.0} % of the mass is deleted. A behaviour is shown when most of the runs it concerns show it.",
-        100.0 * SURVIVAL_LOSS
-    ));
-    page.table("behaviours_by_configuration", &headers, &rows);
-    if let Some((held, _, name)) = best {
-        page.p(&format!(
-            "Closest to the bug report: <b>{}</b> ({held} of 4 behaviours).",
-            crate::report::html::escape(&name)
-        ));
-    }
+    (
+        String::new(),
+        vec![
+            Cell::Text(crate::report::html::escape(name)),
+            Cell::Num(s[0].text()),
+            Cell::Num(s[1].text()),
+            Cell::Num(three),
+            Cell::Num(s[3].text()),
+            Cell::Num(format!("{held} of 4")),
+        ],
+    )
 }

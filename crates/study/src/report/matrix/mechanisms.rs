@@ -5,12 +5,12 @@
 //! many replays matched, which mechanism leads (docs/physics.md section 4c)
 //! and the median shares of the internal force and of M1-M3.
 
-use crate::report::case::explain_record;
 use crate::report::data::{median, Matrix, ParamKey};
 use crate::report::html::{Cell, Page};
 use crate::report::plot::Res;
 use std::collections::BTreeMap;
 use std::path::Path;
+use study::replay::explain::record::ExplainedHead;
 
 /// A mechanism leads an event when its share is at least this (else none).
 pub const LEADS_FROM: f64 = 0.1;
@@ -41,13 +41,13 @@ struct Explained {
     m: [f64; 3],
 }
 
-fn read(j: serde_json::Value) -> Option<Explained> {
-    let sh = &j["shares"];
-    let share = |k: &str| sh[k].as_f64().unwrap_or(f64::NAN);
+fn read(head: ExplainedHead) -> Option<Explained> {
+    let sh = head.shares;
+    let share = |v: Option<f64>| v.unwrap_or(f64::NAN);
     let m = [
-        share("small_mass_node"),
-        share("cell_crossing"),
-        share("stress_outlier"),
+        share(sh.small_mass_node),
+        share(sh.cell_crossing),
+        share(sh.stress_outlier),
     ];
     let (best, value) =
         m.iter().enumerate().fold(
@@ -55,9 +55,9 @@ fn read(j: serde_json::Value) -> Option<Explained> {
             |a, (k, v)| if *v > a.1 { (k, *v) } else { a },
         );
     Some(Explained {
-        matched: j["matched"].as_bool().unwrap_or(false),
+        matched: head.matched,
         leader: if value >= LEADS_FROM { best } else { 3 },
-        internal: share("internal"),
+        internal: share(sh.internal),
         m,
     })
 }
@@ -76,7 +76,7 @@ pub fn mechanism_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
             .and_then(|(_, v)| v.as_f64())
             .unwrap_or(f64::NAN);
         for e in &r.summary.events {
-            if let Some(x) = explain_record(&r.dir, e.id).and_then(read) {
+            if let Some(x) = ExplainedHead::read(&r.dir, e.id).and_then(read) {
                 let order = ["collapse", "impact", "late"]
                     .iter()
                     .position(|s| *s == stratum(e.t))

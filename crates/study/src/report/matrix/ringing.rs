@@ -86,11 +86,23 @@ fn coordinate(x: f64) -> String {
     format!("{x:.3}")
 }
 
-/// The ringing section: the map and a table per method.
-/// (A matrix section: `matrix::MATRIX_SECTIONS`.)
-pub fn ringing_map(m: &Matrix, out: &Path, page: &mut Page) -> Res {
-    // method -> (U dt / h, c dt / h) -> point; the larger share is the full seed.
-    let mut maps: BTreeMap<String, BTreeMap<(String, String), MapPoint>> = BTreeMap::new();
+/// method -> (U dt / h, c dt / h) -> point.
+type Maps = BTreeMap<String, BTreeMap<(String, String), MapPoint>>;
+
+/// The ringing cases of a matrix, on the map's axes.
+struct Gathered {
+    maps: Maps,
+    /// The larger seed share: the full seed (the other is the halved one).
+    full_share: f64,
+    /// How many seed shares the matrix ran.
+    seeds: usize,
+    x_cats: Vec<String>,
+    y_cats: Vec<String>,
+}
+
+/// The ringing cases' figures by method and point; None without any.
+fn gather(m: &Matrix) -> Option<Gathered> {
+    let mut maps = Maps::new();
     let mut shares: Vec<f64> = vec![];
     let figures: Vec<(&Summary, RingingFigures)> = m
         .rows
@@ -98,7 +110,7 @@ pub fn ringing_map(m: &Matrix, out: &Path, page: &mut Page) -> Res {
         .filter_map(|r| Some((&r.summary, r.summary.metrics.check::<RingingFigures>()?)))
         .collect();
     if figures.is_empty() {
-        return Ok(());
+        return None;
     }
     for (_, f) in &figures {
         if !shares.iter().any(|s| (s / f.share - 1.0).abs() < 1e-9) {
@@ -128,7 +140,19 @@ pub fn ringing_map(m: &Matrix, out: &Path, page: &mut Page) -> Res {
         v.iter().map(|x| coordinate(*x)).collect::<Vec<_>>()
     };
     let (x_cats, y_cats) = (cats(&mut xs), cats(&mut ys));
-    let panels = maps
+    Some(Gathered {
+        maps,
+        full_share,
+        seeds: shares.len(),
+        x_cats,
+        y_cats,
+    })
+}
+
+/// One panel per method: each point's growth rate per 1000 steps.
+fn panels(g: &Gathered) -> Vec<HeatPanel> {
+    let (x_cats, y_cats) = (&g.x_cats, &g.y_cats);
+    g.maps
         .iter()
         .map(|(method, points)| HeatPanel {
             title: method.clone(),
@@ -156,40 +180,13 @@ pub fn ringing_map(m: &Matrix, out: &Path, page: &mut Page) -> Res {
                 })
                 .collect(),
         })
-        .collect();
-    let fig = HeatmapFigure {
-        title: "Ringing map: growth of the perturbation's kinetic energy per 1000 steps".into(),
-        x_label: "U dt / h".into(),
-        y_label: "c dt / h".into(),
-        x_cats,
-        y_cats,
-        panels,
-        key: HeatKey::Legend(CLASSES.iter().map(|(l, c)| (l.to_string(), *c)).collect()),
-    };
-    page.h2("Ringing map");
-    page.p(&format!(
-        "Brackbill's ringing test (docs/physics.md section 7b): a uniform flow U through a periodic grid with a seed of {} |U| near the grid scale; the growth rate of E' (the kinetic energy about the drift), fitted over the second half of its linear window. Unstable: E' grows faster than {UNSTABLE_PER_STEP:e} per step. A cell marked ? moved by more than {:.0} % when the seed was halved ({}).",
-        full_share,
-        100.0 * HALVING_TOLERANCE,
-        if shares.len() > 1 { "runs with both seeds" } else { "no halved seed in this matrix" }
-    ));
-    page.figure(
-        &render(&fig, out, "ringing_map")?,
-        "Growth rate of E' per 1000 steps by method over U dt / h and c dt / h (x: blew up or no rate; ?: the halved seed's rate differs by more than 10 %)",
-    );
-    let headers: Vec<String> = [
-        "method",
-        "points",
-        "unstable (rate > 1e-3 / step)",
-        "fastest growth (1 / step)",
-        "at U dt / h, c dt / h",
-        "halved seed: within 10 %",
-        "halved seed: largest change",
-    ]
-    .map(String::from)
-    .to_vec();
-    let rows: Vec<(String, Vec<Cell>)> = maps
-        .iter()
+        .collect()
+}
+
+/// Per method: its points, the unstable ones, the fastest growth and the
+/// halved seed's agreement.
+fn method_rows(maps: &Maps) -> Vec<(String, Vec<Cell>)> {
+    maps.iter()
         .map(|(method, points)| {
             let full: Vec<(&(String, String), &RingingFigures)> = points
                 .iter()
@@ -231,7 +228,46 @@ pub fn ringing_map(m: &Matrix, out: &Path, page: &mut Page) -> Res {
                 ],
             )
         })
-        .collect();
-    page.table("ringing", &headers, &rows);
+        .collect()
+}
+
+/// The ringing section: the map and a table per method.
+/// (A matrix section: `matrix::MATRIX_SECTIONS`.)
+pub fn ringing_map(m: &Matrix, out: &Path, page: &mut Page) -> Res {
+    let Some(g) = gather(m) else {
+        return Ok(());
+    };
+    let fig = HeatmapFigure {
+        title: "Ringing map: growth of the perturbation's kinetic energy per 1000 steps".into(),
+        x_label: "U dt / h".into(),
+        y_label: "c dt / h".into(),
+        x_cats: g.x_cats.clone(),
+        y_cats: g.y_cats.clone(),
+        panels: panels(&g),
+        key: HeatKey::Legend(CLASSES.iter().map(|(l, c)| (l.to_string(), *c)).collect()),
+    };
+    page.h2("Ringing map");
+    page.p(&format!(
+        "Brackbill's ringing test (docs/physics.md section 7b): a uniform flow U through a periodic grid with a seed of {} |U| near the grid scale; the growth rate of E' (the kinetic energy about the drift), fitted over the second half of its linear window. Unstable: E' grows faster than {UNSTABLE_PER_STEP:e} per step. A cell marked ? moved by more than {:.0} % when the seed was halved ({}).",
+        g.full_share,
+        100.0 * HALVING_TOLERANCE,
+        if g.seeds > 1 { "runs with both seeds" } else { "no halved seed in this matrix" }
+    ));
+    page.figure(
+        &render(&fig, out, "ringing_map")?,
+        "Growth rate of E' per 1000 steps by method over U dt / h and c dt / h (x: blew up or no rate; ?: the halved seed's rate differs by more than 10 %)",
+    );
+    let headers: Vec<String> = [
+        "method",
+        "points",
+        "unstable (rate > 1e-3 / step)",
+        "fastest growth (1 / step)",
+        "at U dt / h, c dt / h",
+        "halved seed: within 10 %",
+        "halved seed: largest change",
+    ]
+    .map(String::from)
+    .to_vec();
+    page.table("ringing", &headers, &method_rows(&g.maps));
     Ok(())
 }

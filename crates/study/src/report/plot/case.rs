@@ -20,7 +20,15 @@ pub struct Series {
 }
 
 impl Series {
-    pub fn get(&self, name: &str) -> Option<&[f64]> {
+    /// A column by its name in `output::timeseries::COLUMNS` (None when the
+    /// table lacks it: an older table).
+    pub fn column(&self, name: &str) -> Option<&[f64]> {
+        debug_assert!(
+            study::output::timeseries::COLUMNS
+                .iter()
+                .any(|c| c.name == name),
+            "{name} is not a declared timeseries column"
+        );
         self.columns
             .iter()
             .find(|(n, _)| n == name)
@@ -91,7 +99,7 @@ impl TimeseriesFigure<'_> {
     fn panels(&self) -> Vec<Panel> {
         let s = self.series;
         let col = |n: &str| {
-            s.get(n)
+            s.column(n)
                 .map(|v| v.to_vec())
                 .unwrap_or_else(|| vec![f64::NAN; s.t.len()])
         };

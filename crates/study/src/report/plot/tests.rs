@@ -121,8 +121,8 @@ fn column_snapshot(step: u64, kick: bool) -> Snapshot {
 }
 
 #[test]
-fn case_plots_render_as_png_and_svg() {
-    let dir = scratch("case");
+fn timeseries_plots_render_as_png_and_svg() {
+    let dir = scratch("timeseries");
     let t: Vec<f64> = (0..200).map(|k| k as f64 * 0.005).collect();
     let wave = |a: f64| t.iter().map(|x| a * (3.0 * x).sin()).collect::<Vec<_>>();
     let names = [
@@ -186,7 +186,11 @@ fn case_plots_render_as_png_and_svg() {
     );
     // |sin| + 0.01 spans 0.01..1.01: the log panels run 10⁻²..10¹.
     check_log_ticks(&texts, "timeseries", &["10⁻²", "10⁻¹", "10⁰", "10¹"]);
+}
 
+#[test]
+fn surge_front_plots_render_as_png_and_svg() {
+    let dir = scratch("front");
     let tt: Vec<f64> = (0..50).map(|k| k as f64 * 0.1).collect();
     let zz: Vec<f64> = tt.iter().map(|x| 1.0 + 0.6 * x).collect();
     let data = study::output::metrics::martin_moyce();
@@ -207,7 +211,11 @@ fn case_plots_render_as_png_and_svg() {
             "Martin &amp; Moyce 1952",
         ],
     );
+}
 
+#[test]
+fn pressure_depth_plots_render_as_png_and_svg() {
+    let dir = scratch("pressure_depth");
     let snap = column_snapshot(10, false);
     let fig = PressureDepthFigure {
         snap: &snap,
@@ -222,7 +230,11 @@ fn case_plots_render_as_png_and_svg() {
         "pressure_depth",
         &["pressure p (kPa)", "depth below settled surface (m)"],
     );
+}
 
+#[test]
+fn particle_maps_and_their_animation_render() {
+    let dir = scratch("maps");
     let (a, b, c) = (
         column_snapshot(5, false),
         column_snapshot(10, true),
@@ -275,8 +287,8 @@ fn case_plots_render_as_png_and_svg() {
 }
 
 #[test]
-fn matrix_plots_render_as_png_and_svg() {
-    let dir = scratch("matrix");
+fn heatmaps_render_as_png_and_svg() {
+    let dir = scratch("heatmaps");
     let x_cats: Vec<String> = ["15 kPa", "150 kPa", "1.5 MPa"]
         .iter()
         .map(|s| s.to_string())
@@ -333,6 +345,11 @@ fn matrix_plots_render_as_png_and_svg() {
     };
     let texts = check(&fig, &dir, "heatmap_hydro", &["log10 rel. RMS"]);
     check_log_ticks(&texts, "heatmap_hydro", &["10⁻³", "10⁻²", "10⁻¹", "10⁰"]);
+}
+
+#[test]
+fn stability_lines_render_as_png_and_svg() {
+    let dir = scratch("stability");
     let fig = LinesFigure {
         title: "stability".into(),
         x_label: "K (Pa, log)".into(),
@@ -358,6 +375,11 @@ fn matrix_plots_render_as_png_and_svg() {
         &["K (Pa, log)", "time survived (s)", "power 7"],
     );
     check_log_ticks(&texts, "stability", &["10⁴", "10⁵", "10⁶"]);
+}
+
+#[test]
+fn speed_accuracy_plots_render_as_png_and_svg() {
+    let dir = scratch("speed");
     let fig = ParetoFigure {
         title: "speed".into(),
         x_label: "wall seconds per simulated second".into(),
@@ -377,6 +399,11 @@ fn matrix_plots_render_as_png_and_svg() {
     );
     // x 1..20, y 0.01..0.5, both with 0.3 of padding.
     check_log_ticks(&texts, "speed_accuracy", &["10⁰", "10¹", "10⁻²", "10⁻¹"]);
+}
+
+#[test]
+fn refinement_plots_render_as_png_and_svg() {
+    let dir = scratch("refinement");
     let fig = RefinementFigure {
         title: "Refinement".into(),
         y_label: "late hydrostatic departure".into(),
