@@ -1,4 +1,4 @@
-//! `summary.json`: one case's outcome, written by `run_case` and read by the
+//! `summary.json`: one case's outcome, written by `run::case` and read by the
 //! matrix, the report and `reproduce` through this one type.
 
 use crate::output::files::write_atomic;

@@ -1,9 +1,9 @@
 //! What the report pages read, shared by every section: parquet tables and
 //! their columns, the matrix's rows (each case's summary.json with the
 //! values of the parameters that vary) and the spread of a set of values.
-//! A leaf: it imports no other `report_*` or `plot_*` module but
-//! `plot_common`'s number format, so the report modules form a DAG
-//! (report -> report_case / report_matrix -> sections -> report_data).
+//! A leaf: it imports no other report module but the plots' number
+//! format, so the report modules form a DAG (report -> case / matrix ->
+//! the matrix page's sections -> data).
 
 use crate::report::plot::{short, Res};
 pub use monitor::stats::{median, spread};
@@ -122,7 +122,7 @@ impl Row {
         self.status() == Status::Completed && self.summary.kicked()
     }
 
-    /// The row's class in the case table (report_html's style): the status
+    /// The row's class in the case table (the page's style): the status
     /// as summary.json spells it, or `kicked` for a run that completed
     /// after a kick.
     pub fn css_class(&self) -> &'static str {

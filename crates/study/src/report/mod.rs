@@ -2,8 +2,9 @@
 //! `report/index.html` (self-contained, relative links) with every figure as
 //! PNG and SVG, and an animated GIF around each kick. The entry of the
 //! report modules, which import one another without a cycle:
-//! report -> report_case / report_matrix -> the matrix page's sections
-//! (matrix::MATRIX_SECTIONS) -> report_data / report_html (leaves).
+//! report -> case / matrix -> the matrix page's sections
+//! (matrix::MATRIX_SECTIONS) -> data / html (leaves). It lives in the
+//! binary: the library it reads cannot reach it.
 
 pub mod case;
 pub mod data;
@@ -20,7 +21,7 @@ use std::path::{Path, PathBuf};
 
 /// Writes the report of `dir` (a case or a matrix) and returns the page's
 /// path. A matrix's Methods table also reads the viscous-decay, slosh and surge-front
-/// matrix folders `yardsticks` (report_yardsticks.rs).
+/// matrix folders `yardsticks` (`yardsticks`).
 pub fn report(dir: &Path, yardsticks: &[PathBuf]) -> Res<PathBuf> {
     if dir.join("summary.parquet").exists() {
         matrix_report(dir, yardsticks)

@@ -193,7 +193,7 @@ fn causes_table(c: &CaseInputs, page: &mut Page) {
     page.table("causes", &headers, &rows);
 }
 
-/// The metrics that apply to this scene, with units (report_verdict).
+/// The metrics that apply to this scene, with units (`verdict`).
 fn metrics_section(c: &CaseInputs, page: &mut Page) {
     page.h2("Metrics");
     let rows: Vec<(String, Vec<Cell>)> = verdict::metric_rows(&c.summary.metrics)

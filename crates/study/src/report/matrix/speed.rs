@@ -1,7 +1,7 @@
 //! Speed against accuracy on the matrix page: cost (wall seconds per
 //! simulated second) against the late hydrostatic departure, its excess
 //! over the exact floor, and, when the study tracks a surge front, its early
-//! error; when the methods' yardsticks are known (report_yardsticks.rs),
+//! error; when the methods' yardsticks are known (`report::yardsticks`),
 //! against the method's own dissipation nu_num / nu too. Each with its
 //! Pareto front as a figure and as a table of the cheapest case for a
 //! stated error.

@@ -1,0 +1,37 @@
+//! The solver crate's integration tests, one binary: a module per subject.
+
+mod checkpoint;
+mod common;
+mod determinism;
+mod drag;
+mod energy_budget;
+mod eos;
+mod eos_acoustic_wave;
+mod forensics;
+mod init_hydrostatic;
+mod initial_flow;
+mod mixture;
+mod par;
+mod pore_pressure;
+mod pressure_implicit;
+mod quadrature_mixed;
+mod remedy_energy;
+mod remedy_null_space;
+mod remedy_shifting;
+mod remedy_volumetric;
+mod scene;
+mod set_method;
+mod shape;
+mod solid_neo_hookean;
+mod stage_cull;
+mod stage_grid;
+mod stage_p2g;
+mod stage_stress;
+mod step_allocation;
+mod transfer_conservation;
+mod transfer_free_fall;
+mod transfer_pic_damping;
+mod transfer_xpic;
+mod uintah_details;
+mod viscosity;
+mod viscosity_bulk;

@@ -1,0 +1,169 @@
+//! The details of Uintah's explicit MPM that the faithful replica
+//! (studies/faithful.toml, docs/physics.md section 5b) switches on: the
+//! per-axis time step from the step-start velocity (the first step from
+//! sqrt(K / rho0)), the substepped F update, and the deletion of particles
+//! whose J passes `scene.max_j`.
+
+use crate::common;
+
+use solver::*;
+
+fn column(method: Method, velocity: [f64; 2]) -> Solver {
+    let mut scene = common::box_scene(
+        [0.3, 0.2],
+        [0.0, 0.0, 0.1, 0.12],
+        Material::new(1.5e5),
+        9.81,
+    );
+    scene.bodies[0].velocity = velocity;
+    let cfg = SolverConfig {
+        scene,
+        method,
+        perturb: vec![],
+    };
+    Solver::new(cfg).unwrap()
+}
+
+fn uintah_method() -> Method {
+    let mut m = common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usl);
+    m.dt = DtMode::PerAxis;
+    m.cfl = 0.4;
+    m
+}
+
+/// The first step takes c = sqrt(K / rho0) (not the tangent's sqrt(gamma K
+/// / rho0)) plus the largest velocity component; every later step the
+/// largest c_p + max(|v_x|, |v_y|) of the velocities the particles had at
+/// the start of the step just taken, c_p the tangent wave speed at their
+/// updated J.
+#[test]
+fn the_per_axis_step_is_uintahs() {
+    let mut s = column(uintah_method(), [0.6, -0.8]);
+    let h = 0.01;
+    let first = 0.4 * h / ((1.5e5f64 / 1000.0).sqrt() + 0.8);
+    assert_eq!(s.next_dt(), first);
+    for _ in 0..5 {
+        s.step().unwrap();
+    }
+    let v = s.view();
+    let m = &s.config().scene.materials[0];
+    let speed = (0..v.j.len())
+        .map(|p| {
+            let c = m.wave_speed_of(&m.eos(v.j[p]), v.j[p]);
+            c + v.v_prev[p].x.abs().max(v.v_prev[p].y.abs())
+        })
+        .fold(0.0, f64::max);
+    let want = 0.4 * h / speed;
+    assert!(
+        (s.next_dt() / want - 1.0).abs() < 1e-14,
+        "{} vs {want}",
+        s.next_dt()
+    );
+    // The dynamic step (|v| and the current velocity) is another one.
+    let mut dynamic = uintah_method();
+    dynamic.dt = DtMode::Dynamic;
+    let d = column(dynamic, [0.6, -0.8]);
+    assert!(d.next_dt() < first / 2.0, "{} vs {first}", d.next_dt());
+}
+
+/// A restart from a checkpoint under the per-axis step continues bit for
+/// bit (the step-start velocities travel in the checkpoint).
+#[test]
+fn a_restart_under_the_per_axis_step_continues_exactly() {
+    let mut a = column(uintah_method(), [0.3, 0.0]);
+    for _ in 0..20 {
+        a.step().unwrap();
+    }
+    let saved = a.checkpoint();
+    let mut b = column(uintah_method(), [0.3, 0.0]);
+    b.restore(&saved).unwrap();
+    for _ in 0..20 {
+        a.step().unwrap();
+        b.step().unwrap();
+    }
+    assert_eq!(a.state_hash(), b.state_hash());
+    assert_eq!(a.next_dt(), b.next_dt());
+}
+
+/// The substepped F update is the plain one while |L| dt < 1, and (I + dt
+/// L / n)^n F with n = 2 floor(|L| dt) beyond, which keeps det F > 0 where
+/// the plain update inverts.
+#[test]
+fn the_substepped_f_update_is_the_plain_one_below_one() {
+    use solver::stages::stress::substepped;
+    let f = Mat2::new(1.1, 0.05, -0.02, 0.93);
+    let l = Mat2::new(-3.0, 1.0, 0.5, 2.0);
+    let dt = 0.05; // |L| dt = 0.19
+    assert_eq!(substepped(l, dt, f), (Mat2::identity() + dt * l) * f);
+    let dt = 0.4; // |L| dt = 1.55: n = 2
+    let half = Mat2::identity() + 0.2 * l;
+    assert_eq!(substepped(l, dt, f), half * (half * f));
+    let squeeze = Mat2::new(-10.0, 0.0, 0.0, 0.0);
+    let plain = (Mat2::identity() + 0.15 * squeeze) * f;
+    assert!(plain.determinant() < 0.0);
+    let sub = substepped(squeeze, 0.15, f);
+    assert!(sub.determinant() > 0.0, "{sub}");
+}
+
+/// The stress stage skips `substepped` when `needs_substeps` says one
+/// substep: over |L| dt swept through 0.85 .. 1.05, wherever it skips,
+/// `substepped` is bit for bit the plain update, and it skips below 0.9.
+#[test]
+fn the_substep_shortcut_never_changes_the_f_update() {
+    use solver::stages::stress::{needs_substeps, substepped};
+    let f = Mat2::new(1.1, 0.05, -0.02, 0.93);
+    let l = Mat2::new(-3.0, 1.0, 0.5, 2.0);
+    let norm = l.norm();
+    let (mut skipped, mut taken) = (0, 0);
+    for i in 0..=20_000 {
+        let dt = (0.85 + 0.2 * i as f64 / 20_000.0) / norm;
+        if needs_substeps(l, dt) {
+            taken += 1;
+        } else {
+            skipped += 1;
+            assert_eq!(
+                substepped(l, dt, f),
+                (Mat2::identity() + dt * l) * f,
+                "dt {dt}"
+            );
+        }
+        if norm * dt < 0.9 {
+            assert!(!needs_substeps(l, dt), "|L| dt = {}", norm * dt);
+        }
+    }
+    assert!(skipped > 0 && taken > 0);
+}
+
+/// Under on_inversion = "delete" a particle whose J passes scene.max_j is
+/// deleted at the end of the step and counted as inverted; without
+/// max_j it stays. One whose J is not a number is deleted either way
+/// (Uintah's `!(J > 0)`).
+#[test]
+fn a_particle_past_max_j_is_deleted() {
+    for (max_j, deleted) in [(Some(1e5), 1), (None, 0)] {
+        // A particle whose J is not a number goes too, with or without max_j.
+        let mut scene = common::box_scene(
+            [0.3, 0.2],
+            [0.0, 0.0, 0.1, 0.12],
+            Material::new(1.5e5),
+            9.81,
+        );
+        scene.on_inversion = OnLoss::Delete;
+        scene.max_j = max_j;
+        let mut ps = solver::scene::seed(&scene);
+        ps.f[7] = Mat2::new(1e3, 0.0, 0.0, 1e3);
+        ps.j[7] = 1e6;
+        ps.f[9] = Mat2::new(f64::NAN, 0.0, 0.0, 1.0);
+        let cfg = SolverConfig {
+            scene,
+            method: uintah_method(),
+            perturb: vec![],
+        };
+        let mut s = Solver::with_particles(cfg, ps);
+        let n = s.particle_count();
+        s.step().unwrap();
+        assert_eq!(s.losses().inverted, deleted + 1, "max_j {max_j:?}");
+        assert_eq!(s.particle_count(), n - 1 - deleted as usize);
+        assert!(s.view().j.iter().all(|j| j.is_finite()));
+    }
+}
