@@ -914,26 +914,6 @@ mod tests {
 
     /// Every shipped study expands to unique case names.
     #[test]
-    fn shipped_studies_have_unique_case_names() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../studies");
-        let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-            .collect();
-        files.sort();
-        assert!(files.len() >= 10, "{files:?}");
-        for file in files {
-            let study = load(&file, &[]).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
-            let mut names: Vec<&str> = study.cases.iter().map(|c| c.name.as_str()).collect();
-            let n = names.len();
-            names.sort_unstable();
-            names.dedup();
-            assert_eq!(names.len(), n, "{}: repeated case names", file.display());
-        }
-    }
-
-    #[test]
     fn method_ppc_overrides_the_scene_seeding_and_names_itself() {
         let text = "[scene]\nppc = 2\n[[scene.body]]\nrect = [0.0, 0.0, 0.2, 0.4]\n\
             [materials.water]\nK = 1e5\n[method]\nppc = 3\n";

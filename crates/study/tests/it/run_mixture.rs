@@ -413,7 +413,7 @@ fn terzaghi_column_consolidates_like_the_series_solution() {
 /// problem); with J-bar (anti-locking) it does neither. Neither kicks: the
 /// 12 `injection` kicks once logged without J-bar were the drag's work
 /// booked as the kinetic energy it alone adds (see `exchange_cross_term`). The surface's
-/// levelling needs the study's 3 s (README "Multiphase").
+/// levelling needs the study's 3 s (docs/usage.md, "Multiphase").
 #[test]
 fn filter_stone_locks_without_anti_locking_and_not_with_it() {
     let out = scratch("filter");
