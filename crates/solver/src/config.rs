@@ -7,6 +7,7 @@ pub use crate::choices::*;
 pub use crate::config_error::ConfigError;
 use crate::config_error::{check, ordered_rect, within};
 pub use crate::material::Material;
+use crate::perturb::Perturb;
 use crate::remedies::RemedySettings;
 use serde::{Deserialize, Serialize};
 
@@ -406,25 +407,6 @@ impl Method {
     }
 }
 
-/// Fault injection (`[[perturb]]`): at step `step`, after G2P, add `dv` to every particle in
-/// `region`, an impulse: dv / dt is also added to its force-driven acceleration.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Perturb {
-    pub step: u64,
-    /// [x0, y0, x1, y1] in metres.
-    pub region: [f64; 4],
-    pub dv: [f64; 2],
-}
-
-impl Perturb {
-    /// Whether a particle at `x` gets the push (the region's edges included).
-    pub fn covers(&self, x: crate::Vec2) -> bool {
-        let [x0, y0, x1, y1] = self.region;
-        x.x >= x0 && x.x <= x1 && x.y >= y0 && x.y <= y1
-    }
-}
-
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SolverConfig {
     pub scene: Scene,
@@ -531,13 +513,7 @@ impl SolverConfig {
             self.validate_pressure_implicit()?;
         }
         for (i, p) in self.perturb.iter().enumerate() {
-            check(p.step >= 1, &format!("perturb[{i}].step"), "must be >= 1")?;
-            ordered_rect(&p.region, &format!("perturb[{i}].region"))?;
-            check(
-                p.dv.iter().all(|v| v.is_finite()),
-                &format!("perturb[{i}].dv"),
-                "must be finite",
-            )?;
+            p.validate(i, self.scene.cells())?;
         }
         Ok(())
     }

@@ -242,11 +242,10 @@ impl Solver {
     /// (as `apply_perturbations` chose it: by its position after G2P).
     fn impulse_on(&self, p: usize) -> Vec2 {
         let x = self.particles.x[p];
-        self.cfg
-            .perturb
+        self.planted
             .iter()
-            .filter(|pert| pert.step == self.step && pert.covers(x))
-            .map(|pert| Vec2::from(pert.dv))
+            .filter(|pl| pl.step == self.step && crate::perturb::covers(pl.region, x))
+            .map(|pl| Vec2::from(pl.dv))
             .sum()
     }
 

@@ -27,6 +27,7 @@ mod measure;
 pub mod multiphase;
 pub mod par;
 pub mod particles;
+pub mod perturb;
 pub mod remedies;
 pub mod scene;
 pub mod shapes;
@@ -44,6 +45,7 @@ pub use deletion::{CullReason, Culled, Losses};
 pub use energy::Energy;
 pub use multiphase::mixture::Mixture;
 pub use particles::{Mat2, Vec2};
+pub use perturb::{Direction, Perturb, Placement, Planted};
 pub use remedies::EnergyChange;
 pub use timing::StageTimes;
 pub use view::{GridView, ProjectionView, StateView};
@@ -137,6 +139,8 @@ pub struct Solver {
     ke_grid_updated: f64,
     /// Kinetic energy the `[[perturb]]` impulses of the last step added.
     impulse_kinetic: f64,
+    /// Every `[[perturb]]` impulse applied, as resolved.
+    planted: Vec<Planted>,
     times: StageTimes,
     grid_mass_p2g: f64,
     n_outside: usize,
@@ -193,6 +197,8 @@ impl Solver {
 
     /// A solver over given particles (tests and benchmarks seed their own).
     pub fn with_particles(cfg: SolverConfig, particles: Particles) -> Self {
+        // Each `[[perturb]]` entry applies once: its record allocates nothing in the step loop.
+        let perturbations = cfg.perturb.len();
         let s = &cfg.scene;
         let grid = Grid::new(Vec2::from(s.origin), s.cell, s.cells(), s.periodic)
             .with_no_slip(s.no_slip_mask());
@@ -223,6 +229,7 @@ impl Solver {
             ke_grid_p2g: 0.0,
             ke_grid_updated: 0.0,
             impulse_kinetic: 0.0,
+            planted: Vec::with_capacity(perturbations),
             grid_mass_p2g: 0.0,
             n_outside: 0,
             n_nonfinite: 0,
@@ -764,27 +771,52 @@ impl Solver {
         self.set_axis_signal_speed(timestep::max_axis_signal_speed(&self.particles));
     }
 
-    /// Adds the perturbations scheduled for the step being taken (after G2P).
+    /// Adds the perturbations due in the step being taken (after G2P),
+    /// each resolved against the particles now and recorded in `planted`.
     fn apply_perturbations(&mut self) {
         let step = self.step + 1;
-        for pert in &self.cfg.perturb {
-            if pert.step != step {
+        for (entry, pert) in self.cfg.perturb.iter().enumerate() {
+            if !pert.due(step, self.time, self.dt) {
                 continue;
             }
-            let dv = Vec2::from(pert.dv);
+            let sc = &self.cfg.scene;
+            let frame = perturb::Frame {
+                origin: sc.origin,
+                size: sc.size,
+                cell: sc.cell,
+                cells: sc.cells(),
+            };
+            let Some((region, dv)) = pert.resolve(&frame, &self.particles) else {
+                continue;
+            };
             // An impulse: it drives the particle, so it is part of its force-driven acceleration.
             let da = dv / self.dt;
             let ps = &mut self.particles;
+            let mut count = 0;
             for p in 0..ps.len() {
-                if pert.covers(ps.x[p]) {
+                if perturb::covers(region, ps.x[p]) {
                     let v = ps.v[p];
                     self.impulse_kinetic +=
                         0.5 * ps.mass[p] * ((v + dv).norm_squared() - v.norm_squared());
                     ps.v[p] = v + dv;
                     ps.accel[p] += da;
+                    count += 1;
                 }
             }
+            self.planted.push(Planted {
+                entry,
+                step,
+                t: self.time,
+                region,
+                dv: [dv.x, dv.y],
+                particles: count,
+            });
         }
+    }
+
+    /// Every impulse applied so far, as resolved.
+    pub fn planted(&self) -> &[Planted] {
+        &self.planted
     }
 
     /// Runs one stage alone on the current state, with the current time step
@@ -834,6 +866,9 @@ impl Solver {
     /// Restores a state saved from a solver built from the same configuration.
     pub fn restore(&mut self, bytes: &[u8]) -> Result<(), CheckpointError> {
         checkpoint::load(self, bytes)?;
+        // Impulses after the restored step have not happened (yet).
+        let step = self.step;
+        self.planted.retain(|p| p.step <= step);
         // An inflow may have left more particles than there were at t = 0.
         self.fit_scratch(self.particles.len());
         self.refresh_eos_cache();

@@ -37,17 +37,19 @@ fn run(push: [usize; 4], push_step: u64, push_dv: [f64; 2], steps: u64) -> Run {
     let [i0, j0, i1, j1] = SHEARED;
     let y_c = 0.5 * (j0 + j1) as f64 * H;
     let mut perturb: Vec<Perturb> = (j0..j1)
-        .map(|j| Perturb {
-            step: SHEAR_STEP,
-            region: common::region(H, i0, j, i1, j + 1),
-            dv: [SHEAR_RATE * ((j as f64 + 0.5) * H - y_c), 0.0],
+        .map(|j| {
+            Perturb::at_step(
+                SHEAR_STEP,
+                common::region(H, i0, j, i1, j + 1),
+                [SHEAR_RATE * ((j as f64 + 0.5) * H - y_c), 0.0],
+            )
         })
         .collect();
-    perturb.push(Perturb {
-        step: push_step,
-        region: common::region(H, push[0], push[1], push[2], push[3]),
-        dv: push_dv,
-    });
+    perturb.push(Perturb::at_step(
+        push_step,
+        common::region(H, push[0], push[1], push[2], push[3]),
+        push_dv,
+    ));
     let cfg = SolverConfig {
         scene,
         method: common::method(ShapeKind::Bspline2, TransferKind::Apic),

@@ -40,11 +40,11 @@ fn injected_kicks_in_a_column_at_rest_are_found_where_and_when_they_happen() {
         ([30, 25, 31, 26], [0.0, 1.0], "interior 1x1 up"),
     ];
     for (cells, dv, tag) in cases {
-        let perturb = vec![Perturb {
-            step: s,
-            region: common::region(0.01, cells[0], cells[1], cells[2], cells[3]),
+        let perturb = vec![Perturb::at_step(
+            s,
+            common::region(0.01, cells[0], cells[1], cells[2], cells[3]),
             dv,
-        }];
+        )];
         let (m, _) = common::run_window(&col.cfg, &col.start, &col.monitor, perturb, steps);
         common::assert_detected(m.events(), s, col.window, cells, tag);
         let kick = m
@@ -71,11 +71,7 @@ fn injected_energy_is_half_m_dv_squared() {
     let cells = [15, 10, 20, 15];
     let dv = [0.6, 0.8];
     let region = common::region(0.01, cells[0], cells[1], cells[2], cells[3]);
-    let perturb = vec![Perturb {
-        step: s,
-        region,
-        dv,
-    }];
+    let perturb = vec![Perturb::at_step(s, region, dv)];
     let (m, solver) = common::run_window(&col.cfg, &col.start, &col.monitor, perturb, s);
     let v = solver.view();
     let mass: f64 = (0..v.x.len())
@@ -116,11 +112,11 @@ fn the_smallest_push_found_and_when_it_counts_as_a_kick() {
     let free_fall = (2.0 * 9.81 * 0.6f64).sqrt();
     let mut table = vec![];
     for dv in [0.01, 0.02, 0.03, 0.05, 0.07, 0.1, 0.2, 0.5, 1.0] {
-        let perturb = vec![Perturb {
-            step: s,
-            region: common::region(0.01, cells[0], cells[1], cells[2], cells[3]),
-            dv: [dv, 0.0],
-        }];
+        let perturb = vec![Perturb::at_step(
+            s,
+            common::region(0.01, cells[0], cells[1], cells[2], cells[3]),
+            [dv, 0.0],
+        )];
         let (m, _) = common::run_window(&col.cfg, &col.start, &col.monitor, perturb, steps);
         let at_push: Vec<_> = m
             .events()

@@ -96,11 +96,11 @@ fn injected_kicks_after_three_seconds_of_sloshing() {
     ));
 
     for (cells, dv, tag) in cases {
-        let perturb = vec![Perturb {
-            step: at,
-            region: common::region(0.01, cells[0], cells[1], cells[2], cells[3]),
+        let perturb = vec![Perturb::at_step(
+            at,
+            common::region(0.01, cells[0], cells[1], cells[2], cells[3]),
             dv,
-        }];
+        )];
         let (pm, _) = common::run_window(&cfg, &start, &m, perturb, steps);
         let events = common::events_after(&pm, start_step);
         common::assert_detected(&events, at, window, cells, &tag);

@@ -16,11 +16,7 @@ fn two_pushes() -> Vec<Perturb> {
     let region = common::region(0.01, 18, 15, 21, 18);
     [FIRST, FIRST + GAP]
         .iter()
-        .map(|&step| Perturb {
-            step,
-            region,
-            dv: [1.0, 0.0],
-        })
+        .map(|&step| Perturb::at_step(step, region, [1.0, 0.0]))
         .collect()
 }
 

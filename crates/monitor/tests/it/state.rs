@@ -58,11 +58,7 @@ fn column_pushes_restart_with_an_event_open() {
     cfg.scene.initial = InitialState::ZeroStress;
     let region = common::region(0.01, 18, 15, 21, 18);
     cfg.perturb = [30, 70]
-        .map(|step| Perturb {
-            step,
-            region,
-            dv: [1.0, 0.0],
-        })
+        .map(|step| Perturb::at_step(step, region, [1.0, 0.0]))
         .to_vec();
     // Step 40: the first push's events are open; the second push extends them.
     let m = assert_restart_is_exact(cfg, Some(&col.start), 40, 150);
@@ -125,11 +121,11 @@ fn damaged_state_is_refused() {
     let col = common::column();
     let mut cfg = col.cfg.clone();
     cfg.scene.initial = InitialState::ZeroStress;
-    cfg.perturb = vec![Perturb {
-        step: 5,
-        region: common::region(0.01, 18, 15, 21, 18),
-        dv: [1.0, 0.0],
-    }];
+    cfg.perturb = vec![Perturb::at_step(
+        5,
+        common::region(0.01, 18, 15, 21, 18),
+        [1.0, 0.0],
+    )];
     let mut s = Solver::new(cfg).unwrap();
     s.restore(&col.start).unwrap();
     let mut m = col.monitor.clone();

@@ -340,11 +340,7 @@ fn perturbation_adds_dv_after_g2p_of_its_step() {
     let cfg = SolverConfig {
         scene,
         method: common::method(ShapeKind::Bspline2, TransferKind::Pic, SchemeKind::Usf),
-        perturb: vec![Perturb {
-            step: 3,
-            region,
-            dv: [1.0, -0.5],
-        }],
+        perturb: vec![Perturb::at_step(3, region, [1.0, -0.5])],
     };
     let mut s = Solver::new(cfg).unwrap();
     for _ in 0..2 {
@@ -415,4 +411,64 @@ fn f_reset_changes_only_round_off() {
         distorted > 1e-3,
         "the plain run's F is sheared ({distorted})"
     );
+}
+
+/// A push at a time, placed in the bulk and relative to the flow, is the
+/// push its record says: replayed as a push at that step, in that region,
+/// with that dv, the run is bit-identical; it lands in the step that spans
+/// its time, on the patch the placement rules give, once.
+#[test]
+fn a_timed_placed_push_is_the_push_its_record_names() {
+    let mut scene = common::box_scene([0.4, 0.3], [0.0, 0.0, 0.4, 0.2], Material::tait(1e5), 9.81);
+    scene.initial = InitialState::Hydrostatic;
+    let method = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
+    let timed = Perturb {
+        step: None,
+        t: Some(0.01),
+        region: None,
+        place: Some(Placement::Bulk),
+        cells: 2,
+        near: Some([0.1, 0.1]),
+        dv: None,
+        speed: Some(0.05),
+        direction: Some(Direction::Up),
+    };
+    let run = |perturb: Vec<Perturb>| {
+        let cfg = SolverConfig {
+            scene: scene.clone(),
+            method: method.clone(),
+            perturb,
+        };
+        let mut s = Solver::new(cfg).unwrap();
+        while s.time() < 0.02 {
+            s.step().unwrap();
+        }
+        s
+    };
+    let s = run(vec![timed]);
+    let planted = s.planted().to_vec();
+    assert_eq!(planted.len(), 1, "applied once");
+    let p = planted[0];
+    // The step that spans t = 0.01 (it starts at or before it, ends after it).
+    assert!(p.t <= 0.01, "{p:?}");
+    // A 2 x 2-cell block on cell lines, at least 3 cells from the walls and
+    // the surface (rows up to 0.2 m hold fluid), nearest (0.1, 0.1).
+    let [x0, y0, x1, y1] = p.region;
+    assert!(
+        (x1 - x0 - 0.02).abs() < 1e-12 && (y1 - y0 - 0.02).abs() < 1e-12,
+        "{p:?}"
+    );
+    assert!(
+        x0 >= 0.03 - 1e-12 && y0 >= 0.03 - 1e-12 && y1 <= 0.17 + 1e-12,
+        "{p:?}"
+    );
+    assert!(
+        (x0 - 0.09).abs() < 1e-12 && (y0 - 0.09).abs() < 1e-12,
+        "{p:?}"
+    );
+    assert_eq!(p.dv, [0.0, 0.05]);
+    assert_eq!(p.particles, 16);
+    let replayed = run(vec![Perturb::at_step(p.step, p.region, p.dv)]);
+    assert_eq!(replayed.state_hash(), s.state_hash());
+    assert_eq!(replayed.planted(), planted.as_slice());
 }

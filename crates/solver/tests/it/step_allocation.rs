@@ -58,11 +58,7 @@ fn step_does_not_allocate() {
                     configs.push(SolverConfig {
                         scene: Scene::dam_break(mat),
                         method: common::method(shape, transfer, scheme),
-                        perturb: vec![Perturb {
-                            step: 30,
-                            region: [0.0, 0.0, 0.05, 0.05],
-                            dv: [0.1, 0.0],
-                        }],
+                        perturb: vec![Perturb::at_step(30, [0.0, 0.0, 0.05, 0.05], [0.1, 0.0])],
                     });
                 }
                 // The pressure-implicit step (its own order: one scheme),

@@ -340,6 +340,30 @@ fn bad_study_files_exit_2_naming_file_key_and_range() {
         e.contains("perturb[0].step") && e.contains("required"),
         "{e}"
     );
+    // A push at a time and a step both, and a relative push without its direction.
+    let e = bad(
+        &format!("{GOOD}\n[[perturb]]\nstep = 3\nt = 0.1\nregion = [0, 0, 1, 1]\ndv = [1, 0]\n"),
+        &[],
+    );
+    assert!(
+        e.contains("perturb[0].step | t") && e.contains("got both"),
+        "{e}"
+    );
+    let e = bad(
+        &format!("{GOOD}\n[[perturb]]\nt = 0.1\nplace = \"bulk\"\ncells = 2\nspeed = 0.05\n"),
+        &[],
+    );
+    assert!(
+        e.contains("perturb[0].direction") && e.contains("required"),
+        "{e}"
+    );
+    let e = bad(
+        &format!(
+            "{GOOD}\n[[perturb]]\nt = 0.1\nplace = \"middle\"\nspeed = 0.05\ndirection = \"up\"\n"
+        ),
+        &[],
+    );
+    assert!(e.contains("perturb") && e.contains("place"), "{e}");
 }
 
 /// A TOML syntax error names the file, the line and the column (toml's span,
