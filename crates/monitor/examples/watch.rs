@@ -25,9 +25,8 @@ fn main() {
     })
     .unwrap();
     let mut cfgm = MonitorConfig::default();
-    if std::env::var("NOZ").is_ok() {
-        cfgm.kick_accel_g = 1e9;
-        cfgm.accel_candidate_g = 1e9;
+    if std::env::var("NOJUMP").is_ok() {
+        cfgm.jump_speed = 1e9;
     }
     let mut m = Monitor::new(cfgm, &s.view());
     let (mut za, mut aa) = (0.0f64, 0.0f64);
@@ -42,11 +41,11 @@ fn main() {
         let tm = std::time::Instant::now();
         let r = m.observe(&s.view()).clone();
         tmon += tm.elapsed().as_secs_f64();
-        za = za.max(r.max_z);
+        za = za.max(r.max_jump);
         aa = aa.max(r.max_accel_g);
         if r.events_opened > 0 {
             for e in &m.events()[m.events().len() - r.events_opened..] {
-                println!("EVENT {} {:?} step {} t {:.4} cells {:?} a/g {:.1} z {:.1} rules {:?} q {} d {} courant {:.2}", e.id, e.kind, e.first_step, e.t, e.cells, e.peak_accel_g, e.peak_z, e.rules.names(), e.quiescent_before, e.previously_deformed(), e.courant);
+                println!("EVENT {} {:?} step {} t {:.4} cells {:?} a/g {:.1} jump {:.3} m/s rules {:?} q {} d {} courant {:.2}", e.id, e.kind, e.first_step, e.t, e.cells, e.peak_accel_g, e.jump_speed, e.rules.names(), e.quiescent_before, e.previously_deformed(), e.courant);
             }
         }
         if r.blow_out.is_some() {
@@ -56,7 +55,7 @@ fn main() {
         if r.t >= next {
             next += 0.1;
             let f = m.field_metrics(&s.view());
-            println!("t {:.2} maxz {:.1} maxa {:.1}g inj {:.3e} floor {:.2e} cb {:?} hydro {:.3} front {:?} cour {:.2}", r.t, za, aa, r.energy_injected, r.injection_floor, f.checkerboard_nodal.map(|c| (c*1000.0).round()/1000.0), f.hydro_rel_rms, f.front_z, r.courant);
+            println!("t {:.2} max jump {:.3} maxa {:.1}g inj {:.3e} floor {:.2e} cb {:?} hydro {:.3} front {:?} cour {:.2}", r.t, za, aa, r.energy_injected, r.injection_floor, f.checkerboard_nodal.map(|c| (c*1000.0).round()/1000.0), f.hydro_rel_rms, f.front_z, r.courant);
             za = 0.0;
             aa = 0.0;
         }

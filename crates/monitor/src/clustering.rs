@@ -16,7 +16,9 @@ pub(crate) struct Cluster {
     pub(crate) cells: CellRange,
     pub(crate) rules: Rules,
     pub(crate) peak_accel: f64,
-    pub(crate) peak_z: f64,
+    pub(crate) peak_jump: f64,
+    /// Its particles whose local flow was calm.
+    pub(crate) calm_flow: usize,
     pub(crate) quiescent: usize,
     pub(crate) deformed_rate: usize,
     pub(crate) distorted: usize,
@@ -39,7 +41,8 @@ impl Cluster {
             cells,
             rules,
             peak_accel,
-            peak_z: 0.0,
+            peak_jump: 0.0,
+            calm_flow: 0,
             quiescent: 0,
             deformed_rate: 0,
             distorted: 0,
@@ -125,9 +128,10 @@ impl Monitor {
             let p = f.p as usize;
             let label = self.cell_label[self.geom.cell_index(v.x[p])] as usize;
             let c = &mut self.clusters[label];
-            c.rules = c.rules.union(f.rules);
+            c.rules.insert(Rule::VelocityJump);
             c.peak_accel = c.peak_accel.max(f.a);
-            c.peak_z = c.peak_z.max(f.z);
+            c.peak_jump = c.peak_jump.max(f.jump);
+            c.calm_flow += usize::from(f.calm_flow);
             c.count += 1;
             c.j_min = c.j_min.min(v.j[p]);
             c.speed_before = c.speed_before.max(v.v_prev[p].norm());
@@ -216,7 +220,7 @@ impl Monitor {
             e.region = e.cells.metres(&self.geom);
         }
         e.peak_accel_g = e.peak_accel_g.max(c.peak_accel / g);
-        e.peak_z = e.peak_z.max(c.peak_z);
+        e.jump_speed = e.jump_speed.max(c.peak_jump);
         e.rules = e.rules.union(c.rules);
     }
 
@@ -252,7 +256,7 @@ impl Monitor {
             n_particles: 0,
             particles: Vec::new(),
             peak_accel_g: c.peak_accel / g,
-            peak_z: c.peak_z,
+            jump_speed: c.peak_jump,
             energy_injected: 0.0,
             courant: v.courant,
             quiescent_before: half(c.quiescent),
@@ -264,7 +268,8 @@ impl Monitor {
                 advection_before,
                 critical_courant: self.critical_courant,
                 energy_floor: 0.0,
-                vertical_speed_bound: 0.0,
+                booked_added: Default::default(),
+                calm_flow_fraction: fraction(c.calm_flow),
                 quiescent_fraction: fraction(c.quiescent),
                 deformed_fraction: fraction(c.deformed_rate),
                 peak_dev_rate: c.peak_rate,
@@ -277,7 +282,6 @@ impl Monitor {
             state_hash: None,
             checkpoint: None,
             phase: None,
-            injected_at_open: self.prev_injected,
         };
         event.classify();
         self.events.push(event);

@@ -6,25 +6,17 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct MonitorConfig {
-    /// z scores are computed only for particles accelerating above this (in g).
-    pub accel_candidate_g: f64,
-    /// A particle is an acceleration outlier when a/g >= this ...
-    pub kick_accel_g: f64,
-    /// ... and its robust z score against its neighbourhood >= this.
-    pub kick_z: f64,
-    /// Half-width (cells) of the neighbourhood window for median/MAD; it must be
-    /// wider than any patch to be caught (a 5 x 5 window is blind inside a 5 x 5 kick).
-    pub window_half_cells: usize,
-    /// Window statistics are shared by tiles of this many cells per side (cost).
-    pub window_tile_cells: usize,
-    /// Kinetic-energy spike: e_p over its recent maximum (floored) >= this ...
-    pub ke_spike_ratio: f64,
-    /// ... with the recent maximum floored by 1/2 m v_q^2 at this speed (m/s).
-    pub quiescent_speed: f64,
-    /// Seconds over which a particle's kinetic-energy history decays (1/e): a
-    /// spike is a jump within this time (a window in seconds: dt differs 80x
-    /// across the bug-report matrix).
-    pub ke_history_seconds: f64,
+    /// The velocity-jump rule (`jump`): a particle's velocity change over a
+    /// step departing from the local flow's by at least this (m/s) ...
+    pub jump_speed: f64,
+    /// ... and this many spreads of the local flow's change ...
+    pub jump_z: f64,
+    /// ... read from the cells 2 to this many cells away. A jump is a kick
+    /// when the local flow was calm: the ring's median velocity change over
+    /// the last `calm_seconds` below `calm_change` (m/s).
+    pub jump_ring_cells: usize,
+    pub calm_seconds: f64,
+    pub calm_change: f64,
     /// Hallmark, quiescent before: over `quiet_seconds` before onset the
     /// particle was never faster than `quiet_speed` (m/s; 0.05 sqrt(g H) at
     /// H = 0.4 m) nor deformed faster than `quiet_rate` (in-plane |dev D|, 1/s).
@@ -49,11 +41,14 @@ pub struct MonitorConfig {
     pub max_events: usize,
     /// Particle ids kept per event (the count is always exact).
     pub max_event_ids: usize,
-    /// Energy injected within the last `injection_seconds` (at most the last
-    /// `step_history::CAPACITY` steps) counts as an event when it exceeds this
-    /// multiple of the explicit-stepping noise floor.
-    pub injection_floor_factor: f64,
+    /// The energy gained within the last `injection_seconds` (at most the
+    /// last `step_history::CAPACITY` steps; booked terms by their net over
+    /// it) counts as an injection above the kinetic energy of the mass
+    /// concerned at `jump_speed`, plus this share of the kinetic energy it
+    /// carries (what explicit time integration misplaces in a violent flow
+    /// at the step it takes; gravity's stepping term is booked exactly).
     pub injection_seconds: f64,
+    pub injection_share: f64,
     /// Blow-out: a particle faster than this multiple of sqrt(2 g H_box), or
     /// of the bodies' largest initial speed when that is larger.
     pub escape_speed_factor: f64,
@@ -62,14 +57,11 @@ pub struct MonitorConfig {
 impl Default for MonitorConfig {
     fn default() -> Self {
         MonitorConfig {
-            accel_candidate_g: 5.0,
-            kick_accel_g: 50.0,
-            kick_z: 10.0,
-            window_half_cells: 5,
-            window_tile_cells: 4,
-            ke_spike_ratio: 25.0,
-            quiescent_speed: 0.05,
-            ke_history_seconds: 0.005,
+            jump_speed: 0.02,
+            jump_z: 5.0,
+            jump_ring_cells: 4,
+            calm_seconds: 0.03,
+            calm_change: 0.5,
             quiet_seconds: 0.05,
             quiet_speed: 0.1,
             quiet_rate: 2.0,
@@ -77,11 +69,11 @@ impl Default for MonitorConfig {
             distortion_ratio: 4.0,
             min_cluster_particles: 4,
             merge_cells: 3,
-            merge_seconds: 0.01,
+            merge_seconds: 0.03,
             max_events: 500,
             max_event_ids: 64,
-            injection_floor_factor: 3.0,
-            injection_seconds: 0.005,
+            injection_seconds: 0.03,
+            injection_share: 0.1,
             escape_speed_factor: 10.0,
         }
     }
@@ -102,20 +94,18 @@ impl MonitorConfig {
             )*};
         }
         non_negative!(
-            accel_candidate_g,
-            kick_accel_g,
-            kick_z,
-            ke_spike_ratio,
-            quiescent_speed,
-            ke_history_seconds,
+            jump_speed,
+            jump_z,
+            calm_seconds,
+            calm_change,
             quiet_seconds,
             quiet_speed,
             quiet_rate,
             deformed_rate,
             distortion_ratio,
             merge_seconds,
-            injection_floor_factor,
             injection_seconds,
+            injection_share,
             escape_speed_factor
         );
         if self.injection_seconds <= 0.0 {
@@ -138,8 +128,7 @@ impl MonitorConfig {
             )*};
         }
         count_within!(
-            window_half_cells: 0, 1_000;
-            window_tile_cells: 1, 1_000;
+            jump_ring_cells: 2, 100;
             min_cluster_particles: 0, 1_000_000_000;
             merge_cells: 0, 1_000_000;
             max_events: 0, 10_000_000;

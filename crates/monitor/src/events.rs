@@ -86,8 +86,8 @@ pub struct Region {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Rule {
-    AccelOutlier,
-    KeSpike,
+    /// A velocity change the local flow does not share (`jump`).
+    VelocityJump,
     InjectionWindow,
     OutsideBox,
     EscapeSpeed,
@@ -97,9 +97,8 @@ pub enum Rule {
 
 impl Rule {
     /// Every rule, in the order events list them.
-    pub const ALL: [Rule; 7] = [
-        Rule::AccelOutlier,
-        Rule::KeSpike,
+    pub const ALL: [Rule; 6] = [
+        Rule::VelocityJump,
         Rule::InjectionWindow,
         Rule::OutsideBox,
         Rule::EscapeSpeed,
@@ -110,8 +109,7 @@ impl Rule {
     /// The rule's name as events spell it (its serde name).
     pub fn name(self) -> &'static str {
         match self {
-            Rule::AccelOutlier => "accel_outlier",
-            Rule::KeSpike => "ke_spike",
+            Rule::VelocityJump => "velocity_jump",
             Rule::InjectionWindow => "injection_window",
             Rule::OutsideBox => "outside_box",
             Rule::EscapeSpeed => "escape_speed",
@@ -126,7 +124,7 @@ impl Rule {
 }
 
 /// A set of rules (bit set), serialised as the list of its rules' names in
-/// [`Rule::ALL`] order, e.g. `["accel_outlier", "ke_spike"]`.
+/// [`Rule::ALL`] order, e.g. `["velocity_jump", "injection_window"]`.
 #[derive(Clone, Copy, Default, PartialEq, Eq, Hash)]
 pub struct Rules(u32);
 
@@ -228,9 +226,13 @@ pub struct Event {
     pub n_particles: usize,
     /// Ids of the first `max_event_ids` particles flagged.
     pub particles: Vec<u32>,
+    /// The largest force-driven acceleration of its flagged particles (in g).
     pub peak_accel_g: f64,
-    pub peak_z: f64,
-    /// Energy injected (above the running minimum) while the event was open.
+    /// The largest departure of a flagged particle's velocity change from
+    /// the local flow's (m/s; `Rule::VelocityJump`).
+    pub jump_speed: f64,
+    /// The largest energy gain over the injection window (J/m; booked terms
+    /// counted by their net over it) while the event was open.
     pub energy_injected: f64,
     /// Effective Courant number at the first step.
     pub courant: f64,
@@ -256,10 +258,6 @@ pub struct Event {
     /// phase. Filled in by the study runner.
     #[serde(default)]
     pub phase: Option<String>,
-    /// Energy injected before the event opened (monitor bookkeeping, kept out
-    /// of the summary; the monitor's checkpoint stores it beside the events).
-    #[serde(skip)]
-    pub(crate) injected_at_open: f64,
 }
 
 /// NaN and +inf as f64::MAX, -inf as f64::MIN: JSON has no non-finite
@@ -283,7 +281,7 @@ impl Event {
             &mut e.t,
             &mut e.last_t,
             &mut e.peak_accel_g,
-            &mut e.peak_z,
+            &mut e.jump_speed,
             &mut e.energy_injected,
             &mut e.courant,
             &mut e.region.x_min,
@@ -294,7 +292,7 @@ impl Event {
             &mut e.evidence.advection_before,
             &mut e.evidence.critical_courant,
             &mut e.evidence.energy_floor,
-            &mut e.evidence.vertical_speed_bound,
+            &mut e.evidence.calm_flow_fraction,
             &mut e.evidence.quiescent_fraction,
             &mut e.evidence.deformed_fraction,
             &mut e.evidence.peak_dev_rate,
@@ -323,10 +321,14 @@ impl Event {
         self.quiescent_before && self.deformed_by.contains(&DeformedBy::StrainRate)
     }
 
-    /// A kick: a burst that is a numerical failure (`inversion`) or adds
-    /// energy (`injection`), as opposed to time-step instability or physics.
+    /// A kick: a burst that is a numerical failure (`inversion`), adds
+    /// energy (`injection`) or jumps against a calm local flow (`jump`), as
+    /// opposed to time-step instability or physics.
     pub fn is_kick(&self) -> bool {
-        matches!(self.cause, Cause::Inversion | Cause::Injection)
+        matches!(
+            self.cause,
+            Cause::Inversion | Cause::Injection | Cause::Jump
+        )
     }
 
     /// The kinematic anomaly proper: a kick with the hallmark.
@@ -334,16 +336,19 @@ impl Event {
         self.is_kick() && self.hallmark()
     }
 
-    /// Sets `cause` from the kind and the evidence: inversion, then cfl, then
-    /// injection, else impact.
+    /// Sets `cause` from the kind and the evidence: inversion, then
+    /// injection, then cfl (time-step instability must not hide an
+    /// injection), then a velocity jump, else impact.
     pub fn classify(&mut self) {
         let e = &self.evidence;
         self.cause = if self.kind == EventKind::Inversion {
             Cause::Inversion
-        } else if e.courant_before >= e.critical_courant || e.advection_before >= ADVECTION_LIMIT {
-            Cause::Cfl
         } else if self.energy_injected > e.energy_floor {
             Cause::Injection
+        } else if e.courant_before >= e.critical_courant || e.advection_before >= ADVECTION_LIMIT {
+            Cause::Cfl
+        } else if self.rules.contains(Rule::VelocityJump) && e.calm_flow_fraction >= 0.5 {
+            Cause::Jump
         } else {
             Cause::Impact
         };
@@ -359,21 +364,26 @@ pub const ADVECTION_LIMIT: f64 = 0.5;
 pub enum Cause {
     /// Some particle in the region has J <= 0 (a kick: numerical failure).
     Inversion,
+    /// The energy rose above its floor over the injection window while the
+    /// event was open (a kick).
+    Injection,
     /// The Courant or nodal advective number before onset reached its limit
     /// (time-step instability, reported apart).
     Cfl,
-    /// The total energy rose above its noise floor while the event was open (a kick).
-    Injection,
+    /// A velocity jump the local flow does not share, adding kinetic energy
+    /// (a kick too small for the energy test to see).
+    Jump,
     /// None of these: a burst that moves energy without adding any (physics).
     #[default]
     Impact,
 }
 
 impl Cause {
-    pub const ALL: [Cause; 4] = [
+    pub const ALL: [Cause; 5] = [
         Cause::Inversion,
-        Cause::Cfl,
         Cause::Injection,
+        Cause::Cfl,
+        Cause::Jump,
         Cause::Impact,
     ];
 
@@ -382,6 +392,7 @@ impl Cause {
             Cause::Inversion => "inversion",
             Cause::Cfl => "cfl",
             Cause::Injection => "injection",
+            Cause::Jump => "jump",
             Cause::Impact => "impact",
         }
     }
@@ -398,16 +409,21 @@ pub struct Evidence {
     /// The shape's critical Courant number (1 linear and uGIMP, 1.7
     /// quadratic, 1.9 cubic B-spline).
     pub critical_courant: f64,
-    /// The floor of `Event::energy_injected`: `injection_floor_factor` x the dt-scaled noise floor
-    /// m g dt min(2 V, sqrt(2 g H)) / 2 of the event's own mass m (its particle count
-    /// times the mean particle mass) at its last step, V = `vertical_speed_bound`:
-    /// symplectic Euler adds m g dt |dv_y| / 2 where fluid of mass m changes
-    /// its vertical velocity by dv_y, and |dv_y| <= 2 V.
+    /// The floor of `Event::energy_injected`: the kinetic energy of the
+    /// event's mass m (its particle count times the mean particle mass; the
+    /// whole mass for an energy-injection event) at `jump_speed`, 1/2 m u^2,
+    /// plus the energy sums' round-off. The same physical scale at every
+    /// time step: gravity's stepping term, which a dt-scaled floor only
+    /// bounded, is booked exactly.
     pub energy_floor: f64,
-    /// The largest particle |v_y| (m/s) anywhere from the step before onset to
-    /// the event's last step.
+    /// The booked terms (a remedy's, the transfer's, the projection's) that
+    /// added energy, net, over the injection window while the event was open.
     #[serde(default)]
-    pub vertical_speed_bound: f64,
+    pub booked_added: crate::energy_budget::Terms,
+    /// The share of the particles flagged at onset whose local flow was
+    /// calm (`jump`): a velocity jump is a kick when at least half were.
+    #[serde(default)]
+    pub calm_flow_fraction: f64,
     /// Hallmark evidence over the particles flagged at onset (docs/physics.md
     /// section 4b): the fraction quiet over `quiet_seconds` before their
     /// burst, and the fraction whose in-plane |dev D| peaked above
@@ -484,19 +500,22 @@ mod tests {
             n_particles: 9,
             particles: vec![4, 8, 15],
             peak_accel_g: 120.5,
-            peak_z: 31.0,
+            jump_speed: 0.31,
             energy_injected: 1e-3,
             courant: 0.2,
             quiescent_before: true,
             deformed_by: vec![DeformedBy::StrainRate, DeformedBy::Distortion],
-            rules: [Rule::KeSpike, Rule::AccelOutlier].into_iter().collect(),
+            rules: [Rule::InjectionWindow, Rule::VelocityJump]
+                .into_iter()
+                .collect(),
             cause: Cause::Injection,
             evidence: Evidence {
                 courant_before: 0.3,
                 advection_before: 0.1,
                 critical_courant: 1.7,
                 energy_floor: 1e-4,
-                vertical_speed_bound: 0.3,
+                booked_added: Default::default(),
+                calm_flow_fraction: 1.0,
                 quiescent_fraction: 0.75,
                 deformed_fraction: 0.5,
                 peak_dev_rate: 80.0,
@@ -509,7 +528,6 @@ mod tests {
             state_hash: Some("00ff".into()),
             checkpoint: None,
             phase: None,
-            injected_at_open: 0.0,
         }
     }
 
@@ -519,14 +537,14 @@ mod tests {
         let json = serde_json::to_value(&e).unwrap();
         assert_eq!(
             json["rules"],
-            serde_json::json!(["accel_outlier", "ke_spike"])
+            serde_json::json!(["velocity_jump", "injection_window"])
         );
         assert_eq!(
             json["deformed_by"],
             serde_json::json!(["strain_rate", "distortion"])
         );
         // One stored fact each: no bit set, flag or bookkeeping beside them.
-        for key in ["rule_bits", "previously_deformed", "injected_at_open"] {
+        for key in ["rule_bits", "previously_deformed"] {
             assert!(json.get(key).is_none(), "{key} in {json}");
         }
         let back: Event = serde_json::from_value(json).unwrap();
@@ -558,8 +576,7 @@ mod tests {
         assert_eq!(
             all.names(),
             [
-                "accel_outlier",
-                "ke_spike",
+                "velocity_jump",
                 "injection_window",
                 "outside_box",
                 "escape_speed",
@@ -590,12 +607,12 @@ mod tests {
 
     #[test]
     fn unknown_rule_names_are_refused() {
-        let r: Result<Rules, _> = serde_json::from_str(r#"["ke_spike", "gut_feeling"]"#);
+        let r: Result<Rules, _> = serde_json::from_str(r#"["velocity_jump", "gut_feeling"]"#);
         assert!(r.is_err());
     }
 
     #[test]
-    fn causes_are_judged_in_order_inversion_cfl_injection_impact() {
+    fn causes_are_judged_in_order_inversion_injection_cfl_jump_impact() {
         let mut e = event();
         let judge = |e: &mut Event| {
             e.classify();
@@ -603,26 +620,39 @@ mod tests {
         };
         assert_eq!(judge(&mut e), Cause::Injection, "energy above its floor");
         e.energy_injected = e.evidence.energy_floor;
-        assert_eq!(judge(&mut e), Cause::Impact, "not above the floor");
+        assert_eq!(
+            judge(&mut e),
+            Cause::Jump,
+            "a velocity jump, not above the floor"
+        );
+        e.rules = Rule::InjectionWindow.into();
+        assert_eq!(judge(&mut e), Cause::Impact, "neither");
         e.evidence.advection_before = ADVECTION_LIMIT;
         assert_eq!(judge(&mut e), Cause::Cfl, "nodal advection at its limit");
         e.evidence.advection_before = 0.0;
         e.evidence.courant_before = e.evidence.critical_courant;
         e.energy_injected = 1.0;
-        assert_eq!(judge(&mut e), Cause::Cfl, "cfl before injection");
+        assert_eq!(
+            judge(&mut e),
+            Cause::Injection,
+            "cfl does not hide an injection"
+        );
         e.kind = EventKind::Inversion;
         assert_eq!(judge(&mut e), Cause::Inversion, "inversion first");
         assert!(e.is_kick());
         e.kind = EventKind::Kick;
         e.evidence.courant_before = 0.0;
         assert!(judge(&mut e) == Cause::Injection && e.is_kick() && e.is_anomaly());
+        e.energy_injected = 0.0;
+        e.rules = Rule::VelocityJump.into();
+        assert!(judge(&mut e) == Cause::Jump && e.is_kick() && e.is_anomaly());
         e.quiescent_before = false;
         assert!(
             e.is_kick() && !e.is_anomaly(),
             "no hallmark without quiescence"
         );
         let json = serde_json::to_value(&e).unwrap();
-        assert_eq!(json["cause"], "injection");
+        assert_eq!(json["cause"], "jump");
         assert_eq!(json["outcome"], "recovered");
         assert_eq!(json["evidence"]["critical_courant"], 1.7);
     }

@@ -19,6 +19,8 @@ pub struct Geometry {
     /// The bodies' largest uniform speed |velocity| at t = 0 (m/s): a body
     /// thrown at U (the ringing test's drift) is not escaping at U.
     pub body_speed: f64,
+    /// Which axes wrap (else walls bound them).
+    pub periodic: [bool; 2],
 }
 
 impl Geometry {
@@ -49,6 +51,7 @@ impl Geometry {
                 .iter()
                 .map(|b| b.velocity[0].hypot(b.velocity[1]))
                 .fold(0.0, f64::max),
+            periodic: scene.periodic,
         }
     }
 

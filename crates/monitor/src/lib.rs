@@ -5,8 +5,6 @@
 //! departure, surge front) are computed on demand: at output rows and when an
 //! event opens. Definitions: docs/physics.md section 4.
 
-pub mod accel_outliers;
-pub mod cells;
 pub mod checkerboard;
 pub mod checkerboard_fields;
 mod clustering;
@@ -18,6 +16,7 @@ pub mod events;
 pub mod front;
 pub mod geometry;
 pub mod hydrostatic;
+pub mod jump;
 pub mod mechanisms;
 mod monitor;
 pub mod particle_history;

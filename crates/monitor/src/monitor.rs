@@ -1,19 +1,18 @@
 //! The monitor: its state and the step it observes. The detector, the
 //! event clustering and the energy arithmetic are its parts (their files).
 
-use crate::accel_outliers::WindowStats;
-use crate::cells::CellBins;
 use crate::checkerboard::{self, CellField};
 use crate::checkerboard_fields::FieldCheckerboard;
 use crate::clustering::{Cluster, UNLABELLED};
 use crate::config::MonitorConfig;
 use crate::detector::{Candidate, Scan};
-use crate::energy_budget::EnergyBudget;
+use crate::energy_budget::{Entry, Ledger, TERMS};
 use crate::energy_terms::EnergyStep;
 use crate::events::Event;
 use crate::front::{self, Front};
 use crate::geometry::Geometry;
 use crate::hydrostatic::Hydrostatic;
+use crate::jump::{JumpRule, Jumps};
 use crate::particle_history::ParticleHistory;
 use crate::remedy_booking::RemedyBooking;
 use crate::step_history::StepHistory;
@@ -28,10 +27,19 @@ pub struct Monitor {
     pub(crate) accel: Vec<f64>,
     pub(crate) accel_step: Option<u64>,
     pub(crate) flagged: Vec<Candidate>,
-    pub(crate) bins: CellBins,
-    pub(crate) stats: WindowStats,
+    pub(crate) jumps: Jumps,
     pub(crate) history: ParticleHistory,
-    pub(crate) energy: EnergyBudget,
+    /// The energy ledger (the injection window and the run's credited gain),
+    /// each booked term's cumulative net removal, gravity's stepping term
+    /// booked so far, and the potential energy at the last observation.
+    pub(crate) ledger: Ledger,
+    pub(crate) ledger_terms: [f64; TERMS],
+    pub(crate) gravity_stepping: f64,
+    /// Of it, the advection's part (a ledger term).
+    pub(crate) advection_stepping: f64,
+    pub(crate) prev_potential: Option<f64>,
+    /// The particle set changed at this observation (deletions, inflow, a restore).
+    pub(crate) ids_changed: bool,
     pub(crate) cell_label: Vec<u32>,
     pub(crate) touched: Vec<u32>,
     pub(crate) stack: Vec<u32>,
@@ -43,10 +51,6 @@ pub struct Monitor {
     pub(crate) hydro: Hydrostatic,
     pub(crate) front: Front,
     pub(crate) report: StepReport,
-    pub(crate) prev_injected: f64,
-    /// Largest particle |v_y| at the previous observation (bounds the
-    /// explicit-stepping energy error of an event that opens now).
-    pub(crate) prev_vertical_speed: f64,
     pub(crate) events_dropped: u64,
     /// Courant and nodal advective numbers of the last steps (cause evidence).
     pub(crate) steps: StepHistory,
@@ -102,16 +106,27 @@ impl Monitor {
         for p in 0..n {
             let (speed2, rate) = (v.v[p].norm_squared(), v.dev_rate[p]);
             let active = speed2 > quiet2 || rate > quiet_rate;
-            history.start(p, v.time, 0.5 * v.mass[p] * speed2, active, rate);
+            history.start(p, v.time, active, rate);
         }
         Monitor {
             accel: vec![0.0; n],
             accel_step: None,
             flagged: Vec::with_capacity(n),
-            bins: CellBins::new(&geom, n),
-            stats: WindowStats::new(&geom, n),
+            jumps: Jumps::default(),
             history,
-            energy: EnergyBudget::new(v.energy.total(), v.time, cfg.injection_seconds),
+            ledger: Ledger::new(
+                cfg.injection_seconds,
+                Entry {
+                    t: v.time,
+                    base: v.energy.total(),
+                    terms: [0.0; TERMS],
+                },
+            ),
+            ledger_terms: [0.0; TERMS],
+            gravity_stepping: 0.0,
+            advection_stepping: 0.0,
+            prev_potential: Some(v.energy.gravitational),
+            ids_changed: false,
             cell_label: vec![UNLABELLED; cells],
             touched: Vec::with_capacity(cells),
             stack: Vec::with_capacity(cells),
@@ -123,8 +138,6 @@ impl Monitor {
             hydro: Hydrostatic::new(&geom, n),
             front: Front::new(&geom),
             report: StepReport::default(),
-            prev_injected: 0.0,
-            prev_vertical_speed: 0.0,
             events_dropped: 0,
             steps: StepHistory::default(),
             critical_courant: critical_courant(v.shape),
@@ -189,15 +202,10 @@ impl Monitor {
         let g = self.g_ref();
         let dt = v.dt.max(1e-300);
         self.follow_ids(v);
-        let scan = self.scan_particles(v, g, dt);
+        let scan = self.scan_particles(v, dt);
         self.prev_time = v.time;
-        let max_z = if scan.need_z {
-            self.score_candidates(v)
-        } else {
-            0.0
-        };
-        self.flagged.retain(|c| !c.rules.is_empty());
-        let energy = self.book_energy(v, &scan, g, dt);
+        let max_jump = self.flag_jumps(v);
+        let energy = self.book_energy(v, &scan, self.geom.gravity);
         let grid = self.grid_figures(v);
         // Before any event opens: its window before onset includes this step.
         self.steps.push(v.time, v.courant, grid.node_advection);
@@ -206,7 +214,7 @@ impl Monitor {
             self.cluster_flagged(v, g);
         }
         let gainer = scan.gain_max.1;
-        self.check_energy_injection(v, g, energy.injection.window, energy.floor, gainer);
+        self.check_energy_injection(v, g, energy.window.gain, energy.floor, gainer);
         if !v.culled.is_empty() {
             self.culled_events(v, g);
         }
@@ -214,17 +222,28 @@ impl Monitor {
         if blow_out.is_some() {
             self.stopped(v);
         }
-        let total = energy.injection.total;
-        self.track_injected_energy(v, g, total, scan.max_vertical_speed);
+        self.track_injected_energy(v, energy.window);
         let opened = self.events.len() - opened_before;
-        self.report = self.step_report(v, g, &scan, &energy, &grid, max_z, opened, blow_out);
+        self.report = self.step_report(v, g, &scan, &energy, &grid, max_jump, opened, blow_out);
         &self.report
+    }
+
+    /// The velocity-jump rule's thresholds.
+    pub(crate) fn jump_rule(&self) -> JumpRule {
+        JumpRule {
+            speed: self.cfg.jump_speed,
+            z: self.cfg.jump_z,
+            ring: self.cfg.jump_ring_cells,
+            calm_seconds: self.cfg.calm_seconds,
+            calm_change: self.cfg.calm_change,
+        }
     }
 
     /// Follows the solver's particle ids: after a restore, and after
     /// deletions or inflow, the histories keep their particles.
     fn follow_ids(&mut self, v: &StateView) {
-        if std::mem::take(&mut self.adopt_ids) && v.id.len() == self.history.ke_recent.len() {
+        self.ids_changed = false;
+        if std::mem::take(&mut self.adopt_ids) && v.id.len() == self.history.len() {
             // Restored from a checkpoint taken after deletions.
             self.ids.clear();
             self.ids.extend_from_slice(v.id);
@@ -233,6 +252,7 @@ impl Monitor {
             // The solver deleted particles, or some entered through an
             // inflow wall: keep the history of the others.
             self.history.compact(&self.ids, v.id, self.prev_time);
+            self.ids_changed = true;
             self.ids.clear();
             self.ids.extend_from_slice(v.id);
             let ids = v.id.last().map_or(0, |&id| id as usize + 1);
@@ -251,7 +271,7 @@ impl Monitor {
         scan: &Scan,
         energy: &EnergyStep,
         grid: &GridFigures,
-        max_z: f64,
+        max_jump: f64,
         events_opened: usize,
         blow_out: Option<String>,
     ) -> StepReport {
@@ -259,9 +279,10 @@ impl Monitor {
         let booking = &self.booking;
         StepReport {
             step: v.step,
-            energy_injected: undefined(energy.injection.total),
-            injection_window: undefined(energy.injection.window),
+            energy_injected: undefined(energy.run_gain),
+            injection_window: undefined(energy.window.gain),
             injection_floor: energy.floor,
+            gravity_stepping: self.gravity_stepping,
             transfer_loss: self.transfer_loss + booking.in_transfer_loss(),
             remedy_dissipated: booking.dissipated(),
             remedy_injected: booking.injected(),
@@ -273,11 +294,10 @@ impl Monitor {
             solver_residual: v.projection.map(|p| p.stats.residual),
             projection_dissipated: v.projection.map(|p| p.stats.dissipated_projection),
             hourglass_dissipated: v.projection.map(|p| p.stats.dissipated_hourglass),
-            detector_total: energy.watched,
+            detector_total: energy.base,
             max_accel_g: scan.max_a2.sqrt() / g,
             max_transfer_jump: scan.max_jump2.sqrt(),
-            max_z,
-            max_ke_ratio: scan.max_ratio,
+            max_jump,
             max_speed: scan.max_speed2.sqrt(),
             j_min: scan.j_min,
             j_max: scan.j_max,

@@ -1,6 +1,5 @@
 //! What the monitor remembers of each particle, in seconds (dt differs 80x
-//! across the bug-report matrix): its recent kinetic-energy maximum
-//! (decaying), when it was last active (faster than `quiet_speed` or
+//! across the bug-report matrix): when it was last active (faster than `quiet_speed` or
 //! deforming faster than `quiet_rate`), how long it had been quiet before
 //! its current active stretch, and its running maximum of the in-plane
 //! |dev D| with the time reached, also as it stood when that stretch began.
@@ -10,7 +9,6 @@ pub const NEVER: f64 = f64::NEG_INFINITY;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParticleHistory {
-    pub ke_recent: Vec<f64>,
     /// Last time the particle was active.
     pub last_active: Vec<f64>,
     /// Start of its current (or last) active stretch.
@@ -38,7 +36,6 @@ pub struct Calm {
 impl ParticleHistory {
     pub fn new(n: usize) -> Self {
         ParticleHistory {
-            ke_recent: vec![0.0; n],
             last_active: vec![NEVER; n],
             active_since: vec![NEVER; n],
             quiet_before: vec![f64::INFINITY; n],
@@ -49,12 +46,19 @@ impl ParticleHistory {
         }
     }
 
-    /// The state at the first observation (t = `t0`): each particle's kinetic
-    /// energy `e` starts its history, and one already active (a body given
-    /// an initial velocity) is active since t0 with no quiet spell before
-    /// it: nothing is known of the time before t0.
-    pub fn start(&mut self, p: usize, t0: f64, e: f64, active: bool, rate: f64) {
-        self.ke_recent[p] = e;
+    /// The particles it follows.
+    pub fn len(&self) -> usize {
+        self.last_active.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.last_active.is_empty()
+    }
+
+    /// The state at the first observation (t = `t0`): a particle already
+    /// active (a body given an initial velocity) is active since t0 with no
+    /// quiet spell before it: nothing is known of the time before t0.
+    pub fn start(&mut self, p: usize, t0: f64, active: bool, rate: f64) {
         if active {
             self.last_active[p] = t0;
             self.active_since[p] = t0;
@@ -122,7 +126,6 @@ impl ParticleHistory {
             while old_ids[from] != id {
                 from += 1;
             }
-            self.ke_recent[to] = self.ke_recent[from];
             self.last_active[to] = self.last_active[from];
             self.active_since[to] = self.active_since[from];
             self.quiet_before[to] = self.quiet_before[from];
@@ -133,8 +136,6 @@ impl ParticleHistory {
             from += 1;
         }
         let n = new_ids.len();
-        self.ke_recent.resize(kept, 0.0);
-        self.ke_recent.resize(n, 0.0);
         self.last_active.resize(kept, NEVER);
         self.last_active.resize(n, t);
         self.active_since.resize(kept, NEVER);
@@ -152,9 +153,8 @@ impl ParticleHistory {
     }
 
     /// Every array, in checkpoint order.
-    pub fn arrays_mut(&mut self) -> [&mut Vec<f64>; 8] {
+    pub fn arrays_mut(&mut self) -> [&mut Vec<f64>; 7] {
         [
-            &mut self.ke_recent,
             &mut self.last_active,
             &mut self.active_since,
             &mut self.quiet_before,
@@ -165,9 +165,8 @@ impl ParticleHistory {
         ]
     }
 
-    pub fn arrays(&self) -> [&Vec<f64>; 8] {
+    pub fn arrays(&self) -> [&Vec<f64>; 7] {
         [
-            &self.ke_recent,
             &self.last_active,
             &self.active_since,
             &self.quiet_before,

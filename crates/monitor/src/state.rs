@@ -13,7 +13,9 @@ use solver::checkpoint::{decode, encode, unseal, CheckpointError, Reader, Writer
 // per-remedy booking.
 // B (11): the events and the step history through the solver's checkpoint
 // codec (solver::checkpoint::encode), where bincode wrote them.
-const MAGIC: &[u8; 8] = b"KICKMONB";
+// C (12): the velocity-jump rule and the energy ledger (booked terms by
+// their net over the window, gravity's stepping term booked).
+const MAGIC: &[u8; 8] = b"KICKMONC";
 
 fn encode_events(events: &[Event]) -> Vec<u8> {
     encode(events).expect("events serialise: known lengths, no maps")
@@ -35,10 +37,32 @@ fn decode_events(bytes: &[u8]) -> Result<Vec<Event>, CheckpointError> {
     })
 }
 
+/// The velocity-jump rule's snapshots (at most three).
+fn read_snapshots(r: &mut Reader) -> Result<Vec<crate::jump::Snapshot>, CheckpointError> {
+    let count = r.u64()?;
+    if count > 3 {
+        return Err(CheckpointError::Truncated);
+    }
+    let mut out = vec![];
+    for _ in 0..count {
+        let t = r.f64()?;
+        let n = r.u64()? as usize;
+        if n > r.0.len() / 8 {
+            return Err(CheckpointError::Truncated);
+        }
+        let mut ids = vec![0; n];
+        r.u32s(&mut ids)?;
+        let mut v = vec![solver::Vec2::zeros(); n];
+        r.vec2s(&mut v)?;
+        out.push(crate::jump::Snapshot { t, ids, v });
+    }
+    Ok(out)
+}
+
 impl Monitor {
     /// The monitor's memory as sealed bytes (see the module docs).
     pub fn save_state(&self) -> Vec<u8> {
-        let n = self.history.ke_recent.len();
+        let n = self.history.len();
         let mut w = Writer(Vec::with_capacity(64 + n * 64 + self.event_mark.len() * 8));
         w.0.extend_from_slice(MAGIC);
         w.u64(n as u64);
@@ -48,24 +72,27 @@ impl Monitor {
         }
         w.u32s(&self.event_mark);
         w.f64(self.prev_time);
-        let (minimum, times, recent, next, filled) = self.energy.state();
-        w.f64(minimum);
-        w.u64(recent.len() as u64);
-        w.f64s(times);
-        w.f64s(recent);
-        w.u64(next as u64);
-        w.u64(filled as u64);
+        let (ledger, run_minimum) = self.ledger.state();
+        w.u64(ledger.len() as u64);
+        w.f64s(&ledger);
+        w.f64(run_minimum);
+        w.u64(self.ledger.present_bits() as u64);
+        w.f64s(&self.ledger_terms);
+        w.f64(self.gravity_stepping);
+        w.f64(self.advection_stepping);
+        w.f64(self.prev_potential.unwrap_or(f64::NAN));
         w.f64(self.transfer_loss);
         w.f64s(&self.booking.state());
         w.f64(self.initial_total);
-        w.f64(self.prev_injected);
-        w.f64(self.prev_vertical_speed);
         w.u64(self.events_dropped);
         w.bytes(&encode_events(&self.events));
         w.bytes(&encode(&self.steps).expect("step history serialises"));
-        // Beside the events: monitor bookkeeping kept out of their serde form.
-        for e in &self.events {
-            w.f64(e.injected_at_open);
+        w.u64(self.jumps.snaps.len() as u64);
+        for snap in &self.jumps.snaps {
+            w.f64(snap.t);
+            w.u64(snap.ids.len() as u64);
+            w.u32s(&snap.ids);
+            w.vec2s(&snap.v);
         }
         w.seal()
     }
@@ -99,37 +126,35 @@ impl Monitor {
         self.adopt_ids = true;
         r.u32s(&mut self.event_mark)?;
         self.prev_time = r.f64()?;
-        let minimum = r.f64()?;
         let len = r.u64()? as usize;
-        if len != self.energy.state().2.len() {
+        if len > r.0.len() / 8 {
             return Err(CheckpointError::Truncated);
         }
-        let (mut times, mut recent) = (vec![0.0; len], vec![0.0; len]);
-        r.f64s(&mut times)?;
-        r.f64s(&mut recent)?;
-        let next = r.u64()? as usize;
-        let filled = r.u64()? as usize;
-        if next >= len || filled > len {
-            return Err(CheckpointError::Truncated);
-        }
-        self.energy.restore(minimum, &times, &recent, next, filled);
+        let mut ledger = vec![0.0; len];
+        r.f64s(&mut ledger)?;
+        let run_minimum = r.f64()?;
+        self.ledger
+            .restore(&ledger, run_minimum)
+            .ok_or(CheckpointError::Truncated)?;
+        self.ledger.set_present_bits(r.u64()? as u32);
+        r.f64s(&mut self.ledger_terms)?;
+        self.gravity_stepping = r.f64()?;
+        self.advection_stepping = r.f64()?;
+        let potential = r.f64()?;
+        self.prev_potential = (!potential.is_nan()).then_some(potential);
         self.transfer_loss = r.f64()?;
         let mut booking = vec![0.0; crate::remedy_booking::RemedyBooking::STATE_LEN];
         r.f64s(&mut booking)?;
         self.booking.restore(&booking);
         self.initial_total = r.f64()?;
-        self.prev_injected = r.f64()?;
-        self.prev_vertical_speed = r.f64()?;
         self.events_dropped = r.u64()?;
-        let mut events = decode_events(r.bytes()?)?;
+        let events = decode_events(r.bytes()?)?;
         let steps: crate::step_history::StepHistory = decode(r.bytes()?)?;
         if !steps.is_whole() {
             return Err(CheckpointError::Truncated);
         }
         self.steps = steps;
-        for e in &mut events {
-            e.injected_at_open = r.f64()?;
-        }
+        self.jumps.snaps = read_snapshots(&mut r)?;
         r.finish()?;
         self.events = events;
         Ok(())
@@ -161,7 +186,7 @@ mod tests {
             n_particles: usize::MAX,
             particles: vec![0, u32::MAX],
             peak_accel_g: f64::from_bits(0x7ff8_dead_beef_0001),
-            peak_z: f64::MAX,
+            jump_speed: f64::MAX,
             energy_injected: 1e-300,
             courant: 0.1 + 0.2,
             quiescent_before: false,
@@ -173,7 +198,8 @@ mod tests {
                 advection_before: -0.0,
                 critical_courant: 1.7,
                 energy_floor: 5e-324,
-                vertical_speed_bound: f64::MIN_POSITIVE,
+                booked_added: Default::default(),
+                calm_flow_fraction: 0.5,
                 quiescent_fraction: 1.0 / 3.0,
                 deformed_fraction: 0.0,
                 peak_dev_rate: f64::MAX,
@@ -186,7 +212,6 @@ mod tests {
             state_hash: None,
             checkpoint: Some("ckpt_000004.bin".into()),
             phase: Some("fluid".into()),
-            injected_at_open: 0.0,
         }
     }
 
@@ -200,7 +225,7 @@ mod tests {
             r.x_max,
             r.y_max,
             e.peak_accel_g,
-            e.peak_z,
+            e.jump_speed,
             e.energy_injected,
             e.courant,
         ]

@@ -17,11 +17,17 @@ pub struct StepReport {
     pub e_int: f64,
     pub d_visc: f64,
     pub e_total: f64,
-    /// Total minus its running minimum.
+    /// The whole run's energy gain: the ledger's credited total (each
+    /// booked term credited by its net removal since t = 0) over its running
+    /// minimum. Its peak is the method's pump figure.
     pub energy_injected: f64,
-    /// Injection over the last `injection_seconds`, and its noise floor.
+    /// The largest gain over the last `injection_seconds` (booked terms by
+    /// their net over it), and the whole body's floor for it.
     pub injection_window: f64,
     pub injection_floor: f64,
+    /// Gravity's stepping term booked since t = 0 (J/m): the potential
+    /// energy change beyond gravity's work at the time-centred velocity.
+    pub gravity_stepping: f64,
     /// Transfer loss accumulated since t = 0: sum over steps and particles of
     /// 1/2 m (|v_prev + dt a_p|^2 - |v|^2), the kinetic energy the transfer
     /// took from FLIP's exact update (PIC dissipates there); under B-spline
@@ -31,8 +37,9 @@ pub struct StepReport {
     /// is booked to them. It is added to the total in every injection test
     /// but APIC's, and to every budget but the gradient-form APIC's.
     pub transfer_loss: f64,
-    /// What the injection test watches (J/m): E + L + the remedies'
-    /// dissipation (under APIC without L).
+    /// The ledger's base (J/m): E less the projection's and the hourglass
+    /// control's bookings and gravity's stepping term (the booked terms are
+    /// credited over the window by their net).
     pub detector_total: f64,
     /// Every remedy's removals since t = 0 (its dissipation), and its
     /// additions (its injection, left visible to the injection test).
@@ -41,8 +48,9 @@ pub struct StepReport {
     /// The same per remedy, in registry order (None: not in the method).
     pub booked: [Option<Booked>; REMEDIES],
     /// The budget with every booking, E + L + remedy dissipation - remedy
-    /// injection, minus its value at t = 0: what no term accounts for (the
-    /// time integration's error; under APIC also the transfer's loss).
+    /// injection - gravity's stepping term, minus its value at t = 0: what
+    /// no term accounts for (the time integration's error; under APIC also
+    /// the transfer's loss).
     pub budget_drift: f64,
     /// The same without the remedies' bookings, E + L minus its value at t = 0.
     pub budget_drift_unbooked: f64,
@@ -51,9 +59,9 @@ pub struct StepReport {
     /// Largest transfer jump |v - v_prev - dt a_p| (m/s): the velocity change
     /// not driven by forces (for PIC and APIC, sum_i N_i v_i - v_prev).
     pub max_transfer_jump: f64,
-    /// Largest z computed this step (0 when no particle was a candidate).
-    pub max_z: f64,
-    pub max_ke_ratio: f64,
+    /// Largest velocity jump against the local flow this step (m/s; 0 when
+    /// none reached `jump_speed`).
+    pub max_jump: f64,
     pub max_speed: f64,
     pub courant: f64,
     pub j_min: f64,

@@ -2,7 +2,7 @@
 
 mod report;
 
-use study::replay::{bench, explain, reproduce};
+use study::replay::{bench, calibrate, explain, reproduce};
 use study::run::{case, matrix};
 use study::study_file;
 
@@ -36,6 +36,10 @@ enum Command {
     List(ListArgs),
     /// Measure particle-steps per second.
     Bench(BenchArgs),
+    /// Measure the detector's sensitivity: plant kicks of known size in
+    /// each case (the study's [calibration] table), bisect the smallest
+    /// found, and write OUT/detection.{parquet,csv,json}.
+    Calibrate(CalibrateArgs),
 }
 
 #[derive(Args)]
@@ -87,6 +91,26 @@ struct MatrixArgs {
     /// Also write each case's timeseries as CSV.
     #[arg(long)]
     csv: bool,
+}
+
+#[derive(Args)]
+struct CalibrateArgs {
+    /// Study file (TOML) with a [calibration] table.
+    study: PathBuf,
+    /// Output folder: the clean twins as a matrix, and the detection table.
+    #[arg(long, default_value = "reports/calibration")]
+    out: PathBuf,
+    /// Runs at once (default: number of cores).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Solver threads per run (default: cores / jobs).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Keep the twins whose summary.json is already in OUT.
+    #[arg(long)]
+    resume: bool,
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
 }
 
 #[derive(Args)]
@@ -195,6 +219,7 @@ fn main() -> ExitCode {
         Command::Report(a) => report_command(a),
         Command::List(a) => list_command(a),
         Command::Bench(a) => bench_command(a),
+        Command::Calibrate(a) => calibrate_command(a),
     }
 }
 
@@ -233,6 +258,7 @@ fn run_command(args: RunArgs) -> ExitCode {
         threads,
         bar: Some(indicatif::ProgressBar::new(1000).with_style(case::progress_style())),
         csv,
+        plant_checkpoint: None,
     };
     match case::run_case(chosen, &dir, &opts) {
         Ok(s) => {
@@ -301,6 +327,7 @@ fn matrix_command(args: MatrixArgs) -> ExitCode {
         csv,
         threads_per_case: threads.unwrap_or((cores / jobs).max(1)),
         progress: true,
+        plant_checkpoint: None,
     };
     match matrix::run_matrix(&study, &opts) {
         Ok(r) => {
@@ -316,6 +343,55 @@ fn matrix_command(args: MatrixArgs) -> ExitCode {
         }
         Err(e) => {
             eprintln!("kick matrix: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn calibrate_command(args: CalibrateArgs) -> ExitCode {
+    let study = match study_file::load(&args.study, &args.set) {
+        Ok(s) => s,
+        Err(e) => return bad_input(&e.to_string()),
+    };
+    let Some(spec) = &study.calibration else {
+        return bad_input(&format!(
+            "{}: key `calibration`: a [calibration] table is required (see docs/usage.md)",
+            args.study.display()
+        ));
+    };
+    let t_end = study
+        .cases
+        .iter()
+        .map(|c| c.solver.scene.t_end)
+        .fold(f64::INFINITY, f64::min);
+    if let Err((key, message)) = spec.fits(t_end) {
+        return bad_input(&format!("{}: key `{key}`: {message}", args.study.display()));
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let jobs = args.jobs.unwrap_or(cores);
+    if jobs == 0 || args.threads == Some(0) {
+        return bad_input("--jobs and --threads: 0 is out of range (allowed >= 1)");
+    }
+    let opts = calibrate::CalibrateOptions {
+        out: args.out.clone(),
+        jobs,
+        threads_per_case: args.threads.unwrap_or((cores / jobs).max(1)),
+        resume: args.resume,
+        progress: true,
+    };
+    match calibrate::calibrate(&study, &opts) {
+        Ok(d) => {
+            println!(
+                "{} rows; twins {:.1} s, planted runs {:.1} s (wall); table in {}",
+                d.rows.len(),
+                d.twins_wall_s,
+                d.planted_wall_s,
+                args.out.join("detection.csv").display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("kick calibrate: {e}");
             ExitCode::FAILURE
         }
     }

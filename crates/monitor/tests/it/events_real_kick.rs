@@ -40,12 +40,16 @@ fn baseline_small_k_kicks_then_blows_out() {
     assert!(!kicks.is_empty(), "kicks precede the blow-out");
     for e in &kicks {
         assert!(e.first_step < blow.first_step);
-        assert!(e.courant > 0.0 && e.peak_accel_g >= 50.0 && e.n_particles >= 4);
+        assert!(e.courant > 0.0 && e.n_particles >= 4);
+        assert!(
+            e.jump_speed >= 0.02 || e.rules.contains(monitor::Rule::InjectionWindow),
+            "{e:?}"
+        );
         assert!(e.region.x_max > e.region.x_min && e.region.y_max > e.region.y_min);
         eprintln!(
-            "kick {} step {} t {:.4} s region [{:.2}, {:.2}] x [{:.2}, {:.2}] a/g {:.0} z {:.0} Courant {:.2} quiescent {} deformed {} cause {:?} {:?} outcome {:?}",
+            "kick {} step {} t {:.4} s region [{:.2}, {:.2}] x [{:.2}, {:.2}] a/g {:.0} jump {:.3} m/s Courant {:.2} quiescent {} deformed {} cause {:?} {:?} outcome {:?}",
             e.id, e.first_step, e.t, e.region.x_min, e.region.x_max, e.region.y_min, e.region.y_max,
-            e.peak_accel_g, e.peak_z, e.courant, e.quiescent_before, e.previously_deformed(),
+            e.peak_accel_g, e.jump_speed, e.courant, e.quiescent_before, e.previously_deformed(),
             e.cause, e.evidence, e.outcome
         );
     }

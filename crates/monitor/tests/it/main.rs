@@ -1,5 +1,6 @@
 //! The monitor crate's integration tests, one binary: a module per subject.
 
+mod booked_controls;
 mod checkerboard;
 mod checkerboard_fields;
 mod common;

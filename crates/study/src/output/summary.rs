@@ -237,9 +237,9 @@ pub fn sample_event() -> Event {
         "cells": {"i_min": 0, "j_min": 0, "i_max": 1, "j_max": 1},
         "region": {"x_min": 0.0, "y_min": 0.0, "x_max": 0.01, "y_max": 0.01},
         "extent": {"i_min": 0, "j_min": 0, "i_max": 1, "j_max": 1},
-        "n_particles": 4, "particles": [1, 2], "peak_accel_g": 1.0, "peak_z": 2.0,
+        "n_particles": 4, "particles": [1, 2], "peak_accel_g": 1.0, "jump_speed": 0.05,
         "energy_injected": 0.0, "courant": 0.2, "quiescent_before": false,
-        "deformed_by": [], "rules": ["ke_spike"], "state_hash": null, "checkpoint": null
+        "deformed_by": [], "rules": ["velocity_jump"], "state_hash": null, "checkpoint": null
     }))
     .unwrap()
 }

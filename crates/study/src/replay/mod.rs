@@ -3,5 +3,6 @@
 //! changes replayed), and the solver's speed measured.
 
 pub mod bench;
+pub mod calibrate;
 pub mod explain;
 pub mod reproduce;

@@ -12,6 +12,7 @@ use crate::run::probes::checkpoint_ring::CheckpointRing;
 use crate::run::probes::event_frames::EventFrames;
 use crate::run::probes::mode_decay::ModeDecay;
 use crate::run::probes::particle_files::ParticleFiles;
+use crate::run::probes::plant_checkpoint::PlantCheckpoint;
 use crate::run::probes::ringing::Ringing;
 use crate::run::probes::slosh::Slosh;
 use crate::run::probes::surge_front::SurgeFront;
@@ -29,6 +30,9 @@ pub struct CaseOptions {
     pub bar: Option<ProgressBar>,
     /// Also write the timeseries as CSV.
     pub csv: bool,
+    /// Write `plant.ckpt` at the first step ending at or after this time
+    /// (`kick calibrate`'s restart point).
+    pub plant_checkpoint: Option<f64>,
 }
 
 /// Runs a case into `dir` and returns its summary (also written as summary.json).
@@ -160,6 +164,9 @@ fn case_runner<'p, S: Stepper>(
         case.output.checkpoint_every,
         case.monitor.quiet_seconds,
     ));
+    if let Some(at) = opts.plant_checkpoint {
+        runner.attach(PlantCheckpoint::new(dir.to_path_buf(), at));
+    }
     runner
 }
 

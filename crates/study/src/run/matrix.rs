@@ -27,6 +27,8 @@ pub struct MatrixOptions {
     /// Solver threads per case (cases are the unit of parallelism).
     pub threads_per_case: usize,
     pub progress: bool,
+    /// Each case writes `plant.ckpt` at this time (`kick calibrate`).
+    pub plant_checkpoint: Option<f64>,
 }
 
 /// `I/N` with 0 <= I < N.
@@ -168,6 +170,7 @@ fn run_cases(todo: &[&Case], opts: &MatrixOptions) -> std::io::Result<()> {
                     threads: Some(opts.threads_per_case),
                     bar: Some(bar.clone()),
                     csv: opts.csv,
+                    plant_checkpoint: opts.plant_checkpoint,
                 };
                 let dir = opts.out.join(&case.name);
                 match run_case(case, &dir, &ro) {

@@ -4,6 +4,7 @@
 //! and unit) and validated once. Errors name the file, the dotted key and
 //! what is allowed.
 
+pub mod calibration;
 mod expand;
 pub mod labels;
 mod mixture;
@@ -152,6 +153,8 @@ impl Case {
 pub struct Study {
     pub file: PathBuf,
     pub cases: Vec<Case>,
+    /// The `[calibration]` table, for `kick calibrate`.
+    pub calibration: Option<calibration::CalibrationSpec>,
 }
 
 /// Reads, overrides, expands and validates a study file.
@@ -206,6 +209,7 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Study, StudyError> {
         set_path(&mut root, &key, value).map_err(|m| err(&key, m))?;
     }
     let mut matrix = root.remove("matrix");
+    let calibration = root.remove("calibration");
     let ensemble = ensemble_size(&mut matrix).map_err(|(k, m)| err(&k, m))?;
     let extra = extra_blocks(&mut matrix).map_err(|(k, m)| err(&k, m))?;
     let axes = matrix_axes(matrix).map_err(|(k, m)| err(&k, m))?;
@@ -225,9 +229,17 @@ pub fn load(path: &Path, overrides: &[String]) -> Result<Study, StudyError> {
             cases.push(case);
         }
     }
+    let calibration = match calibration {
+        None => None,
+        Some(table) => {
+            let spec = calibration::CalibrationSpec::from_toml(table);
+            Some(spec.map_err(|(k, m)| err(&k, m))?)
+        }
+    };
     Ok(Study {
         file: path.to_path_buf(),
         cases,
+        calibration,
     })
 }
 

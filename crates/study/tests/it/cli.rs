@@ -74,7 +74,8 @@ fn run_completes_and_writes_the_case_folder() {
         "e_total",
         "energy_injected",
         "max_accel_g",
-        "max_z",
+        "max_jump",
+        "gravity_stepping",
         "checkerboard_means",
         "checkerboard_nodal",
         "checkerboard_cell",
@@ -464,9 +465,9 @@ fn an_unknown_key_in_any_section_exits_2_naming_it_and_the_allowed_keys() {
             "flip_alpha",
         ),
         (
-            format!("{GOOD}\n[monitor]\nkick_g = 1\n"),
-            "monitor.kick_g",
-            "kick_accel_g",
+            format!("{GOOD}\n[monitor]\njump = 1\n"),
+            "monitor.jump",
+            "jump_speed",
         ),
         (
             format!("{GOOD}\n[output]\nrows = 1\n"),
@@ -486,8 +487,8 @@ fn an_unknown_key_in_any_section_exits_2_naming_it_and_the_allowed_keys() {
         );
     }
     // A value of the wrong type or out of range in the typed sections.
-    let e = bad(&format!("{GOOD}\n[monitor]\nkick_z = -1.0\n"), &[]);
-    assert!(e.contains("monitor.kick_z") && e.contains("allowed"), "{e}");
+    let e = bad(&format!("{GOOD}\n[monitor]\njump_z = -1.0\n"), &[]);
+    assert!(e.contains("monitor.jump_z") && e.contains("allowed"), "{e}");
     let e = bad(&format!("{GOOD}\n[output]\ntimeseries_rows = 0\n"), &[]);
     assert!(
         e.contains("output.timeseries_rows") && e.contains("allowed"),
@@ -839,7 +840,8 @@ ensemble = 2
         let e = s
             .events
             .iter()
-            .find(|e| e.kind == EventKind::Kick && e.first_step >= 300)
+            // The push, or the event it joined (a kick nearby within merge_seconds).
+            .find(|e| e.kind == EventKind::Kick && e.first_step <= 301 && e.last_step >= 300)
             .unwrap_or_else(|| panic!("{m}: the push is logged: {:?}", s.events));
         let o = kick(&[
             "reproduce",
@@ -1017,10 +1019,14 @@ fn explain_splits_an_injected_kick_and_replays_single_changes() {
         json["checkpoint_t"].as_f64().unwrap() <= explain_from.max(0.0),
         "{json}"
     );
-    // The parts close to round-off, and the push is the impulse.
+    // The parts close to round-off, and the push is the impulse. The event
+    // grows over the next steps into the neighbours the transfer passes the
+    // push on to (measured: impulse 0.83, the transfer's jump 0.16, the
+    // internal force 0.015 of sum |dv|^2 over its 9 steps).
     assert!(json["closure_rest_max"].as_f64().unwrap() < 1e-9, "{json}");
     assert_eq!(json["largest_part"]["part"], "impulse", "{json}");
-    assert!(json["shares"]["impulse"].as_f64().unwrap() > 0.99, "{json}");
+    let share = |k: &str| json["shares"][k].as_f64().unwrap();
+    assert!(share("impulse") > 0.8 && share("internal") < 0.05, "{json}");
     let sum: f64 = ["internal", "external", "walls", "jump", "impulse", "rest"]
         .iter()
         .map(|k| json["shares"][k].as_f64().unwrap())

@@ -3,6 +3,7 @@
 //! two-phase runs, the report in a browser, and the workspace's module
 //! graph.
 
+mod calibrate;
 mod cli;
 mod common;
 mod module_graph;

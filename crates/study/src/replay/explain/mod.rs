@@ -3,7 +3,7 @@
 //! `quiet_seconds` before onset to the event's last step with the solver's
 //! force forensics (`solver::forensics`), and measures the mechanisms
 //! (`monitor::mechanisms`, docs/physics.md section 4c) over the onset
-//! window (`merge_seconds` before the event's first step to its last).
+//! window (`ONSET_SECONDS` before the event's first step to its last).
 //! With `--counterfactual` it restarts from the same checkpoint once per
 //! single change, applied from the onset window's start.
 
@@ -24,6 +24,10 @@ use serde::Serialize;
 use solver::forensics::ExplainedStep;
 use solver::{CheckpointError, Method, Solver, Vec2};
 use std::path::{Path, PathBuf};
+
+/// The onset window's length before the event's first step (s): the
+/// burst itself, apart from the quiet window before it.
+pub const ONSET_SECONDS: f64 = 0.01;
 
 pub struct ExplainOptions {
     pub threads: Option<usize>,
@@ -300,7 +304,7 @@ pub fn explain(case_dir: &Path, id: u32, opts: &ExplainOptions) -> Result<Outcom
     let mcfg = &loaded.case.monitor;
     let window = Window {
         explain_from: logged.t - mcfg.quiet_seconds,
-        onset_from: logged.t - mcfg.merge_seconds,
+        onset_from: logged.t - ONSET_SECONDS,
         first_step: logged.first_step,
         last_step: logged.last_step,
         last_t: logged.last_t,

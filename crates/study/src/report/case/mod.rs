@@ -232,7 +232,7 @@ fn events_section(c: &CaseInputs, page: &mut Page) {
         "place",
         "particles",
         "peak a/g",
-        "peak z",
+        "jump (m/s)",
         "Courant",
         "quiescent before",
         "previously deformed",
@@ -258,7 +258,7 @@ fn events_section(c: &CaseInputs, page: &mut Page) {
                     Cell::Text(escape(&verdict::place(&e.region, &c.scene))),
                     Cell::Num(e.n_particles.to_string()),
                     Cell::Num(short(e.peak_accel_g)),
-                    Cell::Num(short(e.peak_z)),
+                    Cell::Num(short(e.jump_speed)),
                     Cell::Num(format!("{:.2}", e.courant)),
                     Cell::Num(e.quiescent_before.to_string()),
                     Cell::Num(e.previously_deformed().to_string()),
@@ -330,11 +330,11 @@ fn kind_name(kind: EventKind) -> String {
     serde_name(&kind)
 }
 
-/// Events by cause: kicks (injection, inversion) red, time-step instability
-/// (cfl) orange, impacts (physics) grey.
+/// Events by cause: kicks (injection, inversion, jump) red, time-step
+/// instability (cfl) orange, impacts (physics) grey.
 fn cause_colour(e: &Event) -> RGBColor {
     match e.cause {
-        Cause::Injection | Cause::Inversion => RGBColor(200, 30, 30),
+        Cause::Injection | Cause::Inversion | Cause::Jump => RGBColor(200, 30, 30),
         Cause::Cfl => RGBColor(230, 140, 20),
         Cause::Impact => RGBColor(120, 120, 120),
     }

@@ -17,7 +17,7 @@ fn style(class: Class) -> (&'static str, RGBColor) {
     match class {
         Class::NoKickSurvived => ("no kick, survived", RGBColor(90, 170, 90)),
         Class::NoKickBlewUp => ("no kick, blew up", RGBColor(235, 175, 175)),
-        Class::InjectionFirst => ("injection first", RGBColor(240, 150, 50)),
+        Class::InjectionFirst => ("kick first (injection or jump)", RGBColor(240, 150, 50)),
         Class::InversionFirst => ("inversion first", RGBColor(190, 40, 40)),
         Class::AnomalyFirst => ("anomaly first", RGBColor(140, 60, 170)),
         Class::Failed => ("failed", RGBColor(150, 150, 150)),
@@ -198,7 +198,7 @@ pub fn heatmaps(m: &Matrix, out: &Path, page: &mut Page) -> Res {
     page.h2("Outcome");
     page.figure(
         &render(&outcome, out, "heatmap_outcome")?,
-        "Colour: the cause of the first kick (a kick is an injection or an inversion; the anomaly is a kick with the hallmark), or how a run that never kicked ended; over an ensemble the most frequent class (ties: the worse). Text: k t = first kick at t (s), x t = blew up at t (s), the median ± half the range over an ensemble",
+        "Colour: the cause of the first kick (a kick is an injection, an inversion or a jump; the anomaly is a kick with the hallmark), or how a run that never kicked ended; over an ensemble the most frequent class (ties: the worse). Text: k t = first kick at t (s), x t = blew up at t (s), the median ± half the range over an ensemble",
     );
     let hydro: Vec<f64> = m.rows.iter().map(|r| r.hydro_late()).collect();
     let scale = ColourScale::robust(&hydro, true);

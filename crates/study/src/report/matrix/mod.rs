@@ -2,12 +2,14 @@
 //! link them), then the sections of `MATRIX_SECTIONS` in order: the verdict,
 //! the bug report's behaviours, the methods, refinement, the mixtures,
 //! outcome and late-hydrostatic heatmaps, the stability map, the explained
-//! events by mechanism, the ringing map, speed against
+//! events by mechanism, the ringing map, the detection of planted kicks
+//! (a calibration folder), speed against
 //! accuracy, the ensembles and the case table. The rows are read once
 //! (`data::Matrix`, from each case's summary.json found through
 //! summary.parquet's `case_dir`) and every section renders from them.
 
 pub mod behaviours;
+pub mod detection;
 pub mod heatmaps;
 pub mod mechanisms;
 pub mod methods;
@@ -84,6 +86,11 @@ pub const MATRIX_SECTIONS: &[Section] = &[
         write: ringing::ringing_map,
     },
     Section {
+        name: "detection",
+        needs_axes: false,
+        write: detection::detection_table,
+    },
+    Section {
         name: "speed_accuracy",
         needs_axes: false,
         write: speed::speed_accuracy,
@@ -156,6 +163,7 @@ mod tests {
                 "stability",
                 "mechanisms",
                 "ringing",
+                "detection",
                 "speed_accuracy",
                 "ensembles",
                 "cases"

@@ -100,7 +100,7 @@ fn kicks_sentence(rows: &[Row]) -> String {
     let mut by_time = kicked.clone();
     by_time.sort_by(|a, b| a.t_first_kick().total_cmp(&b.t_first_kick()));
     format!(
-        "<b>Kicked</b>: {} of {} cases; the first kick was an injection in {}, an inversion in {} and had the hallmark (the anomaly) in {}. Earliest first: {}.",
+        "<b>Kicked</b>: {} of {} cases; the first kick was an injection or a jump in {}, an inversion in {} and had the hallmark (the anomaly) in {}. Earliest first: {}.",
         kicked.len(),
         rows.len(),
         first_by(Class::InjectionFirst),

@@ -127,10 +127,10 @@ impl TimeseriesFigure<'_> {
                 log: false,
             },
             Panel {
-                ylabel: "a/g, z (log)".into(),
+                ylabel: "a/g, jump m/s (log)".into(),
                 lines: vec![
                     ("max a/g", col("max_accel_g")),
-                    ("max outlier z", col("max_z")),
+                    ("max velocity jump (m/s)", col("max_jump")),
                 ],
                 log: true,
             },

@@ -133,7 +133,7 @@ fn timeseries_plots_render_as_png_and_svg() {
         "e_total",
         "energy_injected",
         "max_accel_g",
-        "max_z",
+        "max_jump",
         "checkerboard_means",
         "checkerboard_nodal",
         "hydro_rel_rms",
@@ -180,7 +180,7 @@ fn timeseries_plots_render_as_png_and_svg() {
             "checkerboard",
             "#1*",
             "#2",
-            "a/g, z (log)",
+            "a/g, jump m/s (log)",
             "departure (of rho g depth, log)",
         ],
     );

@@ -15,6 +15,7 @@ pub mod mixture_rows;
 pub mod mixture_scene;
 pub mod mode_decay;
 pub mod particle_files;
+pub mod plant_checkpoint;
 pub mod replay;
 pub mod ringing;
 pub mod slosh;

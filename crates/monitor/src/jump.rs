@@ -1,0 +1,308 @@
+//! The velocity-jump rule (docs/physics.md section 4b). A kick is a
+//! velocity change the local flow does not share: each step, each
+//! particle's change v - v_prev is set against the local flow's, the
+//! component-wise median of the mean changes of the cells 2 to
+//! `jump_ring_cells` cells away (a patch up to a few cells wide cannot drag
+//! that median along; beyond a wall, the wall's mirror image of the cells
+//! inside, as the boundary condition has it), with 1.4826 times their
+//! median absolute deviation as the flow's own spread. A particle whose
+//! change departs by at least `jump_speed` and `jump_z` spreads, and whose
+//! kinetic energy grew, jumped (a kick adds kinetic energy; a particle an
+//! impact stops does not count). The threshold is a velocity, not an
+//! acceleration: an impulse dv is the same jump at every time step and
+//! formulation, where an acceleration dv / dt is not.
+//!
+//! A jump is *calm* when the ring's median velocity change over the last
+//! `calm_seconds` stays below `calm_change`: no impact, rebound or splash
+//! (the local flow stopping or turning) explains it. A calm jump is a kick
+//! by this rule; any other is physics unless the energy test says it added
+//! energy. The rule keeps a few snapshots of the velocities for that window.
+
+use crate::geometry::Geometry;
+use crate::stats::lower_median;
+use solver::{StateView, Vec2};
+
+/// A particle's jump: its slot now and how far its change departs from the
+/// local flow's (m/s).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Jump {
+    pub p: u32,
+    pub residual: f64,
+    /// The local flow was calm: the ring's median velocity change over the
+    /// last `calm_seconds` stayed below `calm_change` (no impact, no
+    /// rebound, no splash around it).
+    pub calm: bool,
+}
+
+/// The particles' velocities at a time (ids ascending, as the solver keeps them).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Snapshot {
+    pub t: f64,
+    pub ids: Vec<u32>,
+    pub v: Vec<Vec2>,
+}
+
+/// The rule's thresholds (`MonitorConfig`'s `jump_*`).
+#[derive(Clone, Copy, Debug)]
+pub struct JumpRule {
+    /// Smallest departure that counts (m/s) ...
+    pub speed: f64,
+    /// ... and in spreads of the local flow.
+    pub z: f64,
+    /// Outer radius (cells) of the ring the local flow is read from.
+    pub ring: usize,
+    /// The calm window (s) and the ring's velocity change over it below
+    /// which the local flow is calm (m/s).
+    pub calm_seconds: f64,
+    pub calm_change: f64,
+}
+
+/// Cells of the ring a verdict needs (else the cell is left unjudged: spray).
+pub const MIN_RING_CELLS: usize = 6;
+
+/// What the rule knows of a cell this step: the ring's median change and
+/// its spread (NaN when unjudged), and its median change over the calm window.
+#[derive(Clone, Copy, Debug, Default)]
+struct Local {
+    change: Vec2,
+    spread: f64,
+    window_change: f64,
+}
+
+/// The rule's snapshots (its only memory) and per-step scratch.
+#[derive(Clone, Debug, Default)]
+pub struct Jumps {
+    /// The velocities every half calm window, newest first (at most three).
+    pub snaps: Vec<Snapshot>,
+    /// This step's jumps.
+    found: Vec<Jump>,
+    /// Per cell: mass, mass-weighted mean change this step and over the calm window.
+    mass: Vec<f64>,
+    change: Vec<Vec2>,
+    window_change: Vec<Vec2>,
+    /// Per cell: whether `local` holds this step's figures.
+    judged: Vec<bool>,
+    local: Vec<Local>,
+    /// Per cell: the mean change of its 9 x 9-cell block (the cheap first test).
+    block: Vec<Vec2>,
+    sat_m: Vec<f64>,
+    sat_p: Vec<Vec2>,
+    /// The ring's cells, each with whether it is a wall's image in x and y.
+    ring: Vec<(usize, [bool; 2])>,
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+    dev: Vec<f64>,
+}
+
+impl Jumps {
+    /// This step's jumps: the particles whose velocity change departs from
+    /// the local flow's.
+    pub fn observe(&mut self, geom: &Geometry, v: &StateView, rule: &JumpRule) -> &[Jump] {
+        self.snapshot(v, rule.calm_seconds);
+        self.cell_sums(geom, v, rule.calm_seconds);
+        self.block_means(geom);
+        let cells = geom.cell_count();
+        self.judged.clear();
+        self.judged.resize(cells, false);
+        self.local.resize(cells, Local::default());
+        self.found.clear();
+        for p in 0..v.x.len() {
+            let dv = v.v[p] - v.v_prev[p];
+            let c = geom.cell_index(v.x[p]);
+            // The local flow is read only where a particle departs from its
+            // block's mean by half the threshold.
+            let departure = (dv - self.block[c]).norm();
+            if departure.is_nan() || departure < 0.5 * rule.speed {
+                continue;
+            }
+            if !self.judged[c] {
+                self.judged[c] = true;
+                self.local[c] = self.local_flow(geom, c, rule.ring);
+            }
+            let l = self.local[c];
+            let residual = (dv - l.change).norm();
+            let gaining = v.v[p].norm_squared() > v.v_prev[p].norm_squared();
+            if gaining && residual.is_finite() && residual >= rule.speed.max(rule.z * l.spread) {
+                self.found.push(Jump {
+                    p: p as u32,
+                    residual,
+                    calm: l.window_change < rule.calm_change,
+                });
+            }
+        }
+        &self.found
+    }
+
+    /// Keeps the velocities every half calm window (the three newest).
+    fn snapshot(&mut self, v: &StateView, window: f64) {
+        let due = self
+            .snaps
+            .first()
+            .is_none_or(|s| v.time - s.t >= 0.5 * window * (1.0 - 1e-9));
+        if due {
+            // The oldest's buffers are reused once there are three.
+            let mut s = if self.snaps.len() >= 3 {
+                self.snaps.pop().unwrap_or_default()
+            } else {
+                Snapshot::default()
+            };
+            s.t = v.time;
+            s.ids.clear();
+            s.ids.extend_from_slice(v.id);
+            s.v.clear();
+            s.v.extend_from_slice(v.v);
+            self.snaps.insert(0, s);
+        }
+    }
+
+    /// Per cell, the mass-weighted mean change of its particles this step,
+    /// and since the newest snapshot at least half a calm window old, or
+    /// else the oldest (matched by id; a particle it lacks counts as unchanged).
+    fn cell_sums(&mut self, geom: &Geometry, v: &StateView, window: f64) {
+        let n = geom.cell_count();
+        self.mass.clear();
+        self.mass.resize(n, 0.0);
+        self.change.clear();
+        self.change.resize(n, Vec2::zeros());
+        self.window_change.clear();
+        self.window_change.resize(n, Vec2::zeros());
+        // Early in a run, the oldest there is (the window is still shorter).
+        let reference = self
+            .snaps
+            .iter()
+            .find(|s| v.time - s.t >= 0.5 * window * (1.0 - 1e-9))
+            .or(self.snaps.last().filter(|s| s.t < v.time));
+        let mut k = 0;
+        for p in 0..v.x.len() {
+            let c = geom.cell_index(v.x[p]);
+            let m = v.mass[p];
+            self.mass[c] += m;
+            self.change[c] += m * (v.v[p] - v.v_prev[p]);
+            if let Some(s) = reference {
+                while k < s.ids.len() && s.ids[k] < v.id[p] {
+                    k += 1;
+                }
+                if k < s.ids.len() && s.ids[k] == v.id[p] {
+                    self.window_change[c] += m * (v.v[p] - s.v[k]);
+                }
+            }
+        }
+        for c in 0..n {
+            if self.mass[c] > 0.0 {
+                self.change[c] /= self.mass[c];
+                self.window_change[c] /= self.mass[c];
+            }
+        }
+    }
+
+    /// Each cell's 9 x 9-cell block mean change, from a summed-area table.
+    fn block_means(&mut self, geom: &Geometry) {
+        let [nx, ny] = geom.cells;
+        let w = nx + 1;
+        self.sat_m.clear();
+        self.sat_m.resize(w * (ny + 1), 0.0);
+        self.sat_p.clear();
+        self.sat_p.resize(w * (ny + 1), Vec2::zeros());
+        for j in 0..ny {
+            for i in 0..nx {
+                let (c, k) = (i + nx * j, (i + 1) + w * (j + 1));
+                let m = self.mass[c];
+                self.sat_m[k] = m + self.sat_m[k - 1] + self.sat_m[k - w] - self.sat_m[k - w - 1];
+                self.sat_p[k] = m * self.change[c] + self.sat_p[k - 1] + self.sat_p[k - w]
+                    - self.sat_p[k - w - 1];
+            }
+        }
+        self.block.clear();
+        for j in 0..ny {
+            for i in 0..nx {
+                let (i0, j0) = (i.saturating_sub(4), j.saturating_sub(4));
+                let (i1, j1) = ((i + 5).min(nx), (j + 5).min(ny));
+                let (a, b, c, d) = (i0 + w * j0, i1 + w * j0, i0 + w * j1, i1 + w * j1);
+                let m = self.sat_m[d] - self.sat_m[c] - self.sat_m[b] + self.sat_m[a];
+                let p = self.sat_p[d] - self.sat_p[c] - self.sat_p[b] + self.sat_p[a];
+                self.block.push(if m > 0.0 { p / m } else { Vec2::zeros() });
+            }
+        }
+    }
+
+    /// Cell `c`'s local flow: the ring's median change and spread (NaN:
+    /// fewer than `MIN_RING_CELLS` cells with material).
+    fn local_flow(&mut self, geom: &Geometry, c: usize, ring: usize) -> Local {
+        let [nx, ny] = geom.cells;
+        let r = ring as i64;
+        let (ci, cj) = ((c % nx) as i64, (c / nx) as i64);
+        self.ring.clear();
+        for j in cj - r..=cj + r {
+            for i in ci - r..=ci + r {
+                if (i - ci).abs().max((j - cj).abs()) < 2 {
+                    continue;
+                }
+                // Beyond a wall, the wall's mirror image of the cell inside
+                // (the boundary condition is a mirror): normal component flipped.
+                let (o, flip) = image(i, nx, geom.periodic[0])
+                    .zip(image(j, ny, geom.periodic[1]))
+                    .map_or((usize::MAX, [false; 2]), |((ii, fx), (jj, fy))| {
+                        (ii + nx * jj, [fx, fy])
+                    });
+                if o != usize::MAX && self.mass[o] > 0.0 {
+                    self.ring.push((o, flip));
+                }
+            }
+        }
+        if self.ring.len() < MIN_RING_CELLS {
+            return Local {
+                change: Vec2::repeat(f64::NAN),
+                spread: f64::NAN,
+                window_change: f64::NAN,
+            };
+        }
+        let (change, spread) = self.median_and_spread(false);
+        let (window, _) = self.median_and_spread(true);
+        Local {
+            change,
+            spread,
+            window_change: window.norm(),
+        }
+    }
+
+    /// The ring's component-wise median of the cells' changes (this step's,
+    /// or over the calm window) and 1.4826 times the median distance from it.
+    fn median_and_spread(&mut self, over_window: bool) -> (Vec2, f64) {
+        let field = if over_window {
+            &self.window_change
+        } else {
+            &self.change
+        };
+        let at = |&(o, [fx, fy]): &(usize, [bool; 2])| {
+            let f: Vec2 = field[o];
+            Vec2::new(if fx { -f.x } else { f.x }, if fy { -f.y } else { f.y })
+        };
+        self.xs.clear();
+        self.xs.extend(self.ring.iter().map(|r| at(r).x));
+        self.ys.clear();
+        self.ys.extend(self.ring.iter().map(|r| at(r).y));
+        let centre = Vec2::new(lower_median(&mut self.xs), lower_median(&mut self.ys));
+        self.dev.clear();
+        self.dev
+            .extend(self.ring.iter().map(|r| (at(r) - centre).norm()));
+        (centre, 1.4826 * lower_median(&mut self.dev))
+    }
+}
+
+/// Cell index `k` along an axis of `n` cells: itself inside, wrapped on a
+/// periodic axis, else its mirror image across the wall (and true: the
+/// normal component flips); None beyond the image.
+fn image(k: i64, n: usize, periodic: bool) -> Option<(usize, bool)> {
+    let n = n as i64;
+    if (0..n).contains(&k) {
+        Some((k as usize, false))
+    } else if periodic {
+        Some((k.rem_euclid(n) as usize, false))
+    } else if k < 0 && -1 - k < n {
+        Some(((-1 - k) as usize, true))
+    } else if k >= n && 2 * n - 1 - k >= 0 {
+        Some(((2 * n - 1 - k) as usize, true))
+    } else {
+        None
+    }
+}

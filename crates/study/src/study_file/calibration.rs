@@ -1,0 +1,173 @@
+//! The `[calibration]` table: how `kick calibrate` plants kicks of known
+//! size in the study's cases (docs/usage.md, "Calibrating the detector").
+//! Each case runs clean first (its twin) and is checkpointed at `plant_t`;
+//! planted runs restart from that checkpoint with one patch per `[[patch]]`
+//! entry, `cells` x `cells` cells, and are judged over `window` seconds.
+
+use serde::{Deserialize, Serialize};
+use solver::{Direction, Placement};
+
+/// One placement of the calibration: where its patch goes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PatchSpec {
+    pub place: Placement,
+    /// The qualifying patch nearest this point (m).
+    pub near: [f64; 2],
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CalibrationSpec {
+    /// When the patches are planted (s): the first step that ends at or
+    /// after it is the twin's checkpoint, and the patches go in the step after.
+    pub plant_t: f64,
+    /// How long after the plant an event still counts as finding it (s).
+    #[serde(default = "CalibrationSpec::default_window")]
+    pub window: f64,
+    /// Patch sizes (cells a side).
+    pub sizes: Vec<usize>,
+    #[serde(default = "CalibrationSpec::default_direction")]
+    pub direction: Direction,
+    pub patch: Vec<PatchSpec>,
+    /// Bisect the smallest dv found between these speeds (m/s) ...
+    #[serde(default)]
+    pub bisect: Option<[f64; 2]>,
+    /// ... until the bracket's ratio is at most this.
+    #[serde(default = "CalibrationSpec::default_ratio")]
+    pub ratio: f64,
+    /// ... or plant exactly these speeds (m/s).
+    #[serde(default)]
+    pub dv: Vec<f64>,
+}
+
+type KeyError = (String, String);
+
+impl CalibrationSpec {
+    fn default_window() -> f64 {
+        0.1
+    }
+
+    fn default_direction() -> Direction {
+        Direction::Up
+    }
+
+    fn default_ratio() -> f64 {
+        1.2
+    }
+
+    /// Reads the table; Err: (dotted key, message).
+    pub fn from_toml(v: toml::Value) -> Result<Self, KeyError> {
+        let spec: CalibrationSpec = v
+            .try_into()
+            .map_err(|e: toml::de::Error| ("calibration".to_string(), e.message().to_string()))?;
+        spec.validate()?;
+        Ok(spec)
+    }
+
+    /// The window ends by `t_end` (checked by `kick calibrate` only: a
+    /// shorter `kick run` of the same study is fine).
+    pub fn fits(&self, t_end: f64) -> Result<(), KeyError> {
+        if self.plant_t + self.window <= t_end {
+            return Ok(());
+        }
+        Err((
+            "calibration.window".into(),
+            format!(
+                "plant_t + window = {} is out of range (allowed <= scene.t_end = {t_end})",
+                self.plant_t + self.window
+            ),
+        ))
+    }
+
+    fn validate(&self) -> Result<(), KeyError> {
+        let bad = |k: &str, m: String| Err((format!("calibration.{k}"), m));
+        if !(self.plant_t.is_finite() && self.plant_t > 0.0) {
+            return bad(
+                "plant_t",
+                format!("{} is out of range (allowed > 0 s)", self.plant_t),
+            );
+        }
+        if !(self.window.is_finite() && self.window > 0.0) {
+            return bad(
+                "window",
+                format!("{} is out of range (allowed > 0 s)", self.window),
+            );
+        }
+        if self.sizes.is_empty() || self.sizes.iter().any(|&s| !(1..=64).contains(&s)) {
+            return bad(
+                "sizes",
+                format!(
+                    "{:?}: allowed a non-empty list of 1 ..= 64 cells",
+                    self.sizes
+                ),
+            );
+        }
+        if self.patch.is_empty() {
+            return bad(
+                "patch",
+                "at least one [[calibration.patch]] is required".into(),
+            );
+        }
+        match (self.bisect, self.dv.is_empty()) {
+            (Some(_), false) | (None, true) => bad(
+                "bisect | dv",
+                "exactly one of them is required (a bracket to bisect, or the speeds to plant)"
+                    .into(),
+            ),
+            (Some([lo, hi]), true) => {
+                if !(lo.is_finite() && lo > 0.0 && hi > lo && hi.is_finite()) {
+                    return bad("bisect", format!("[{lo}, {hi}]: allowed 0 < lo < hi m/s"));
+                }
+                if !(self.ratio.is_finite() && self.ratio > 1.0) {
+                    return bad(
+                        "ratio",
+                        format!("{} is out of range (allowed > 1)", self.ratio),
+                    );
+                }
+                Ok(())
+            }
+            (None, false) => {
+                if let Some(v) = self.dv.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+                    return bad("dv", format!("{v} is out of range (allowed > 0 m/s)"));
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(extra: &str) -> Result<CalibrationSpec, KeyError> {
+        let text = format!(
+            "plant_t = 0.5\nsizes = [2]\n{extra}\n[[patch]]\nplace = \"bulk\"\nnear = [0.4, 0.15]\n"
+        );
+        let spec = CalibrationSpec::from_toml(text.parse::<toml::Table>().unwrap().into())?;
+        spec.fits(1.0)?;
+        Ok(spec)
+    }
+
+    #[test]
+    fn a_bracket_or_speeds_but_not_both() {
+        assert!(spec("bisect = [0.005, 0.32]").is_ok());
+        assert!(spec("dv = [0.05, 0.1]").is_ok());
+        assert_eq!(spec("").unwrap_err().0, "calibration.bisect | dv");
+        assert_eq!(
+            spec("bisect = [0.005, 0.32]\ndv = [0.1]").unwrap_err().0,
+            "calibration.bisect | dv"
+        );
+        assert_eq!(
+            spec("bisect = [0.3, 0.1]").unwrap_err().0,
+            "calibration.bisect"
+        );
+        assert_eq!(
+            spec("dv = [0.1]\nwindow = 0.6").unwrap_err().0,
+            "calibration.window"
+        );
+        assert_eq!(spec("dv = [-1.0]").unwrap_err().0, "calibration.dv");
+        assert_eq!(spec("dv = [0.1]\nhunch = 1").unwrap_err().0, "calibration");
+    }
+}
