@@ -18,18 +18,17 @@ use crate::output::files::write_atomic;
 use crate::output::summary::Summary;
 use crate::output::tables;
 use crate::run::case::{panic_message, progress_style, watches, with_threads};
-use crate::run::matrix::{run_matrix, MatrixOptions};
+use crate::run::matrix::{each_in_parallel, run_matrix, MatrixOptions};
 use crate::run::probes::plant_checkpoint::PLANT_CHECKPOINT;
 use crate::run::{Rows, RunOptions, Runner, Stepper};
 use crate::study_file::calibration::{CalibrationSpec, PatchSpec};
 use crate::study_file::{Case, Study};
 use indicatif::{ProgressBar, ProgressStyle};
-use monitor::{Cause, CellRange, Event};
+use monitor::{Cause, CellRange, Event, Geometry};
 use polars::prelude::*;
 use serde::{Deserialize, Serialize};
-use solver::{Perturb, Planted, Solver};
+use solver::{Perturb, Planted, Solver, Vec2};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
@@ -149,29 +148,20 @@ fn run_tasks(
         .unwrap_or_else(|_| progress_style()),
     );
     bar.set_prefix("planted runs");
-    let next = AtomicUsize::new(0);
     let done = Mutex::new(Vec::<(usize, Result<Vec<DetectionRow>, String>)>::new());
-    std::thread::scope(|scope| {
-        for _ in 0..opts.jobs.max(1).min(tasks.len().max(1)) {
-            scope.spawn(|| loop {
-                let k = next.fetch_add(1, Ordering::SeqCst);
-                let Some(&(case, size)) = tasks.get(k) else {
-                    break;
-                };
-                let dir = opts.out.join(&case.name);
-                let rows = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    with_threads(Some(opts.threads_per_case), || {
-                        Ok(calibrate_case(case, &dir, size, spec))
-                    })
-                    .map_err(|e| e.to_string())
-                    .and_then(|r| r)
-                }))
-                .unwrap_or_else(|p| Err(format!("panic: {}", panic_message(p))));
-                bar.set_message(format!("last: {} {size}x{size}", case.name));
-                done.lock().expect("not poisoned").push((k, rows));
-                bar.inc(1);
-            });
-        }
+    each_in_parallel(tasks, opts.jobs, |k, &(case, size)| {
+        let dir = opts.out.join(&case.name);
+        let rows = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            with_threads(Some(opts.threads_per_case), || {
+                Ok(calibrate_case(case, &dir, size, spec))
+            })
+            .map_err(|e| e.to_string())
+            .and_then(|r| r)
+        }))
+        .unwrap_or_else(|p| Err(format!("panic: {}", panic_message(p))));
+        bar.set_message(format!("last: {} {size}x{size}", case.name));
+        done.lock().expect("not poisoned").push((k, rows));
+        bar.inc(1);
     });
     bar.finish_and_clear();
     let mut done = done.into_inner().expect("not poisoned");
@@ -428,13 +418,13 @@ fn planted_run(
     let mut runner = Runner::new(solver, watches, opts);
     let simulated = runner.run().map_err(|e| e.to_string())?;
     let (solver, _) = runner.into_parts();
-    let geom = Geom::of(case);
+    let geom = Geometry::from_scene(&case.solver.scene);
     let planted: Vec<(usize, CellRange, Placed)> = solver
         .planted()
         .iter()
         .map(|p: &Planted| {
             let placed = Some((p.region, p.step, p.particles));
-            (entries[p.entry], geom.cells_of(p.region), placed)
+            (entries[p.entry], cells_of(&geom, p.region), placed)
         })
         .collect();
     let reach = case.monitor.merge_cells;
@@ -500,30 +490,17 @@ fn find(
         })
 }
 
-/// The scene's grid, to turn a planted region into cells.
-struct Geom {
-    origin: [f64; 2],
-    cell: f64,
-}
-
-impl Geom {
-    fn of(case: &Case) -> Self {
-        Geom {
-            origin: case.solver.scene.origin,
-            cell: case.solver.scene.cell,
-        }
-    }
-
-    fn cells_of(&self, r: [f64; 4]) -> CellRange {
-        let at = |x: f64, o: f64| ((x - o) / self.cell).floor().max(0.0) as usize;
-        // The region's far edges sit on cell faces: the last cell is inside.
-        let last = |x: f64, o: f64| (((x - o) / self.cell).ceil() as usize).saturating_sub(1);
-        CellRange {
-            i_min: at(r[0], self.origin[0]),
-            j_min: at(r[1], self.origin[1]),
-            i_max: last(r[2], self.origin[0]).max(at(r[0], self.origin[0])),
-            j_max: last(r[3], self.origin[1]).max(at(r[1], self.origin[1])),
-        }
+/// The cells of a planted region (a block of whole cells): those holding
+/// its first and its last cell's centres.
+fn cells_of(geom: &Geometry, r: [f64; 4]) -> CellRange {
+    let half = 0.5 * geom.cell;
+    let (i_min, j_min) = geom.cell_of(Vec2::new(r[0] + half, r[1] + half));
+    let (i_max, j_max) = geom.cell_of(Vec2::new(r[2] - half, r[3] - half));
+    CellRange {
+        i_min,
+        j_min,
+        i_max: i_max.max(i_min),
+        j_max: j_max.max(j_min),
     }
 }
 

@@ -157,36 +157,27 @@ fn run_cases(todo: &[&Case], opts: &MatrixOptions) -> std::io::Result<()> {
         .expect("valid template"),
     );
     overall.set_prefix("matrix");
-    let next = AtomicUsize::new(0);
     let failures = Mutex::new(Vec::<String>::new());
-    std::thread::scope(|scope| {
-        for _ in 0..opts.jobs.max(1).min(todo.len().max(1)) {
-            scope.spawn(|| loop {
-                let k = next.fetch_add(1, Ordering::SeqCst);
-                let Some(case) = todo.get(k) else { break };
-                let bar = multi.insert_before(&overall, ProgressBar::new(1000));
-                bar.set_style(progress_style());
-                let ro = CaseOptions {
-                    threads: Some(opts.threads_per_case),
-                    bar: Some(bar.clone()),
-                    csv: opts.csv,
-                    plant_checkpoint: opts.plant_checkpoint,
-                };
-                let dir = opts.out.join(&case.name);
-                match run_case(case, &dir, &ro) {
-                    Ok(s) => {
-                        overall.set_message(format!("last: {} {}", case.name, s.status.as_str()))
-                    }
-                    Err(e) => failures
-                        .lock()
-                        .expect("not poisoned")
-                        .push(format!("{}: {e}", dir.display())),
-                }
-                bar.finish_and_clear();
-                multi.remove(&bar);
-                overall.inc(1);
-            });
+    each_in_parallel(todo, opts.jobs, |_, case| {
+        let bar = multi.insert_before(&overall, ProgressBar::new(1000));
+        bar.set_style(progress_style());
+        let ro = CaseOptions {
+            threads: Some(opts.threads_per_case),
+            bar: Some(bar.clone()),
+            csv: opts.csv,
+            plant_checkpoint: opts.plant_checkpoint,
+        };
+        let dir = opts.out.join(&case.name);
+        match run_case(case, &dir, &ro) {
+            Ok(s) => overall.set_message(format!("last: {} {}", case.name, s.status.as_str())),
+            Err(e) => failures
+                .lock()
+                .expect("not poisoned")
+                .push(format!("{}: {e}", dir.display())),
         }
+        bar.finish_and_clear();
+        multi.remove(&bar);
+        overall.inc(1);
     });
     overall.finish_and_clear();
     let failures = failures.into_inner().expect("not poisoned");
@@ -195,6 +186,22 @@ fn run_cases(todo: &[&Case], opts: &MatrixOptions) -> std::io::Result<()> {
     } else {
         Err(std::io::Error::other(failures.join("; ")))
     }
+}
+
+/// Calls `work` on every item, on `jobs` workers taking the items in order
+/// (each worker the next one free): the matrix's cases, the calibration's
+/// planted runs.
+pub fn each_in_parallel<T: Sync>(items: &[T], jobs: usize, work: impl Fn(usize, &T) + Sync) {
+    let next = AtomicUsize::new(0);
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.max(1).min(items.len().max(1)) {
+            scope.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::SeqCst);
+                let Some(item) = items.get(k) else { break };
+                work(k, item);
+            });
+        }
+    });
 }
 
 /// Joins the case folders of several matrix outputs (e.g. shards) into OUT's
