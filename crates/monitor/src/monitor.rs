@@ -172,6 +172,17 @@ impl Monitor {
         self.initial_mass
     }
 
+    /// The booked terms the method has, and each one's cumulative net
+    /// removal so far (J/m; negative: it added energy, net).
+    pub fn booked_terms(
+        &self,
+    ) -> (
+        crate::energy_budget::Terms,
+        &[f64; crate::energy_budget::TERMS],
+    ) {
+        (self.ledger.present, &self.ledger_terms)
+    }
+
     pub fn report(&self) -> &StepReport {
         &self.report
     }

@@ -33,6 +33,12 @@ pub enum Flow {
     /// compressive and rotational. Periodic on both axes; a uniform flow
     /// alone is an exact discrete steady state and seeds only round-off.
     GridSeed { share: f64, mode: u32 },
+    /// A standing sound wave along x in a closed box the body fills,
+    /// without gravity: u = U sin(k x), v = 0, k = m pi / W, at the instant
+    /// of largest velocity (uniform pressure). Linear acoustics: frequency
+    /// c k, amplitude decay (2/3) nu k^2 (the 3D deviator of plane strain,
+    /// no bulk viscosity).
+    SoundWave { amplitude: f64, mode: u32 },
 }
 
 impl Flow {
@@ -41,7 +47,8 @@ impl Flow {
         match *self {
             Flow::TaylorGreen { mode, .. }
             | Flow::StandingWave { mode, .. }
-            | Flow::GridSeed { mode, .. } => Some(mode),
+            | Flow::GridSeed { mode, .. }
+            | Flow::SoundWave { mode, .. } => Some(mode),
             Flow::ShearWave { .. } => None,
         }
     }
@@ -50,9 +57,9 @@ impl Flow {
     pub fn wavenumber(&self, rect: [f64; 4]) -> f64 {
         let (w, h) = (rect[2] - rect[0], rect[3] - rect[1]);
         match *self {
-            Flow::TaylorGreen { mode, .. } | Flow::StandingWave { mode, .. } => {
-                mode as f64 * PI / w
-            }
+            Flow::TaylorGreen { mode, .. }
+            | Flow::StandingWave { mode, .. }
+            | Flow::SoundWave { mode, .. } => mode as f64 * PI / w,
             Flow::ShearWave { .. } => 2.0 * PI / h,
             Flow::GridSeed { mode, .. } => 2.0 * PI * mode as f64 / w,
         }
@@ -68,7 +75,8 @@ impl Flow {
         match *self {
             Flow::TaylorGreen { amplitude, .. }
             | Flow::ShearWave { amplitude }
-            | Flow::StandingWave { amplitude, .. } => amplitude,
+            | Flow::StandingWave { amplitude, .. }
+            | Flow::SoundWave { amplitude, .. } => amplitude,
             Flow::GridSeed { share, .. } => share,
         }
     }
@@ -119,6 +127,7 @@ impl Flow {
                 let (sx, sy) = ((k * dx).sin(), (k * dy).sin());
                 Vec2::new(0.5 * (sx + sy), 0.5 * (sx - sy))
             }
+            Flow::SoundWave { .. } => Vec2::new((k * dx).sin(), 0.0),
         }
     }
 
@@ -143,6 +152,7 @@ impl Flow {
                 let h = 0.5 * ak;
                 Mat2::new(h * cx, h * cy, h * cx, -h * cy)
             }
+            Flow::SoundWave { .. } => Mat2::new(ak * cx, 0.0, 0.0, 0.0),
         }
     }
 
@@ -162,7 +172,8 @@ impl Flow {
     /// The flow is defined on this body of a scene with these periodic
     /// axes and gravity: a finite positive amplitude, a mode of at least 1,
     /// a square body for Taylor-Green and the grid seed, both axes periodic
-    /// for the shear wave and the grid seed, gravity for the standing wave.
+    /// for the shear wave and the grid seed, gravity for the standing wave,
+    /// none and walls on x for the sound wave.
     pub fn check(
         &self,
         rect: [f64; 4],
@@ -204,6 +215,10 @@ impl Flow {
             Flow::StandingWave { .. } if gravity <= 0.0 => {
                 Err(bad("kind", "standing_wave needs scene.gravity > 0"))
             }
+            Flow::SoundWave { .. } if gravity != 0.0 || periodic[0] => Err(bad(
+                "kind",
+                "sound_wave needs scene.gravity = 0 and walls on x (scene.periodic[0] = false)",
+            )),
             _ => Ok(()),
         }
     }
@@ -281,6 +296,23 @@ mod tests {
         assert!(div.abs() < 1e-7, "{div}");
     }
 
+    /// The sound wave has no normal velocity at the x walls, and mode 5 of
+    /// the 0.2 m box at h = 1 cm is the one with k h = pi / 4.
+    #[test]
+    fn sound_wave_is_walled_and_its_mode_sets_k() {
+        let f = Flow::SoundWave {
+            amplitude: 1e-3,
+            mode: 5,
+        };
+        for y in [0.0, 0.07, 0.2] {
+            assert!(f.velocity(Vec2::new(0.0, y), BOX, 0.0).x.abs() < 1e-18);
+            assert!(f.velocity(Vec2::new(0.2, y), BOX, 0.0).x.abs() < 1e-17);
+            assert_eq!(f.velocity(Vec2::new(0.03, y), BOX, 0.0).y, 0.0);
+        }
+        assert!((f.wavenumber(BOX) * 0.01 - PI / 4.0).abs() < 1e-12);
+        assert_eq!(f.mode(), Some(5));
+    }
+
     /// The gradient is the velocity's, by central differences, for each flow.
     #[test]
     fn gradients_match_the_velocity_fields() {
@@ -305,6 +337,13 @@ mod tests {
                 Flow::GridSeed {
                     share: 0.01,
                     mode: 3,
+                },
+                BOX,
+            ),
+            (
+                Flow::SoundWave {
+                    amplitude: 0.001,
+                    mode: 5,
                 },
                 BOX,
             ),
@@ -360,6 +399,13 @@ mod tests {
                 .key,
             "scene.body[0].flow.share"
         );
+        let sound = Flow::SoundWave {
+            amplitude: 1e-3,
+            mode: 5,
+        };
+        assert!(sound.check(wide, [false, false], 0.0, key).is_ok());
+        assert!(sound.check(wide, [false, false], 9.81, key).is_err());
+        assert!(sound.check(wide, [true, false], 0.0, key).is_err());
         assert_eq!(seed(1e-4).drift_scale([3.0, 4.0]), 5.0);
         assert_eq!(tg(1).drift_scale([3.0, 4.0]), 1.0);
     }

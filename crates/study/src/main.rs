@@ -80,6 +80,9 @@ struct MatrixArgs {
     /// Run only the cases at positions I, I+N, I+2N, ... (0 <= I < N).
     #[arg(long, value_name = "I/N", value_parser = matrix::parse_shard)]
     shard: Option<(usize, usize)>,
+    /// Run only the cases whose name contains TEXT (repeat: every one).
+    #[arg(long, value_name = "TEXT")]
+    only: Vec<String>,
     /// Skip cases whose summary.json is already in OUT.
     #[arg(long)]
     resume: bool,
@@ -289,6 +292,7 @@ fn matrix_command(args: MatrixArgs) -> ExitCode {
         jobs,
         threads,
         shard,
+        only,
         resume,
         merge,
         set,
@@ -323,6 +327,7 @@ fn matrix_command(args: MatrixArgs) -> ExitCode {
         out: out.clone(),
         jobs,
         shard,
+        only,
         resume,
         csv,
         threads_per_case: threads.unwrap_or((cores / jobs).max(1)),

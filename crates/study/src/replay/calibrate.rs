@@ -105,6 +105,7 @@ pub fn calibrate(study: &Study, opts: &CalibrateOptions) -> std::io::Result<Dete
         out: opts.out.clone(),
         jobs: opts.jobs,
         shard: None,
+        only: vec![],
         resume: opts.resume,
         csv: false,
         threads_per_case: opts.threads_per_case,

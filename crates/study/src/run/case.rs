@@ -9,12 +9,14 @@ use crate::output::summary::{Summary, SCHEMA_VERSION};
 use crate::output::vtu;
 use crate::run::mixture;
 use crate::run::probes::checkpoint_ring::CheckpointRing;
+use crate::run::probes::energy_gain::EnergyGain;
 use crate::run::probes::event_frames::EventFrames;
 use crate::run::probes::mode_decay::ModeDecay;
 use crate::run::probes::particle_files::ParticleFiles;
 use crate::run::probes::plant_checkpoint::PlantCheckpoint;
 use crate::run::probes::ringing::Ringing;
 use crate::run::probes::slosh::Slosh;
+use crate::run::probes::sound_wave::SoundWave;
 use crate::run::probes::surge_front::SurgeFront;
 use crate::run::{Rows, RunOptions, Runner, Simulated, Stepper, Watch};
 use crate::study_file::Case;
@@ -118,6 +120,12 @@ fn simulate(case: &Case, dir: &Path, opts: &CaseOptions) -> std::io::Result<Simu
             }
             if let Some(slosh) = Slosh::new(&case.solver.scene, dir.to_path_buf(), opts.csv) {
                 runner.attach(slosh);
+            }
+            if let Some(gain) = EnergyGain::new(&case.solver.scene) {
+                runner.attach(gain);
+            }
+            if let Some(sound) = SoundWave::new(&case.solver.scene, dir.to_path_buf(), opts.csv) {
+                runner.attach(sound);
             }
             if let Some(ringing) = Ringing::new(&case.solver.scene, dir.to_path_buf(), opts.csv) {
                 runner.attach(ringing);

@@ -22,6 +22,8 @@ pub struct MatrixOptions {
     pub jobs: usize,
     /// (index, count): run the cases whose position in the study is index mod count.
     pub shard: Option<(usize, usize)>,
+    /// Run only the cases whose name contains every one of these.
+    pub only: Vec<String>,
     pub resume: bool,
     pub csv: bool,
     /// Solver threads per case (cases are the unit of parallelism).
@@ -85,6 +87,7 @@ pub fn run_matrix(study: &Study, opts: &MatrixOptions) -> std::io::Result<Matrix
         .enumerate()
         .filter(|(k, _)| opts.shard.is_none_or(|(i, n)| k % n == i))
         .map(|(_, c)| c)
+        .filter(|c| opts.only.iter().all(|part| c.name.contains(part.as_str())))
         .collect();
     let mut todo: Vec<&Case> = selected
         .iter()
@@ -128,6 +131,7 @@ fn write_manifest(
         "study": study.file.display().to_string(),
         "state": state,
         "shard": opts.shard.map(|(i, n)| format!("{i}/{n}")),
+        "only": opts.only,
         "jobs": opts.jobs,
         "threads_per_case": opts.threads_per_case,
         "cases": selected.iter().map(|c| c.name.clone()).collect::<Vec<_>>(),

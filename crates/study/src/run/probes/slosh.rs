@@ -144,35 +144,42 @@ impl Slosh {
     }
 }
 
-/// The zero crossings and the extremes of X - X(0), followed while the
-/// extremes stay above `PEAK_FLOOR` of the first.
+/// The zero crossings and the extremes of an oscillating signal (X - X(0)
+/// of the slosh, the sound wave's mode), followed while the extremes stay
+/// above `PEAK_FLOOR` of the first.
 #[derive(Debug, Default)]
-struct Swing {
-    crossings: Vec<f64>,
-    /// (t, |X - X(0)|) at each extreme, refined by a parabola through the
+pub(crate) struct Swing {
+    pub(crate) crossings: Vec<f64>,
+    /// (t, |d|) at each extreme, refined by a parabola through the
     /// largest sample and its neighbours.
-    extremes: Vec<(f64, f64)>,
-    followed_to: f64,
+    pub(crate) extremes: Vec<(f64, f64)>,
+    pub(crate) followed_to: f64,
 }
 
 impl Swing {
+    /// The swing of X - X(0), which starts at 0.
     fn of(samples: &[(f64, f64)]) -> Self {
-        let mut swing = Swing::default();
         let Some(&(_, x0)) = samples.first() else {
-            return swing;
+            return Swing::default();
         };
         let d: Vec<f64> = samples.iter().map(|s| s.1 - x0).collect();
         let t: Vec<f64> = samples.iter().map(|s| s.0).collect();
-        // Half swings: the stretches between sign changes (the first
-        // starts at t = 0, where X = X(0)).
-        let mut start = 1;
-        for i in 1..d.len() {
+        Swing::of_signal(&t, &d, 1)
+    }
+
+    /// The swing of `d` at times `t`, its first half swing from row `first`
+    /// (1 for a signal that starts at 0, 0 for one that starts at an extreme).
+    pub(crate) fn of_signal(t: &[f64], d: &[f64], first: usize) -> Self {
+        let mut swing = Swing::default();
+        // Half swings: the stretches between sign changes.
+        let mut start = first;
+        for i in first..d.len() {
             // A row exactly at zero counts as positive, so no crossing is missed.
             let closes = i + 1 == d.len() || (d[i] >= 0.0) != (d[i + 1] >= 0.0);
             if !closes || i < start {
                 continue;
             }
-            let Some(extreme) = refined_extreme(&t, &d, start, i) else {
+            let Some(extreme) = refined_extreme(t, d, start, i) else {
                 break;
             };
             let first = swing.extremes.first().map_or(extreme.1, |e| e.1);
@@ -190,7 +197,7 @@ impl Swing {
     }
 
     /// Twice the slope of the crossing times against their count.
-    fn period(&self) -> Option<f64> {
+    pub(crate) fn period(&self) -> Option<f64> {
         if self.crossings.len() < 3 {
             return None;
         }
@@ -203,7 +210,7 @@ impl Swing {
         line_fit(&pts).map(|(slope, _)| 2.0 * slope)
     }
 
-    fn decay_rate(&self) -> Option<f64> {
+    pub(crate) fn decay_rate(&self) -> Option<f64> {
         if self.extremes.len() < 3 {
             return None;
         }
