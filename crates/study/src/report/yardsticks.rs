@@ -45,11 +45,7 @@ pub const SOUND_DAMPER_RATE: f64 = 1.0;
 /// decays faster than this (1/s) at the reference point, twice the modern
 /// baseline's 692 /s (measured before the rule was fixed).
 pub const GRID_DAMPER_RATE: f64 = 1384.0;
-/// A *pump*: the motion's energy grows by more than this share of the
-/// wave's, over 5 s or over any 1 s, in an inviscid yardstick.
-pub const PUMP_SHARE: f64 = 0.01;
-/// *Cycling*: the booked terms move more energy than the wave holds.
-pub const CYCLING_SHARE: f64 = 1.0;
+pub use study::run::probes::energy_gain::{CYCLING_SHARE, PUMP_SHARE};
 /// The test of the mode fit moves every rate by this share.
 const RATE_SHIFT: f64 = 0.01;
 /// A mode whose projection comes back above this share after its fit
@@ -88,9 +84,10 @@ pub struct Yardstick {
     pub grid_k: [Option<f64>; 2],
     /// The largest growth of the motion's energy (over 5 s, or over any
     /// 1 s) over the inviscid yardsticks, as a share of the wave's, and the
-    /// largest energy the booked terms moved over the wave's.
+    /// largest energy the booked terms cycled (the smaller of what they
+    /// added and removed) over the wave's.
     pub energy_growth: Option<f64>,
-    pub booked_moved: Option<f64>,
+    pub booked_cycled: Option<f64>,
 }
 
 /// What a method is, by the yardsticks' rules.
@@ -139,7 +136,7 @@ impl Yardstick {
     }
 
     pub fn is_cycling(&self) -> Option<bool> {
-        self.booked_moved.map(|m| m > CYCLING_SHARE)
+        self.booked_cycled.map(|m| m > CYCLING_SHARE)
     }
 
     /// Damper by any rule, pump by the energy's growth; accurate only when
@@ -325,11 +322,15 @@ impl Yardsticks {
     /// The inviscid sound wave's figures, and every inviscid yardstick's
     /// energy growth and booked terms (the largest over the yardsticks).
     fn sound_and_energy(&mut self, id: &str, s: &Summary) {
-        if viscous(s) {
+        let (sound, gain) = (
+            s.metrics.check::<SoundWaveFigures>(),
+            s.metrics.check::<EnergyGainFigures>(),
+        );
+        if viscous(s) || (sound.is_none() && gain.is_none()) {
             return;
         }
         let e = self.by_method.entry(id.to_string()).or_default();
-        if let Some(c) = s.metrics.check::<SoundWaveFigures>() {
+        if let Some(c) = sound {
             if mode(s) == Some(1) {
                 e.sound_frequency_error = c.frequency_error;
                 e.sound_excess_rate = c.decay_rate.map(|r| r - c.decay_theory);
@@ -338,15 +339,11 @@ impl Yardsticks {
                 e.sound_excess_nu_pi4 = c.excess_viscosity;
             }
         }
-        if let Some(g) = s.metrics.check::<EnergyGainFigures>() {
-            let growth = g
-                .growth
-                .into_iter()
-                .chain(g.largest_growth_1s)
-                .reduce(f64::max);
+        if let Some(g) = gain {
+            let growth = g.largest_growth();
             let most = |a: Option<f64>, b: Option<f64>| a.into_iter().chain(b).reduce(f64::max);
             e.energy_growth = most(e.energy_growth, growth);
-            e.booked_moved = most(e.booked_moved, Some(g.booked_moved));
+            e.booked_cycled = most(e.booked_cycled, Some(g.booked_cycled()));
         }
     }
 
@@ -389,7 +386,7 @@ impl Yardsticks {
                 fill(&mut e.grid_k[i], o.grid_k[i]);
             }
             fill(&mut e.energy_growth, o.energy_growth);
-            fill(&mut e.booked_moved, o.booked_moved);
+            fill(&mut e.booked_cycled, o.booked_cycled);
         }
         self
     }
@@ -614,6 +611,83 @@ mod tests {
         );
         assert_eq!(base.is_damper(), Some(true));
         assert!((base.nu_phys.unwrap() / nu - 1.0).abs() < 1e-9);
+    }
+
+    /// The verdict's rules: accurate with every figure measured and none
+    /// over its line; a damper by the sound or by the grid scale whatever
+    /// its nu_num; a pump by the motion's growth; undecided without the
+    /// grid-scale figure; and the higher modes stay out of the nu_num fit.
+    #[test]
+    fn each_rule_decides_the_verdict_it_names() {
+        use study::output::summary::Metrics;
+        let k = |m: f64| m * std::f64::consts::PI / 0.2;
+        let tg = |rate: f64, m: u64| {
+            move |x: &mut Metrics| {
+                x.set_check(&ModeDecayFigures {
+                    k: k(m as f64),
+                    rate: Some(rate),
+                    later_max_ratio: 0.01,
+                    ..Default::default()
+                })
+            }
+        };
+        let method = |name: &str, sound_rate: f64, grid: Option<f64>, growth: f64| {
+            let mut rows = vec![
+                summary(name, 1, 0.0, tg(2.0 * k(1.0).powi(2) * 1e-5, 1)),
+                summary(name, 2, 0.0, tg(2.0 * k(2.0).powi(2) * 1.2e-5, 2)),
+                summary(name, 1, 0.5, tg(2.0 * k(1.0).powi(2) * 5.1e-4, 1)),
+                summary(name, 1, 0.0, move |x: &mut Metrics| {
+                    x.set_check(&SoundWaveFigures {
+                        k: k(1.0),
+                        kh: k(1.0) * CELL,
+                        frequency_error: Some(-0.003),
+                        decay_rate: Some(sound_rate),
+                        excess_viscosity: Some(sound_rate / (2.0 / 3.0 * k(1.0).powi(2))),
+                        ..Default::default()
+                    });
+                    x.set_check(&EnergyGainFigures {
+                        wave_energy: 1.0,
+                        growth: Some(growth),
+                        largest_growth_1s: Some(growth.max(0.0)),
+                        ..Default::default()
+                    });
+                }),
+            ];
+            if let Some(rate) = grid {
+                rows.push(summary(name, 5, 0.0, tg(rate, 5)));
+            }
+            let y = Yardsticks::of(&rows);
+            y.of_method(&rows[0].summary).unwrap().clone()
+        };
+        let accurate = method("apic", 0.14, Some(692.0), -0.3);
+        assert_eq!(accurate.grid_rate[0], Some(692.0));
+        assert!(
+            (accurate.nu_num.unwrap() / 1e-5 - 1.0).abs() < 0.5,
+            "{accurate:?}"
+        );
+        assert_eq!(accurate.verdict(), Verdict::Accurate, "{accurate:?}");
+        let sound = method("av", 4.8, Some(700.0), -0.3);
+        assert_eq!(
+            (sound.verdict(), sound.damps()),
+            (Verdict::Damper, vec!["sound"])
+        );
+        let grid = method("pic", 0.1, Some(20000.0), -0.9);
+        assert_eq!(
+            (grid.verdict(), grid.damps()),
+            (Verdict::Damper, vec!["grid scale"])
+        );
+        assert_eq!(
+            method("pump", 0.1, Some(600.0), 0.05).verdict(),
+            Verdict::Pump
+        );
+        assert_eq!(
+            method("both", 5.0, Some(600.0), 0.05).verdict(),
+            Verdict::DamperAndPump
+        );
+        assert_eq!(
+            method("unknown", 0.1, None, -0.3).verdict(),
+            Verdict::Undecided
+        );
     }
 
     /// `j_bar = true` beside its settings is the same method as the

@@ -1,7 +1,7 @@
 //! The study crate's integration tests, one binary: the `kick` CLI end to
 //! end (runs, matrices, reproduction, explanation, bad input), the
-//! two-phase runs, the report in a browser, and the workspace's module
-//! graph.
+//! two-phase runs, the report in a browser, the yardsticks, and the
+//! workspace's module graph.
 
 mod calibrate;
 mod cli;
@@ -9,3 +9,4 @@ mod common;
 mod module_graph;
 mod report_browser;
 mod run_mixture;
+mod yardsticks;

@@ -211,7 +211,7 @@ pub fn methods_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
     let mut headers: Vec<String> = HEADERS.map(String::from).to_vec();
     if !sticks.is_empty() {
         page.p(&format!("The yardsticks a damper cannot pass (docs/physics.md section 7), measured for the same method (the same resolved method settings and particles per cell) at h = {} cm and K = {} MPa: from the walled Taylor-Green vortex, the fluid's viscosity as the method sees it (nu_phys, mode 1) and the method's own dissipation nu_num and beta (least squares of rate / (2 k²) = nu_num + beta k² over the inviscid rates of every mode run), both over the fluid's nu; from the sloshing tank at the viscous run, the period error against linear theory and the decay rate over 2 nu k²; from the surge front (viscous, free-slip floor) the early RMS error in Z after the best time shift and the late front speed dZ/dT (the data about 1.7). A method whose nu_num exceeds {} nu by more than its uncertainty (the larger of its movement when the rates move by 1 % and, from three modes, when the highest mode is left out) is a damper: whatever its kicks and late departure, it gets there by taking the flow's energy. Where nu_num, give or take its uncertainty, straddles that share, the verdict is undecided at this h.", 100.0 * yardsticks::CELL, yardsticks::BULK_MODULUS / 1e6, yardsticks::DAMPER_SHARE));
-        page.p(&format!("Beside them: from the standing sound wave in a closed box (inviscid), the frequency error against c k and the excess decay as a viscosity, (rate - (2/3) nu k²) / ((2/3) k²), over nu, at mode 1 and at k h = π/4; from the inviscid Taylor-Green modes near k h = π/4 and π/2, the measured decay rates at {} MPa and at {} MPa (read as measured: the line nu_num + beta k² bends there); from every inviscid yardstick, the largest growth of the motion's energy (kinetic, potential and stored above the water at rest, averaged over an energy period, over 5 s or over any 1 s) as a share of the wave's, and the largest energy the booked terms moved (added and removed, each by its net over an energy period) over the wave's. The verdict, its rules fixed before the runs: a damper by nu_num (above), by the sound (mode 1's excess decay above {} /s: it loses 63 % of its amplitude within the dam break's second) or by the grid scale (the π/4 mode's rate above {} /s, twice the modern baseline's); a pump when the motion's energy grows by more than {} % of the wave's; accurate when every rule was measured and none fired; undecided otherwise. A method whose booked terms move more than the wave's energy also cycles.", yardsticks::BULK_MODULUS / 1e6, yardsticks::STIFF_BULK_MODULUS / 1e6, yardsticks::SOUND_DAMPER_RATE, yardsticks::GRID_DAMPER_RATE, 100.0 * yardsticks::PUMP_SHARE));
+        page.p(&format!("Beside them: from the standing sound wave in a closed box (inviscid), the frequency error against c k and the excess decay as a viscosity, (rate - (2/3) nu k²) / ((2/3) k²), over nu, at mode 1 and at k h = π/4; from the inviscid Taylor-Green modes near k h = π/4 and π/2, the measured decay rates at {} MPa and at {} MPa (read as measured: the line nu_num + beta k² bends there); from every inviscid yardstick, the largest growth of the motion's energy (kinetic, potential and stored above the water at rest, averaged over an energy period, over 5 s or over any 1 s) as a share of the wave's, and the largest energy the booked terms cycled (the smaller of what they added and what they removed, each by its net over an energy period) over the wave's. The verdict, its rules fixed before the runs: a damper by nu_num (above), by the sound (mode 1's excess decay above {} /s: it loses 63 % of its amplitude within the dam break's second) or by the grid scale (the π/4 mode's rate above {} /s, twice the modern baseline's); a pump when the motion's energy grows by more than {} % of the wave's; accurate when every rule was measured and none fired; undecided otherwise. A method whose booked terms put in and take out more than the wave's energy also cycles.", yardsticks::BULK_MODULUS / 1e6, yardsticks::STIFF_BULK_MODULUS / 1e6, yardsticks::SOUND_DAMPER_RATE, yardsticks::GRID_DAMPER_RATE, 100.0 * yardsticks::PUMP_SHARE));
         headers.extend(YARDSTICK_HEADERS.map(String::from));
     }
     let rows: Vec<(String, Vec<Cell>)> = groups
@@ -242,7 +242,7 @@ const YARDSTICK_HEADERS: [&str; 15] = [
     "grid rate k h = π/2 (1/s)",
     "grid rates at 15 MPa (1/s)",
     "energy growth, inviscid",
-    "booked moved / wave",
+    "booked cycled / wave",
     "verdict",
 ];
 
@@ -281,7 +281,7 @@ fn yardstick_cells(sticks: &Yardsticks, runs: &[&Row]) -> Vec<Cell> {
             format!("{x:.0}")
         }),
         num(y.energy_growth, &|x| format!("{:+.1} %", 100.0 * x)),
-        num(y.booked_moved, &|x| format!("{x:.2}")),
+        num(y.booked_cycled, &|x| format!("{x:.2}")),
         Cell::Text(verdict_text(&y)),
     ]
 }
