@@ -341,9 +341,8 @@ impl Yardsticks {
         }
         if let Some(g) = gain {
             let growth = g.largest_growth();
-            let most = |a: Option<f64>, b: Option<f64>| a.into_iter().chain(b).reduce(f64::max);
-            e.energy_growth = most(e.energy_growth, growth);
-            e.booked_cycled = most(e.booked_cycled, Some(g.booked_cycled()));
+            e.energy_growth = larger(e.energy_growth, growth);
+            e.booked_cycled = larger(e.booked_cycled, Some(g.booked_cycled()));
         }
     }
 
@@ -362,7 +361,8 @@ impl Yardsticks {
         self.by_method.get(&method_id(s))
     }
 
-    /// Both sets, `other`'s figures filling what this one lacks.
+    /// Both sets, `other`'s figures filling what this one lacks (the energy
+    /// figures: the larger of the two).
     pub fn merged(mut self, other: Yardsticks) -> Self {
         for (id, o) in other.by_method {
             let e = self.by_method.entry(id).or_default();
@@ -385,11 +385,17 @@ impl Yardsticks {
                 fill(&mut e.grid_rate_stiff[i], o.grid_rate_stiff[i]);
                 fill(&mut e.grid_k[i], o.grid_k[i]);
             }
-            fill(&mut e.energy_growth, o.energy_growth);
-            fill(&mut e.booked_cycled, o.booked_cycled);
+            // The energy figures are the largest over every yardstick.
+            e.energy_growth = larger(e.energy_growth, o.energy_growth);
+            e.booked_cycled = larger(e.booked_cycled, o.booked_cycled);
         }
         self
     }
+}
+
+/// The larger of two optional figures (either alone if the other is None).
+fn larger(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    a.into_iter().chain(b).reduce(f64::max)
 }
 
 /// A method's decay rate (None: no rate) and wavenumber by (mode, viscous).
