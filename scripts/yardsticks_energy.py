@@ -2,7 +2,7 @@
 """The yardsticks that see compression, the grid scale and energy gained
 (docs/physics.md section 7), per method, as markdown tables.
 
-Usage: scripts/yardsticks_energy.py [--sound DIR] [--grid DIR] [--energy DIR...] [--nu NU]
+Usage: scripts/yardsticks_energy.py [--sound DIR] [--grid DIR] [--energy DIR...] [--rest DIR] [--nu NU]
 
 --sound DIR: a `kick matrix` folder of studies/acoustic.toml: per method
   and K, the inviscid sound wave's frequency error and excess viscosity
@@ -14,6 +14,10 @@ Usage: scripts/yardsticks_energy.py [--sound DIR] [--grid DIR] [--energy DIR...]
   energy growth over its window and over any 1 s (shares of the wave's
   energy), the energy its booked terms cycled (the smaller of what they
   added and removed, over the wave's), and each term that moved energy.
+--rest DIR: the same cases run without their flow (the water at rest,
+  `--set scene.body=...` and `--csv`): each method's drift of the water's
+  energy at rest, the mean over the last energy period less the first's
+  (J/m), beside the energy table's case of the same name.
 
 NU defaults to 5e-4 m^2/s (the 0.5 Pa s water). Reads every
 CASE/summary.json. Standard library only.
@@ -101,9 +105,30 @@ def grid_table(folder):
         print(f"| {method} | " + " | ".join(fmt(x, ".4g") for x in r) + " |")
 
 
-def energy_table(folders):
-    print("| case | status | wave energy (J/m) | growth | window (s) | largest 1 s growth | booked cycled / wave | terms: added / removed (J/m) |")
-    print("|---|---|---|---|---|---|---|---|")
+def rest_drift(folder, period):
+    """Per case: the energy at rest's last-period mean less its first's (J/m)."""
+    import csv
+
+    drift = {}
+    for path in sorted(Path(folder).glob("*/timeseries.csv")):
+        rows = list(csv.DictReader(path.open()))
+        e = [
+            (float(r["t"]), sum(float(r[k]) for k in ("e_kin", "e_affine", "e_grav", "e_int")))
+            for r in rows
+        ]
+        if len(e) < 2:
+            continue
+        t0, t1 = e[0][0], e[-1][0]
+        first = [v for t, v in e if t <= t0 + period]
+        last = [v for t, v in e if t >= t1 - period]
+        drift[path.parent.name] = sum(last) / len(last) - sum(first) / len(first)
+    return drift
+
+
+def energy_table(folders, rest=None):
+    print("| case | status | wave energy (J/m) | growth | window (s) | largest 1 s growth | booked cycled / wave | at rest: drift / wave | terms: added / removed (J/m) |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    drifts = {}
     for folder in folders:
         for name, s in cases(folder):
             if (param(s, ".viscosity") or 0.0) > 0.0:
@@ -111,6 +136,8 @@ def energy_table(folders):
             g = s["metrics"].get("checks", {}).get("energy_gain")
             if not g:
                 continue
+            if rest and not drifts:
+                drifts.update(rest_drift(rest, g["energy_period_s"]))
             added = sum(t["added"] for t in g["booked"])
             removed = sum(t["removed"] for t in g["booked"])
             e0 = abs(g["wave_energy"]) or float("nan")
@@ -125,7 +152,8 @@ def energy_table(folders):
             print(
                 f"| {name} | {s['status']} | {g['wave_energy']:.4g} | {fmt(growth * 100 if growth is not None else None, '+.1f')} % "
                 f"| {window} | {fmt(largest * 100 if largest is not None else None, '+.1f')} % "
-                f"| {min(added, removed) / e0:.3g} | {terms} |"
+                f"| {min(added, removed) / e0:.3g} "
+                f"| {fmt(drifts[name] / e0 * 100 if name in drifts else None, '+.1f')} % | {terms} |"
             )
 
 
@@ -134,6 +162,7 @@ def main():
     ap.add_argument("--sound")
     ap.add_argument("--grid")
     ap.add_argument("--energy", nargs="*", default=[])
+    ap.add_argument("--rest")
     ap.add_argument("--nu", type=float, default=5e-4)
     a = ap.parse_args()
     if a.sound:
@@ -143,7 +172,7 @@ def main():
         grid_table(a.grid)
         print()
     if a.energy:
-        energy_table(a.energy)
+        energy_table(a.energy, a.rest)
 
 
 if __name__ == "__main__":
