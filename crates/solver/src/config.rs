@@ -607,6 +607,14 @@ impl SolverConfig {
         if let Some(flow) = &b.flow {
             let key = format!("scene.body[{i}].flow");
             flow.check(b.rect, s.periodic, s.gravity, &key)?;
+            // Linear acoustics' closed box: the water fills it, walls at its sides.
+            let fills = b.rect[..2].iter().all(|&v| v.abs() < 1e-9)
+                && (0..2).all(|k| (b.rect[k + 2] - s.size[k]).abs() < 1e-9 * s.size[k]);
+            check(
+                fills || !matches!(flow, crate::flows::Flow::SoundWave { .. }),
+                &format!("scene.body[{i}].rect"),
+                "must fill the box, [0, 0, box width, box height], under a sound_wave flow",
+            )?;
             check(
                 flow.drift_scale(b.velocity) > 0.0,
                 &format!("scene.body[{i}].velocity"),

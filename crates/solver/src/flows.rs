@@ -198,6 +198,7 @@ impl Flow {
             Flow::TaylorGreen { mode, .. }
             | Flow::StandingWave { mode, .. }
             | Flow::GridSeed { mode, .. }
+            | Flow::SoundWave { mode, .. }
                 if mode == 0 =>
             {
                 Err(bad("mode", "must be >= 1"))
@@ -406,6 +407,17 @@ mod tests {
         assert!(sound.check(wide, [false, false], 0.0, key).is_ok());
         assert!(sound.check(wide, [false, false], 9.81, key).is_err());
         assert!(sound.check(wide, [true, false], 0.0, key).is_err());
+        let silent = Flow::SoundWave {
+            amplitude: 1e-3,
+            mode: 0,
+        };
+        assert_eq!(
+            silent
+                .check(wide, [false, false], 0.0, key)
+                .unwrap_err()
+                .key,
+            "scene.body[0].flow.mode"
+        );
         assert_eq!(seed(1e-4).drift_scale([3.0, 4.0]), 5.0);
         assert_eq!(tg(1).drift_scale([3.0, 4.0]), 1.0);
     }

@@ -87,7 +87,7 @@ struct MatrixArgs {
     #[arg(long)]
     resume: bool,
     /// Join the case folders of these matrix outputs into OUT's tables.
-    #[arg(long, num_args = 1.., value_name = "DIR", conflicts_with_all = ["study", "shard", "resume"])]
+    #[arg(long, num_args = 1.., value_name = "DIR", conflicts_with_all = ["study", "shard", "resume", "only"])]
     merge: Vec<PathBuf>,
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -322,6 +322,14 @@ fn matrix_command(args: MatrixArgs) -> ExitCode {
     let jobs = jobs.unwrap_or(cores);
     if jobs == 0 || threads == Some(0) {
         return bad_input("--jobs and --threads: 0 is out of range (allowed >= 1)");
+    }
+    let named = |c: &study_file::Case| only.iter().all(|part| c.name.contains(part.as_str()));
+    if !only.is_empty() && !study.cases.iter().any(named) {
+        return bad_input(&format!(
+            "{}: --only {}: no case's name contains it (kick list shows the names)",
+            study.file.display(),
+            only.join(" --only ")
+        ));
     }
     let opts = matrix::MatrixOptions {
         out: out.clone(),

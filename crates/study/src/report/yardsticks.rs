@@ -76,6 +76,9 @@ pub struct Yardstick {
     pub sound_excess_rate: Option<f64>,
     pub sound_excess_nu: Option<f64>,
     pub sound_excess_nu_pi4: Option<f64>,
+    /// What the mode-1 sound keeps after a period, and that period (s):
+    /// the sound rule's reading of a wave gone before it has a rate.
+    pub sound_kept: Option<(f64, f64)>,
     /// The inviscid Taylor-Green decay rates (1/s) at k h = pi/4 and pi/2,
     /// at the reference K and at `STIFF_BULK_MODULUS`.
     pub grid_rate: [Option<f64>; 2],
@@ -119,10 +122,15 @@ impl Yardstick {
         if self.is_damper() == Some(true) {
             why.push("nu_num");
         }
-        if self
-            .sound_excess_rate
-            .is_some_and(|r| r > SOUND_DAMPER_RATE)
-        {
+        let gone_fast = || {
+            self.sound_kept
+                .is_some_and(|(kept, period)| kept < (-SOUND_DAMPER_RATE * period).exp())
+        };
+        let sound = match self.sound_excess_rate {
+            Some(r) => r > SOUND_DAMPER_RATE,
+            None => gone_fast(),
+        };
+        if sound {
             why.push("sound");
         }
         if self.grid_rate[0].is_some_and(|r| r > GRID_DAMPER_RATE) {
@@ -208,10 +216,15 @@ fn param(s: &Summary, suffix: &str) -> Option<f64> {
         .and_then(|(_, v)| v.as_f64())
 }
 
+/// At the reference cell and K (a case with no K is at it; K = "inf" is not).
 fn at_reference(s: &Summary) -> bool {
     let near = |v: Option<f64>, x: f64| v.is_some_and(|v| (v / x - 1.0).abs() < 1e-9);
-    near(param(s, "scene.cell"), CELL)
-        && (near(param(s, ".K"), BULK_MODULUS) || param(s, ".K").is_none())
+    let k = s
+        .params
+        .iter()
+        .find(|(k, _)| k.ends_with(".K"))
+        .map(|(_, v)| v);
+    near(param(s, "scene.cell"), CELL) && k.is_none_or(|k| near(k.as_f64(), BULK_MODULUS))
 }
 
 /// At the reference cell with the stiffer water.
@@ -335,6 +348,7 @@ impl Yardsticks {
                 e.sound_frequency_error = c.frequency_error;
                 e.sound_excess_rate = c.decay_rate.map(|r| r - c.decay_theory);
                 e.sound_excess_nu = c.excess_viscosity;
+                e.sound_kept = c.kept_after_period.map(|k| (k, c.period_theory_s));
             } else if grid_slot(c.kh) == Some(0) {
                 e.sound_excess_nu_pi4 = c.excess_viscosity;
             }
@@ -380,6 +394,7 @@ impl Yardsticks {
             fill(&mut e.sound_excess_rate, o.sound_excess_rate);
             fill(&mut e.sound_excess_nu, o.sound_excess_nu);
             fill(&mut e.sound_excess_nu_pi4, o.sound_excess_nu_pi4);
+            e.sound_kept = e.sound_kept.or(o.sound_kept);
             for i in 0..2 {
                 fill(&mut e.grid_rate[i], o.grid_rate[i]);
                 fill(&mut e.grid_rate_stiff[i], o.grid_rate_stiff[i]);
@@ -694,6 +709,14 @@ mod tests {
             method("unknown", 0.1, None, -0.3).verdict(),
             Verdict::Undecided
         );
+        // A sound gone before it has a rate: what it keeps after a period.
+        let gone = |kept: f64| Yardstick {
+            sound_excess_rate: None,
+            sound_kept: Some((kept, 0.0103)),
+            ..accurate.clone()
+        };
+        assert_eq!(gone(0.05).damps(), vec!["sound"]);
+        assert!(gone(0.999).damps().is_empty());
     }
 
     /// `j_bar = true` beside its settings is the same method as the

@@ -297,14 +297,21 @@ fn verdict_text(y: &yardsticks::Yardstick) -> String {
         why.push("cycles".into());
     }
     let over = |v: Option<f64>| v.zip(y.nu).map(|(v, nu)| v / nu);
-    match (v, over(y.nu_num), over(y.nu_num_uncertainty)) {
-        (yardsticks::Verdict::Undecided, Some(n), Some(u)) if y.is_damper().is_none() => format!(
+    let undecided = match (over(y.nu_num), over(y.nu_num_uncertainty)) {
+        (Some(n), Some(u)) if y.is_damper().is_none() => format!(
             "undecided: nu_num = {n:.2} ± {u:.2} nu straddles {}",
             yardsticks::DAMPER_SHARE
         ),
-        (yardsticks::Verdict::Undecided, _, _) => "undecided: not every yardstick measured".into(),
-        _ if why.is_empty() => v.name().into(),
-        _ => format!("{} ({})", v.name(), why.join(", ")),
+        _ => "undecided: not every yardstick measured".into(),
+    };
+    let name = match v {
+        yardsticks::Verdict::Undecided => undecided,
+        _ => v.name().into(),
+    };
+    if why.is_empty() {
+        name
+    } else {
+        format!("{name} ({})", why.join(", "))
     }
 }
 
