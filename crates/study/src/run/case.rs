@@ -121,7 +121,7 @@ fn simulate(case: &Case, dir: &Path, opts: &CaseOptions) -> std::io::Result<Simu
             if let Some(slosh) = Slosh::new(&case.solver.scene, dir.to_path_buf(), opts.csv) {
                 runner.attach(slosh);
             }
-            if let Some(gain) = EnergyGain::new(&case.solver.scene) {
+            if let Some(gain) = EnergyGain::new(&case.solver) {
                 runner.attach(gain);
             }
             if let Some(sound) = SoundWave::new(&case.solver.scene, dir.to_path_buf(), opts.csv) {

@@ -2,8 +2,12 @@
 //! yardstick flow (Taylor-Green, the shear wave, the standing wave, the
 //! sound wave). Each starts from the water at rest plus a velocity field,
 //! so the physical energy of the motion is E = kinetic (with APIC's affine
-//! part) + the rise of potential and stored energy since t = 0, and the
-//! wave's energy is E(0). No booked term is added back: a method that puts
+//! part) + potential + stored, less the same water's at rest, and the
+//! wave's energy is E(0). Under gravity the water at rest is a *rest twin*:
+//! the same case without its flow and its perturbations, stepped beside it
+//! with the same steps, so a method that moves its own rest state (lifts or
+//! drains the water) does not read as growth; without gravity it is the
+//! state at t = 0. No booked term is added back: a method that puts
 //! energy in shows it as growth. E is averaged over blocks of one energy
 //! period (pi / omega: kinetic and potential or stored energy trade twice a
 //! period), so the exchange does not read as growth. The figures: the
@@ -17,7 +21,7 @@ use crate::run::{Probe, Run, Simulated};
 use monitor::energy_budget::{term_name, Terms, TERMS, TRANSFER};
 use serde::{Deserialize, Serialize};
 use solver::flows::Flow;
-use solver::{Scene, Solver};
+use solver::{Solver, SolverConfig};
 
 /// The growth's window from the first block (s).
 pub const GROWTH_WINDOW_S: f64 = 5.0;
@@ -59,6 +63,9 @@ pub struct EnergyGainFigures {
     /// Every booked term's energy moved (added + removed) over the growth's
     /// window, over wave_energy.
     pub booked_moved: f64,
+    /// E was measured above a rest twin (else above the state at t = 0).
+    #[serde(default)]
+    pub rest_twin: bool,
 }
 
 impl Check for EnergyGainFigures {
@@ -106,6 +113,11 @@ pub struct EnergyGain {
     period: f64,
     /// E's rest part at t = 0 (potential + stored) and E(0).
     rest: Option<f64>,
+    /// The rest twin, stepped to the run's time (None: no gravity, or it
+    /// failed or could not follow a restored run).
+    twin: Option<Solver>,
+    twin_start: Option<f64>,
+    twin_used: bool,
     wave_energy: f64,
     present: Terms,
     /// The open block: its start, the time it spans and the integral of E;
@@ -119,8 +131,9 @@ pub struct EnergyGain {
 }
 
 impl EnergyGain {
-    /// For a scene with one body whose flow is a yardstick's.
-    pub fn new(scene: &Scene) -> Option<Self> {
+    /// For a case with one body whose flow is a yardstick's.
+    pub fn new(cfg: &SolverConfig) -> Option<Self> {
+        let scene = &cfg.scene;
         let [body] = scene.bodies.as_slice() else {
             return None;
         };
@@ -132,9 +145,18 @@ impl EnergyGain {
             Flow::GridSeed { .. } => return None,
             _ => material.wave_speed(1.0) * k,
         };
+        let twin = (scene.gravity > 0.0).then(|| {
+            let mut rest = cfg.clone();
+            rest.scene.bodies[0].flow = None;
+            rest.perturb.clear();
+            Solver::new(rest).ok()
+        });
         Some(EnergyGain {
             period: std::f64::consts::PI / omega,
             rest: None,
+            twin: twin.flatten(),
+            twin_start: None,
+            twin_used: false,
             wave_energy: 0.0,
             present: Default::default(),
             start: 0.0,
@@ -176,6 +198,7 @@ impl EnergyGain {
         let mut f = EnergyGainFigures {
             wave_energy: self.wave_energy,
             energy_period_s: self.period,
+            rest_twin: self.twin_used,
             ..Default::default()
         };
         let Some(first) = self.blocks.first() else {
@@ -260,17 +283,47 @@ fn energies(run: &Run<Solver>) -> (Energies, [f64; TERMS], Terms) {
     (e, terms, present)
 }
 
+impl EnergyGain {
+    /// The rest twin stepped to `t` (its steps the run's), and its energy
+    /// now (None without a twin).
+    fn rest_drift(&mut self, t: f64) -> Option<f64> {
+        let twin = self.twin.as_mut()?;
+        let dt = t - twin.time();
+        if dt > 0.0 && twin.step_with_dt(dt).is_err() {
+            self.twin = None;
+            return None;
+        }
+        let e = twin.view().energy;
+        Some(e.kinetic_with_affine() + e.gravitational + e.stored)
+    }
+
+    /// E's parts at `t`, the rest twin's drift since t = 0 taken off (booked
+    /// with the potential energy: only the sum counts).
+    fn observe_run(&mut self, run: &Run<Solver>) {
+        let (mut e, terms, present) = energies(run);
+        self.present = present;
+        let t = run.stepper.time();
+        if let Some(now) = self.rest_drift(t) {
+            let start = *self.twin_start.get_or_insert(now);
+            e.potential -= now - start;
+            self.twin_used = true;
+        }
+        self.observe(t, e, &terms);
+    }
+}
+
 impl Probe<Solver> for EnergyGain {
     fn begin(&mut self, run: &Run<Solver>) -> std::io::Result<()> {
-        let (e, terms, _) = energies(run);
-        self.observe(run.stepper.time(), e, &terms);
+        // A restored run starts past t = 0, where the twin cannot follow.
+        if run.stepper.time() > 0.0 {
+            self.twin = None;
+        }
+        self.observe_run(run);
         Ok(())
     }
 
     fn after_step(&mut self, run: &Run<Solver>, _: &[u32]) -> std::io::Result<()> {
-        let (e, terms, present) = energies(run);
-        self.present = present;
-        self.observe(run.stepper.time(), e, &terms);
+        self.observe_run(run);
         Ok(())
     }
 
@@ -288,6 +341,9 @@ mod tests {
         EnergyGain {
             period,
             rest: None,
+            twin: None,
+            twin_start: None,
+            twin_used: false,
             wave_energy: 0.0,
             present: Default::default(),
             start: 0.0,
