@@ -323,8 +323,7 @@ fn matrix_command(args: MatrixArgs) -> ExitCode {
     if jobs == 0 || threads == Some(0) {
         return bad_input("--jobs and --threads: 0 is out of range (allowed >= 1)");
     }
-    let named = |c: &study_file::Case| only.iter().all(|part| c.name.contains(part.as_str()));
-    if !only.is_empty() && !study.cases.iter().any(named) {
+    if !only.is_empty() && !study.cases.iter().any(|c| matrix::named(&only, &c.name)) {
         return bad_input(&format!(
             "{}: --only {}: no case's name contains it (kick list shows the names)",
             study.file.display(),

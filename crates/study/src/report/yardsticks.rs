@@ -216,9 +216,13 @@ fn param(s: &Summary, suffix: &str) -> Option<f64> {
         .and_then(|(_, v)| v.as_f64())
 }
 
+/// `v` is `x` to round-off.
+fn near(v: Option<f64>, x: f64) -> bool {
+    v.is_some_and(|v| (v / x - 1.0).abs() < 1e-9)
+}
+
 /// At the reference cell and K (a case with no K is at it; K = "inf" is not).
 fn at_reference(s: &Summary) -> bool {
-    let near = |v: Option<f64>, x: f64| v.is_some_and(|v| (v / x - 1.0).abs() < 1e-9);
     let k = s
         .params
         .iter()
@@ -229,7 +233,6 @@ fn at_reference(s: &Summary) -> bool {
 
 /// At the reference cell with the stiffer water.
 fn at_stiff(s: &Summary) -> bool {
-    let near = |v: Option<f64>, x: f64| v.is_some_and(|v| (v / x - 1.0).abs() < 1e-9);
     near(param(s, "scene.cell"), CELL) && near(param(s, ".K"), STIFF_BULK_MODULUS)
 }
 

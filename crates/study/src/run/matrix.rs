@@ -46,6 +46,11 @@ pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     Ok((i, n))
 }
 
+/// `name` contains every one of `only` (`--only`; true when empty).
+pub fn named(only: &[String], name: &str) -> bool {
+    only.iter().all(|part| name.contains(part.as_str()))
+}
+
 /// Relative cost of a case: particles x steps (sound speed sets the fixed step).
 pub fn estimated_cost(case: &Case) -> f64 {
     let s = &case.solver.scene;
@@ -87,7 +92,7 @@ pub fn run_matrix(study: &Study, opts: &MatrixOptions) -> std::io::Result<Matrix
         .enumerate()
         .filter(|(k, _)| opts.shard.is_none_or(|(i, n)| k % n == i))
         .map(|(_, c)| c)
-        .filter(|c| opts.only.iter().all(|part| c.name.contains(part.as_str())))
+        .filter(|c| named(&opts.only, &c.name))
         .collect();
     let mut todo: Vec<&Case> = selected
         .iter()

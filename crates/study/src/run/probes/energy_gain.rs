@@ -145,16 +145,23 @@ impl EnergyGain {
             Flow::GridSeed { .. } => return None,
             _ => material.wave_speed(1.0) * k,
         };
-        let twin = (scene.gravity > 0.0).then(|| {
-            let mut rest = cfg.clone();
-            rest.scene.bodies[0].flow = None;
-            rest.perturb.clear();
-            Solver::new(rest).ok()
-        });
-        Some(EnergyGain {
-            period: std::f64::consts::PI / omega,
+        let twin = (scene.gravity > 0.0)
+            .then(|| {
+                let mut rest = cfg.clone();
+                rest.scene.bodies[0].flow = None;
+                rest.perturb.clear();
+                Solver::new(rest).ok()
+            })
+            .flatten();
+        Some(EnergyGain::with(std::f64::consts::PI / omega, twin))
+    }
+
+    /// A probe with blocks of `period` seconds, above `twin` if any.
+    fn with(period: f64, twin: Option<Solver>) -> Self {
+        EnergyGain {
+            period,
             rest: None,
-            twin: twin.flatten(),
+            twin,
             twin_start: None,
             twin_used: false,
             wave_energy: 0.0,
@@ -165,7 +172,7 @@ impl EnergyGain {
             last_t: None,
             start_terms: [0.0; TERMS],
             blocks: Vec::with_capacity(1024),
-        })
+        }
     }
 
     /// Observes E at `t` (the first call: t = 0 or the restored step), with
@@ -337,24 +344,6 @@ impl Probe<Solver> for EnergyGain {
 mod tests {
     use super::*;
 
-    fn probe(period: f64) -> EnergyGain {
-        EnergyGain {
-            period,
-            rest: None,
-            twin: None,
-            twin_start: None,
-            twin_used: false,
-            wave_energy: 0.0,
-            present: Default::default(),
-            start: 0.0,
-            span: 0.0,
-            integral: 0.0,
-            last_t: None,
-            start_terms: [0.0; TERMS],
-            blocks: vec![],
-        }
-    }
-
     /// A wave that trades kinetic for potential energy twice a period, and
     /// loses 30 % of it in the trade and gets it back (the mean of E is
     /// 0.85 E(0)), reads no growth; the same with a source that adds 2 % a
@@ -366,7 +355,7 @@ mod tests {
         let (omega, e0, dt) = (8.4, 0.0245, 1e-3);
         let period = std::f64::consts::PI / omega;
         for source in [0.0, 0.02] {
-            let mut p = probe(period);
+            let mut p = EnergyGain::with(period, None);
             p.present.insert(1);
             p.present.insert(4);
             for n in 0..=6000 {

@@ -174,20 +174,8 @@ impl ModeDecay {
         })
     }
 
-    /// The velocity projected on the flow's shape.
     fn amplitude(&self, s: &Solver) -> f64 {
-        let v = s.view();
-        let (mut num, mut den) = (0.0, 0.0);
-        for ((x, u), m) in v.x.iter().zip(v.v).zip(v.mass) {
-            let shape = self.flow.shape(*x, self.rect, self.gravity);
-            num += m * u.dot(&shape);
-            den += m * shape.norm_squared();
-        }
-        if den > 0.0 {
-            num / den
-        } else {
-            0.0
-        }
+        projected(s, &self.flow, self.rect, self.gravity)
     }
 
     fn observe(&mut self, s: &Solver) {
@@ -198,6 +186,23 @@ impl ModeDecay {
             self.stride *= 2;
             self.taken = 0;
         }
+    }
+}
+
+/// The particles' velocity projected on `flow`'s shape over its body
+/// `rect`: sum m v . s / sum m s . s (0 when the shape vanishes).
+pub(crate) fn projected(s: &Solver, flow: &Flow, rect: [f64; 4], gravity: f64) -> f64 {
+    let v = s.view();
+    let (mut num, mut den) = (0.0, 0.0);
+    for ((x, u), m) in v.x.iter().zip(v.v).zip(v.mass) {
+        let shape = flow.shape(*x, rect, gravity);
+        num += m * u.dot(&shape);
+        den += m * shape.norm_squared();
+    }
+    if den > 0.0 {
+        num / den
+    } else {
+        0.0
     }
 }
 

@@ -11,6 +11,7 @@
 
 use crate::output::summary::Check;
 use crate::output::tables;
+use crate::run::probes::mode_decay::projected;
 use crate::run::probes::slosh::Swing;
 use crate::run::{Probe, Run, Simulated};
 use serde::{Deserialize, Serialize};
@@ -93,18 +94,7 @@ impl SoundWave {
 
     /// The velocity projected on the wave's shape.
     fn amplitude(&self, s: &Solver) -> f64 {
-        let v = s.view();
-        let (mut num, mut den) = (0.0, 0.0);
-        for ((x, u), m) in v.x.iter().zip(v.v).zip(v.mass) {
-            let shape = self.flow.shape(*x, self.rect, 0.0);
-            num += m * u.dot(&shape);
-            den += m * shape.norm_squared();
-        }
-        if den > 0.0 {
-            num / den
-        } else {
-            0.0
-        }
+        projected(s, &self.flow, self.rect, 0.0)
     }
 
     fn figures(&self) -> SoundWaveFigures {
