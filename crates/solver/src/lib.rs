@@ -814,6 +814,15 @@ impl Solver {
         }
     }
 
+    /// Moves every particle by a seeded offset of at most `relative` h per
+    /// axis, as `scene.jitter` does at t = 0: ensemble members of a replay
+    /// from one checkpoint.
+    pub fn jitter(&mut self, relative: f64, seed: u64) {
+        let amplitude = relative * self.cfg.scene.cell;
+        scene::jitter_positions(&mut self.particles.x, amplitude, seed);
+        self.measure();
+    }
+
     /// Every impulse applied so far, as resolved.
     pub fn planted(&self) -> &[Planted] {
         &self.planted

@@ -72,13 +72,18 @@ pub fn seed(scene: &Scene) -> Particles {
 /// Ensemble members: each position moved by a seeded uniform offset of at
 /// most `scene.jitter` h per axis (nothing when the jitter is 0).
 fn jitter(ps: &mut Particles, scene: &Scene) {
-    if scene.jitter == 0.0 {
+    jitter_positions(&mut ps.x, scene.jitter * scene.cell, scene.seed);
+}
+
+/// Moves each position by a uniform offset of at most `amplitude` per axis,
+/// from the seed's own stream (nothing when the amplitude is 0).
+pub fn jitter_positions(x: &mut [Vec2], amplitude: f64, seed: u64) {
+    if amplitude == 0.0 {
         return;
     }
-    let amplitude = scene.jitter * scene.cell;
-    let mut state = scene.seed ^ 0x6a09_e667_f3bc_c909;
+    let mut state = seed ^ 0x6a09_e667_f3bc_c909;
     let mut uniform = || uniform01(&mut state);
-    for x in ps.x.iter_mut() {
+    for x in x.iter_mut() {
         x.x += amplitude * (2.0 * uniform() - 1.0);
         x.y += amplitude * (2.0 * uniform() - 1.0);
     }

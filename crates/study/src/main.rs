@@ -152,10 +152,17 @@ struct ExplainArgs {
     /// Output folder (default CASE_DIR/explain/event_K).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Also replay once per single change (PIC, FLIP 0.99, half dt, minimum
-    /// nodal mass, J-bar, pressure smoothing, XPIC on/off, shifting).
+    /// Also replay the unchanged control and each single change (PIC, FLIP
+    /// 0.99, half dt, minimum nodal mass, J-bar, pressure smoothing, XPIC
+    /// on/off, shifting, the remedies off, the pressure-implicit
+    /// formulation at its own step and at the run's) as ensembles, each
+    /// member jittered by scene.jitter from the same checkpoint, on to 0.2 s
+    /// past the event.
     #[arg(long)]
     counterfactual: bool,
+    /// Members of each counterfactual row (1 to 64).
+    #[arg(long, default_value_t = explain::counterfactual::MEMBERS)]
+    members: usize,
 }
 
 #[derive(Args)]
@@ -450,14 +457,21 @@ fn explain_command(args: ExplainArgs) -> ExitCode {
         threads,
         out,
         counterfactual,
+        members,
     } = args;
     if threads == Some(0) {
         return bad_input("--threads: 0 is out of range (allowed >= 1)");
+    }
+    if !(1..=64).contains(&members) {
+        return bad_input(&format!(
+            "--members: {members} is out of range (allowed 1 to 64)"
+        ));
     }
     let opts = explain::ExplainOptions {
         threads,
         out,
         counterfactual,
+        members,
     };
     match explain::explain(&case_dir, event, &opts) {
         Ok(o) => {

@@ -244,6 +244,25 @@ pub fn sample_event() -> Event {
     .unwrap()
 }
 
+/// A method's identity across studies: its resolved `method.*` settings and
+/// `scene.ppc` as `key=value` lines (a remedy switched on by `true` and by
+/// its settings table are the same).
+pub fn method_id(params: &BTreeMap<String, serde_json::Value>) -> String {
+    let keys: Vec<&String> = params
+        .keys()
+        .filter(|k| k.starts_with("method.") || *k == "scene.ppc")
+        .collect();
+    keys.iter()
+        .filter(|k| {
+            let prefix = format!("{k}.");
+            !(params[**k] == serde_json::Value::Bool(true)
+                && keys.iter().any(|o| o.starts_with(&prefix)))
+        })
+        .map(|k| format!("{k}={}", params[*k]))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -189,24 +189,9 @@ pub struct Yardsticks {
     pub by_method: BTreeMap<String, Yardstick>,
 }
 
-/// A method's identity across studies: its resolved `method.*` settings and
-/// `scene.ppc` as `key=value` lines (a remedy switched on by `true` and by
-/// its settings table are the same).
+/// A method's identity across studies (`summary::method_id`).
 pub fn method_id(s: &Summary) -> String {
-    let keys: Vec<&String> = s
-        .params
-        .keys()
-        .filter(|k| k.starts_with("method.") || *k == "scene.ppc")
-        .collect();
-    keys.iter()
-        .filter(|k| {
-            let prefix = format!("{k}.");
-            !(s.params[**k] == serde_json::Value::Bool(true)
-                && keys.iter().any(|o| o.starts_with(&prefix)))
-        })
-        .map(|k| format!("{k}={}", s.params[*k]))
-        .collect::<Vec<_>>()
-        .join("\n")
+    study::output::summary::method_id(&s.params)
 }
 
 fn param(s: &Summary, suffix: &str) -> Option<f64> {

@@ -991,6 +991,8 @@ fn explain_splits_an_injected_kick_and_replays_single_changes() {
         "--event",
         &id,
         "--counterfactual",
+        "--members",
+        "2",
     ]);
     assert!(
         o.status.success(),
@@ -1032,46 +1034,78 @@ fn explain_splits_an_injected_kick_and_replays_single_changes() {
         .map(|k| json["shares"][k].as_f64().unwrap())
         .sum();
     assert!((sum - 1.0).abs() < 1e-9, "shares sum to {sum}");
-    // The control row reproduces the event and its injection.
+    // The control row reproduces the event in both members, each jittered
+    // by round-off, with the event's injection.
     let rows = json["counterfactual"].as_array().unwrap();
     let control = &rows[0];
     assert_eq!(control["change"], "unchanged");
-    assert_eq!(control["event_happens"], true);
-    assert_eq!(control["verdict"], "again", "{control}");
-    assert_eq!(control["outcome"], "completed", "{control}");
-    // A row is "prevented" only when the replay completed the window with no
-    // other non-physical event and gained less than the control.
-    for r in rows.iter().filter(|r| r["refused"].is_null()) {
-        let prevented = r["event_happens"] == false
-            && r["outcome"] == "completed"
-            && r["other_events"].as_array().unwrap().is_empty()
-            && r["injected"].as_f64().unwrap() < control["injected"].as_f64().unwrap();
-        assert_eq!(r["verdict"] == "prevented", prevented, "{r}");
-    }
+    assert_eq!(control["reopened"], 2, "{control}");
+    assert_eq!(control["verdict"], "control", "{control}");
+    let members = control["members"].as_array().unwrap();
+    assert_eq!(members.len(), 2);
+    assert_ne!(members[0]["seed"], members[1]["seed"]);
+    assert!(
+        members.iter().all(|m| m["outcome"] == "completed"),
+        "{control}"
+    );
     let injected = control["injected"].as_f64().unwrap();
     assert!(
         (injected - event.energy_injected).abs() <= 1e-9 * event.energy_injected,
         "{injected} vs {}",
         event.energy_injected
     );
+    // The replays go on 0.2 s past the event, beyond the case's t_end: the
+    // push is the first kick in its region, at the event's own time.
+    assert!(
+        members[0]["steps"].as_u64().unwrap() > event.last_step + 1000,
+        "{control}"
+    );
+    assert_eq!(control["next_kick"][0], 0.0, "{control}");
+    // Each change's members carry the control's seeds, and a row is
+    // "prevented" only when the event reopened in no member (0 of 2), none
+    // blew up or opened another non-physical event, and the median member
+    // gained less than the control.
+    for r in rows.iter().filter(|r| r["refused"].is_null()) {
+        let seeds: Vec<_> = r["members"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|m| &m["seed"])
+            .collect();
+        assert_eq!(seeds, [&members[0]["seed"], &members[1]["seed"]], "{r}");
+        let prevented = r["reopened"] == 0
+            && r["blew_up"] == 0
+            && r["moved"] == 0
+            && r["injected"].as_f64().unwrap() < injected;
+        assert_eq!(r["verdict"] == "prevented", prevented, "{r}");
+    }
+    let steps = |r: &serde_json::Value| r["members"][0]["steps"].as_u64().unwrap();
     let half = rows.iter().find(|r| r["change"] == "half dt").unwrap();
-    assert!(half["steps"].as_u64().unwrap() > control["steps"].as_u64().unwrap());
-    assert_eq!(rows.len(), 10, "{rows:?}");
+    assert!(steps(half) > steps(control));
+    assert_eq!(rows.len(), 12, "{rows:?}");
+    // No remedy to switch off: that row says so.
+    let off = rows.iter().find(|r| r["change"] == "remedies off").unwrap();
+    assert_eq!(off["verdict"], "refused", "{off}");
     // The pressure-implicit formulation is switched to mid-run: its step
-    // follows the flow, so it crosses the window in fewer steps.
+    // follows the flow, so it crosses the window in fewer steps; at the
+    // run's own step it takes the control's count.
     let implicit = rows
         .iter()
         .find(|r| r["change"] == "pressure implicit")
         .unwrap();
     assert!(implicit["refused"].is_null(), "{implicit}");
-    assert!(
-        implicit["steps"].as_u64().unwrap() < control["steps"].as_u64().unwrap(),
-        "{implicit}"
-    );
+    assert!(steps(implicit) < steps(control), "{implicit}");
+    let at_dt = rows
+        .iter()
+        .find(|r| r["change"] == "pressure implicit at the run's dt")
+        .unwrap();
+    assert!(at_dt["refused"].is_null(), "{at_dt}");
+    assert_eq!(steps(at_dt), steps(control), "{at_dt}");
     for f in [
         "explain_steps.csv",
         "explain_steps.parquet",
         "explain_cells.png",
+        "counterfactual.md",
     ] {
         assert!(folder.join(f).exists(), "{f}");
     }
@@ -1079,4 +1113,18 @@ fn explain_splits_an_injected_kick_and_replays_single_changes() {
     let o = kick(&["explain", dir.to_str().unwrap(), "--event", "999"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("no event 999"), "{}", stderr(&o));
+    let o = kick(&[
+        "explain",
+        dir.to_str().unwrap(),
+        "--event",
+        &id,
+        "--members",
+        "0",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("--members: 0 is out of range"),
+        "{}",
+        stderr(&o)
+    );
 }

@@ -4,25 +4,26 @@
 //! force forensics (`solver::forensics`), and measures the mechanisms
 //! (`monitor::mechanisms`, docs/physics.md section 4c) over the onset
 //! window (`ONSET_SECONDS` before the event's first step to its last).
-//! With `--counterfactual` it restarts from the same checkpoint once per
-//! single change, applied from the onset window's start.
+//! With `--counterfactual` it restarts from the same checkpoint as an
+//! ensemble per single change, applied from the onset window's start
+//! (`counterfactual`).
 
 pub mod record;
 
-use crate::output::summary::{Status, Summary};
+use crate::output::summary::Summary;
 use crate::output::tables;
 use crate::run::case::{watches, with_threads};
 use crate::run::checkpoint;
 use crate::run::probes::checkpoint_ring::ring_step;
 use crate::run::probes::replay::{Found, Replay as ReplayChecks};
-use crate::run::{Probe, Rows, Run, RunOptions, Runner, Simulated, Stepper, Watch};
+use crate::run::{Rows, RunOptions, Runner, Stepper, Watch};
 use crate::study_file::{self, Case};
 use monitor::mechanisms::{Mechanisms, Shares, StepParts};
-use monitor::{Cause, CellRange, Event};
+use monitor::{CellRange, Event};
 use record::{Criteria, ExplainRecord, LargestPart, Leading, Ringing, TimeStep};
 use serde::Serialize;
 use solver::forensics::ExplainedStep;
-use solver::{CheckpointError, Method, Solver, Vec2};
+use solver::{CheckpointError, Solver, Vec2};
 use std::path::{Path, PathBuf};
 
 /// The onset window's length before the event's first step (s): the
@@ -33,6 +34,8 @@ pub struct ExplainOptions {
     pub threads: Option<usize>,
     pub out: Option<PathBuf>,
     pub counterfactual: bool,
+    /// Members of each counterfactual row.
+    pub members: usize,
 }
 
 /// Bad input (exit 2): missing or corrupted files, unknown event, mixtures.
@@ -122,6 +125,9 @@ macro_rules! solver_stepper {
         }
     };
 }
+
+pub mod counterfactual;
+pub use counterfactual::CounterfactualRow;
 
 /// A solver whose steps in the window are explained.
 struct Explaining<'a> {
@@ -329,7 +335,7 @@ pub fn explain(case_dir: &Path, id: u32, opts: &ExplainOptions) -> Result<Outcom
         ))
     })?;
     let counterfactual = if opts.counterfactual {
-        with_threads(opts.threads, || Ok(counterfactuals(&loaded, window)))
+        counterfactual::run(&loaded, window, opts.members, opts.threads)
             .map_err(|e| at(e.to_string()))?
     } else {
         vec![]
@@ -410,378 +416,6 @@ fn window_shares(rows: &[StepRow]) -> Shares {
     sum.over(dv2)
 }
 
-/// One single change of the counterfactual replay.
-#[derive(Clone, Debug, Serialize)]
-pub struct CounterfactualRow {
-    pub change: String,
-    /// Why it could not be made (then nothing below was measured).
-    pub refused: Option<String>,
-    /// Largest rise (J/m) over the onset window of the total the injection
-    /// test watches above its running minimum there, against the event's floor.
-    pub injected: f64,
-    pub floor: f64,
-    /// An event of the same kind opened in the window over the event's cells.
-    pub event_happens: bool,
-    pub steps: u64,
-    /// How the replay ended: `completed` (it reached the window's end) or
-    /// `blew up: REASON`.
-    pub outcome: String,
-    /// Events the replay opened in the window that are not physics (cause
-    /// other than impact) and are not the event itself: "KIND (CAUSE) at T s".
-    pub other_events: Vec<String>,
-    /// `again` (the event happened), `blew up`, `moved` (no event over its
-    /// cells, but another non-physical one), `injected` (none, but the
-    /// window gained at least the control's injection), `prevented` (none of
-    /// these) or `refused`.
-    pub verdict: &'static str,
-}
-
-/// What a counterfactual replay did, for its verdict.
-#[derive(Clone, Copy, Debug)]
-pub struct Replayed {
-    pub event_happens: bool,
-    pub blew_up: bool,
-    pub other_events: usize,
-    /// The window's injection (J/m), and the control replay's (the event's).
-    pub injected: f64,
-    pub event_injected: f64,
-}
-
-/// A counterfactual's verdict: an event that did not open again over its
-/// cells is prevented only when the replay also completed the window,
-/// raised no other non-physical event, and gained less energy over the
-/// window than the unchanged control did (else the change moved or hastened the
-/// failure, or hid it from the detector: it did not cure it).
-pub fn verdict(r: Replayed) -> &'static str {
-    if r.event_happens {
-        "again"
-    } else if r.blew_up {
-        "blew up"
-    } else if r.other_events > 0 {
-        "moved"
-    } else if r.event_injected > 0.0 && (r.injected >= r.event_injected || r.injected.is_nan()) {
-        "injected"
-    } else {
-        "prevented"
-    }
-}
-
-/// What a counterfactual changes, from the onset window's start.
-enum Change {
-    /// Study-file overrides of `[method]` (none: the control).
-    Overrides(Vec<String>),
-    /// The solver's own step halved when the change is made.
-    HalfDt,
-    /// The pressure-implicit formulation (docs/physics.md section 8) in
-    /// place of the particles' EOS stress; built from the case's method,
-    /// since its study file may set keys the formulation refuses.
-    PressureImplicit,
-}
-
-/// The default list: (name, change).
-fn changes(method: &Method) -> Vec<(String, Change)> {
-    let overrides = |keys: &[&str]| Change::Overrides(keys.iter().map(|k| k.to_string()).collect());
-    let xpic = if method.transfer == solver::TransferKind::Xpic {
-        ("xpic off", overrides(&["method.transfer=\"flip\""]))
-    } else {
-        (
-            "xpic on",
-            overrides(&["method.transfer=\"xpic\"", "method.xpic_order=5"]),
-        )
-    };
-    let remedies: Vec<&str> = method
-        .remedies
-        .active()
-        .iter()
-        .map(|r| r.descriptor().key)
-        .collect();
-    // It takes no remedy (its controls are its own): the method's go with it.
-    let implicit = if remedies.is_empty() {
-        "pressure implicit".to_string()
-    } else {
-        format!("pressure implicit (without {})", remedies.join(", "))
-    };
-    vec![
-        ("unchanged".into(), Change::Overrides(vec![])),
-        ("pic".into(), overrides(&["method.transfer=\"pic\""])),
-        (
-            "flip 0.99".into(),
-            overrides(&["method.transfer=\"flip\"", "method.flip_alpha=0.99"]),
-        ),
-        ("half dt".into(), Change::HalfDt),
-        (
-            "min node mass 0.01".into(),
-            overrides(&["method.min_node_mass={ share = 0.01 }"]),
-        ),
-        ("j-bar".into(), overrides(&["method.j_bar=true"])),
-        (
-            "pressure smoothing".into(),
-            overrides(&["method.pressure_smoothing=true"]),
-        ),
-        (xpic.0.into(), xpic.1),
-        (
-            "shifting".into(),
-            overrides(&["method.shifting={ time = 0.02 }"]),
-        ),
-        (implicit, Change::PressureImplicit),
-    ]
-}
-
-/// The case's method under the pressure-implicit formulation: no remedy,
-/// and the step from the flow (a fixed explicit step would be kept).
-fn pressure_implicit(method: &Method) -> Method {
-    Method {
-        formulation: solver::Formulation::PressureImplicit,
-        remedies: Default::default(),
-        dt_value: None,
-        ..method.clone()
-    }
-}
-
-/// A solver that changes its method once, at the onset window's start,
-/// and ends after the event's last time.
-struct Switching {
-    solver: Solver,
-    at: f64,
-    until: f64,
-    method: Option<Method>,
-    halve_dt: bool,
-    refused: Option<String>,
-    /// The step count when the change was made.
-    switched_at: Option<u64>,
-}
-
-impl Stepper for Switching {
-    fn advance(&mut self) -> Result<(), String> {
-        let s = &mut self.solver;
-        if s.time() + s.next_dt() >= self.at {
-            self.switched_at.get_or_insert(s.step_count());
-            if std::mem::take(&mut self.halve_dt) {
-                let mut m = s.config().method.clone();
-                match m.dt {
-                    solver::DtMode::Fixed => m.dt_value = Some(s.next_dt() / 2.0),
-                    solver::DtMode::Dynamic | solver::DtMode::PerAxis => m.cfl /= 2.0,
-                }
-                self.method = Some(m);
-            }
-            if let Some(m) = self.method.take() {
-                if let Err(e) = s.set_method(m) {
-                    self.refused = Some(e.to_string());
-                    return Err(format!("refused: {e}"));
-                }
-            }
-        }
-        Stepper::advance(s)
-    }
-    fn finished(&self) -> bool {
-        self.solver.finished() || self.solver.time() >= self.until
-    }
-    solver_stepper!();
-}
-
-/// What a counterfactual run did over the onset window: the running
-/// minimum of the budget the detector watches, the largest rise above it,
-/// and whether the event opened again.
-struct Measured {
-    min: f64,
-    injected: f64,
-    happens: bool,
-}
-
-struct WindowInjection<'a> {
-    from: f64,
-    until: f64,
-    logged: &'a Event,
-    measured: &'a mut Measured,
-}
-
-impl<S: Stepper> Probe<S> for WindowInjection<'_> {
-    fn after_step(&mut self, run: &Run<S>, opened: &[u32]) -> std::io::Result<()> {
-        let t = run.stepper.time();
-        if t < self.from || t > self.until + 1e-12 {
-            return Ok(());
-        }
-        let monitor = &run.watches[0].monitor;
-        let r = monitor.report();
-        let watched = r.detector_total;
-        let m = &mut *self.measured;
-        if watched.is_finite() {
-            m.min = m.min.min(watched);
-            m.injected = m.injected.max(watched - m.min);
-        }
-        for id in opened {
-            if let Some(e) = monitor.events().iter().find(|e| e.id == *id) {
-                if e.kind == self.logged.kind && overlaps(e.cells, self.logged.cells) {
-                    m.happens = true;
-                }
-            }
-        }
-        Ok(())
-    }
-}
-
-fn overlaps(a: CellRange, b: CellRange) -> bool {
-    a.i_min <= b.i_max && b.i_min <= a.i_max && a.j_min <= b.j_max && b.j_min <= a.j_max
-}
-
-/// The control (unchanged) first: each change's window injection is judged
-/// against the control's, the same measure over the same window.
-fn counterfactuals(loaded: &Loaded, window: Window) -> Vec<CounterfactualRow> {
-    let mut rows: Vec<CounterfactualRow> = vec![];
-    for (name, change) in changes(&loaded.case.solver.method) {
-        let control = rows
-            .first()
-            .map_or(loaded.logged.energy_injected, |c| c.injected);
-        rows.push(counterfactual(loaded, window, name, &change, control));
-    }
-    rows
-}
-
-fn counterfactual(
-    loaded: &Loaded,
-    window: Window,
-    name: String,
-    change: &Change,
-    control_injected: f64,
-) -> CounterfactualRow {
-    let floor = loaded.logged.evidence.energy_floor;
-    let refused = |why: String| CounterfactualRow {
-        change: name.clone(),
-        refused: Some(why),
-        injected: f64::NAN,
-        floor,
-        event_happens: false,
-        steps: 0,
-        outcome: String::new(),
-        other_events: vec![],
-        verdict: "refused",
-    };
-    let (measured, replay) = match replay_with_change(loaded, window, change) {
-        Ok(done) => done,
-        Err(why) => return refused(why),
-    };
-    let other_events = other_events(loaded, window, &replay.simulated, replay.switched_at);
-    let blew_up = replay.simulated.status == Status::BlewUp;
-    CounterfactualRow {
-        change: name,
-        refused: None,
-        injected: measured.injected,
-        floor,
-        event_happens: measured.happens,
-        steps: replay.steps,
-        outcome: if blew_up {
-            format!("blew up: {}", replay.simulated.reason)
-        } else {
-            "completed".into()
-        },
-        verdict: verdict(Replayed {
-            event_happens: measured.happens,
-            blew_up,
-            other_events: other_events.len(),
-            injected: measured.injected,
-            event_injected: control_injected,
-        }),
-        other_events,
-    }
-}
-
-/// How a counterfactual replay ran: what it simulated, its steps, and the
-/// step of its switch.
-struct ChangedReplay {
-    simulated: Simulated,
-    steps: u64,
-    switched_at: u64,
-}
-
-/// Replays the event's window from its checkpoint with `change` switched
-/// on at onset; the window's measure and the replay, or why it was refused.
-fn replay_with_change(
-    loaded: &Loaded,
-    window: Window,
-    change: &Change,
-) -> Result<(Measured, ChangedReplay), String> {
-    let method = match change {
-        Change::Overrides(o) if o.is_empty() => None,
-        Change::Overrides(o) => Some(changed_method(&loaded.study_path, o)?),
-        Change::HalfDt => None,
-        Change::PressureImplicit => Some(pressure_implicit(&loaded.case.solver.method)),
-    };
-    let case = &loaded.case;
-    let solver = Solver::new(case.solver.clone()).map_err(|e| format!("setup: {e}"))?;
-    let mut watches = watches(&solver, case);
-    let mut stepper = Switching {
-        solver,
-        at: window.onset_from,
-        until: window.last_t,
-        method,
-        halve_dt: matches!(change, Change::HalfDt),
-        refused: None,
-        switched_at: None,
-    };
-    stepper
-        .load(&loaded.checkpoint, &mut watches)
-        .map_err(|e| e.to_string())?;
-    let start = stepper.step_count();
-    let mut measured = Measured {
-        min: f64::INFINITY,
-        injected: 0.0,
-        happens: false,
-    };
-    // A change whose step collapses stops as a blow-up, as a case does,
-    // instead of crawling to the window's end.
-    let mut opts = RunOptions::new(None, Rows::every_step());
-    opts.collapse_from = Some(stepper.solver.next_dt());
-    let mut runner = Runner::new(stepper, watches, opts);
-    runner.attach(WindowInjection {
-        from: window.onset_from,
-        until: window.last_t,
-        logged: &loaded.logged,
-        measured: &mut measured,
-    });
-    let ran = runner.run();
-    let steps = runner.stepper().step_count().saturating_sub(start);
-    let why_refused = runner.stepper().refused.clone();
-    let switched_at = runner.stepper().switched_at.unwrap_or(start);
-    drop(runner);
-    if let Some(why) = why_refused {
-        return Err(why);
-    }
-    let simulated = ran.map_err(|e| e.to_string())?;
-    let replay = ChangedReplay {
-        simulated,
-        steps,
-        switched_at,
-    };
-    Ok((measured, replay))
-}
-
-/// The non-physical events a replay opened in the window other than the
-/// explained one (not at the change's own step: a new transfer counts the
-/// kinetic energy and the transfer loss its own way from there, and the
-/// budget's step at the switch reads as an injection).
-fn other_events(
-    loaded: &Loaded,
-    window: Window,
-    simulated: &Simulated,
-    switched_at: u64,
-) -> Vec<String> {
-    simulated
-        .events
-        .iter()
-        .filter(|e| e.t >= window.onset_from && e.t <= window.last_t + 1e-12)
-        .filter(|e| e.first_step > switched_at + 1)
-        .filter(|e| e.cause != Cause::Impact)
-        .filter(|e| !(e.kind == loaded.logged.kind && overlaps(e.cells, loaded.logged.cells)))
-        .map(|e| format!("{} ({}) at {:.4} s", e.kind.name(), e.cause.name(), e.t))
-        .collect()
-}
-
-/// The case's method with `overrides` applied to its study file.
-fn changed_method(study_path: &Path, overrides: &[String]) -> Result<Method, String> {
-    let study = study_file::load(study_path, overrides).map_err(|e| e.to_string())?;
-    Ok(study.cases[0].solver.method.clone())
-}
-
 fn finish(
     case_dir: &Path,
     out: &Path,
@@ -794,6 +428,10 @@ fn finish(
     let explained = explain_record(case_dir, loaded, window, record, found, counterfactual);
     std::fs::create_dir_all(out)?;
     explained.write(out)?;
+    if !counterfactual.is_empty() {
+        let table = counterfactual::markdown(counterfactual);
+        crate::output::files::write_atomic(&out.join("counterfactual.md"), table.as_bytes())?;
+    }
     write_steps(&record.rows, out)?;
     let (lead, part) = (&explained.leading, &explained.largest_part);
     let mut message = format!(
@@ -942,29 +580,4 @@ fn write_steps(rows: &[StepRow], out: &Path) -> std::io::Result<()> {
     ];
     let refs: Vec<(&str, &[f64])> = columns.iter().map(|(n, v)| (*n, v.as_slice())).collect();
     tables::write_columns(&refs, out, "explain_steps", true)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::{verdict, Replayed};
-
-    #[test]
-    fn a_change_prevents_only_what_it_does_not_move_hasten_or_hide() {
-        let r = |event_happens, blew_up, other_events, injected| {
-            verdict(Replayed {
-                event_happens,
-                blew_up,
-                other_events,
-                injected,
-                event_injected: 1.0,
-            })
-        };
-        assert_eq!(r(true, false, 0, 0.0), "again");
-        assert_eq!(r(true, true, 3, 9.0), "again");
-        assert_eq!(r(false, true, 0, 0.0), "blew up");
-        assert_eq!(r(false, false, 1, 0.0), "moved");
-        assert_eq!(r(false, false, 0, 1.0), "injected");
-        assert_eq!(r(false, false, 0, f64::NAN), "injected");
-        assert_eq!(r(false, false, 0, 0.5), "prevented");
-    }
 }

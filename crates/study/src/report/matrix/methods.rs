@@ -5,12 +5,14 @@
 
 use crate::report::data::{median, spread_text, Matrix, ParamKey, Row};
 use crate::report::html::{Cell, Page};
+use crate::report::matrix::cure;
 use crate::report::plot::Res;
 use crate::report::yardsticks::{self as yardsticks, Yardsticks};
 use monitor::Cause;
 use std::collections::BTreeMap;
 use std::path::Path;
 use study::output::summary::Status;
+use study::replay::explain::counterfactual::{RARE_SHARE, REPRODUCED_SHARE};
 
 /// For each varying `method.*` axis: its index and most common value.
 fn baseline(m: &Matrix) -> Vec<(usize, String)> {
@@ -214,6 +216,13 @@ pub fn methods_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
         page.p(&format!("Beside them: from the standing sound wave in a closed box (inviscid), the frequency error against c k and the excess decay as a viscosity, (rate - (2/3) nu k²) / ((2/3) k²), over nu, at mode 1 and at k h = π/4; from the inviscid Taylor-Green modes near k h = π/4 and π/2, the measured decay rates at {} MPa and at {} MPa (read as measured: the line nu_num + beta k² bends there); from every inviscid yardstick, the largest growth of the motion's energy (kinetic, potential and stored above the water at rest, averaged over an energy period, over 5 s or over any 1 s) as a share of the wave's, and the largest energy the booked terms cycled (the smaller of what they added and what they removed, each by its net over an energy period) over the wave's. The verdict, its rules fixed before the runs: a damper by nu_num (above), by the sound (mode 1's excess decay above {} /s: it loses 63 % of its amplitude within the dam break's second) or by the grid scale (the π/4 mode's rate above {} /s, twice the modern baseline's); a pump when the motion's energy grows by more than {} % of the wave's; accurate when every rule was measured and none fired; undecided otherwise. A method whose booked terms put in and take out more than the wave's energy also cycles.", yardsticks::BULK_MODULUS / 1e6, yardsticks::STIFF_BULK_MODULUS / 1e6, yardsticks::SOUND_DAMPER_RATE, yardsticks::GRID_DAMPER_RATE, 100.0 * yardsticks::PUMP_SHARE));
         headers.extend(YARDSTICK_HEADERS.map(String::from));
     }
+    page.p(&format!("The cure column, its rule fixed before the runs (docs/physics.md section 7, the cure column): each method against the baseline on the same physics case (the same values of every axis that is not a method key), over the case's ensemble members. The baseline kicks in a case when at least {:.0} % of its members kicked; the method prevents it there when at most {:.0} % of its members kicked and none blew up; it brings a kick when the baseline's case is clean and the method's kicks. A method is a cure when it prevents the baseline's kick in more than half of its kicking cases (the count with its 95 % Wilson interval), brings none, and the yardsticks measured it and call it neither a damper nor a pump; the yardsticks' damper or pump comes first, whatever it prevents; one that prevents some and brings others moves the event.", 100.0 * REPRODUCED_SHARE, 100.0 * RARE_SHARE));
+    headers.push("cure".into());
+    let method_axes: Vec<usize> = base.iter().map(|(i, _)| *i).collect();
+    let baseline_runs: Vec<&Row> = groups
+        .iter()
+        .find(|(l, _)| l == "baseline")
+        .map_or(vec![], |(_, runs)| runs.clone());
     let rows: Vec<(String, Vec<Cell>)> = groups
         .iter()
         .map(|(l, runs)| {
@@ -221,6 +230,13 @@ pub fn methods_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
             if !sticks.is_empty() {
                 cells.extend(yardstick_cells(&sticks, runs));
             }
+            cells.push(Cell::Text(if l == "baseline" {
+                "-".into()
+            } else {
+                let p = cure::paired(&method_axes, &baseline_runs, runs);
+                let y = runs.first().and_then(|r| sticks.of_method(&r.summary));
+                cure::verdict(p, y)
+            }));
             (String::new(), cells)
         })
         .collect();
@@ -417,6 +433,60 @@ mod tests {
         match c {
             Cell::Num(s) | Cell::Text(s) => s,
         }
+    }
+
+    /// The cure column pairs each method with the baseline on the same
+    /// physics case (the non-method axes), over its members.
+    #[test]
+    fn the_cure_column_pairs_each_method_with_the_baseline_case_by_case() {
+        let kick = || vec![event(Cause::Jump)];
+        // Axes: transfer (a method key) and K (the physics case).
+        let at = |t: &str, k: &str, events: Vec<monitor::Event>| {
+            let mut r = run(t, Some((0.1, 0.1)), events);
+            r.params = vec![t.into(), k.into()];
+            r
+        };
+        let mut rows = vec![];
+        for _ in 0..5 {
+            // The baseline (apic) kicks at K = 1 and 2, is clean at K = 3.
+            rows.push(at("apic", "1", kick()));
+            rows.push(at("apic", "2", kick()));
+            rows.push(at("apic", "3", vec![]));
+            // PIC prevents both kicks; FLIP prevents one and brings one.
+            rows.push(at("pic", "1", vec![]));
+            rows.push(at("pic", "2", vec![]));
+            rows.push(at("pic", "3", vec![]));
+            rows.push(at("flip", "1", vec![]));
+            rows.push(at("flip", "2", kick()));
+            rows.push(at("flip", "3", kick()));
+        }
+        // One of PIC's five members at K = 2 kicks: still at most 1 of 5.
+        rows[4].summary.events = kick();
+        // A sixth clean baseline member makes apic the most common transfer.
+        rows.push(at("apic", "3", vec![]));
+        let m = Matrix {
+            reference_rows: vec![],
+            axes: vec![
+                ParamKey::Method("transfer".into()),
+                ParamKey::Material {
+                    name: "water".into(),
+                    field: "K".into(),
+                },
+            ],
+            rows,
+        };
+        let mut page = Page::default();
+        methods_table(&m, Path::new("."), &mut page).unwrap();
+        let html = page.finish("t");
+        assert!(html.contains("<th>cure</th>"), "{html}");
+        assert!(
+            html.contains("not judged: no yardstick (prevents 2 of 2 [0.34, 1.00], brings 0)"),
+            "{html}"
+        );
+        assert!(
+            html.contains("moves the event (prevents 1 of 2 [0.09, 0.91], brings 1)"),
+            "{html}"
+        );
     }
 
     #[test]

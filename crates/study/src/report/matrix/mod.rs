@@ -9,6 +9,7 @@
 //! summary.parquet's `case_dir`) and every section renders from them.
 
 pub mod behaviours;
+pub mod cure;
 pub mod detection;
 pub mod heatmaps;
 pub mod mechanisms;

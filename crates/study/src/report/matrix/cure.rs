@@ -1,0 +1,132 @@
+//! The Methods table's cure column: one verdict per method, its rule fixed
+//! before the runs it judges (docs/physics.md section 7, "The cure column"). A method is
+//! compared with the baseline on the same physics case (the same values of
+//! every axis that is not a method key), over each case's ensemble members.
+
+use crate::report::data::Row;
+use crate::report::yardsticks::{Verdict, Yardstick};
+use std::collections::BTreeMap;
+use study::replay::explain::counterfactual::{wilson, RARE_SHARE, REPRODUCED_SHARE};
+
+/// A case kicks when at least `REPRODUCED_SHARE` of its members kicked; it
+/// is kick-free when at most `RARE_SHARE` did and none blew up.
+fn kicks(runs: &[&Row]) -> bool {
+    let k = runs.iter().filter(|r| kicked(r)).count();
+    k as f64 >= REPRODUCED_SHARE * runs.len() as f64 - 1e-9
+}
+
+fn clean(runs: &[&Row]) -> bool {
+    let k = runs.iter().filter(|r| kicked(r)).count();
+    let blew = runs
+        .iter()
+        .any(|r| r.summary.status == study::output::summary::Status::BlewUp);
+    !blew && k as f64 <= RARE_SHARE * runs.len() as f64 + 1e-9
+}
+
+fn kicked(r: &Row) -> bool {
+    r.summary.events.iter().any(|e| e.is_kick())
+}
+
+/// What the method did to the baseline's cases.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Paired {
+    /// Cases the baseline kicks in (at least 4 of 5 members).
+    pub baseline_kicks: usize,
+    /// Of those, the cases the method runs kick-free (at most 1 of 5
+    /// members kicked, none blew up).
+    pub prevented: usize,
+    /// Cases the baseline runs kick-free and the method kicks in.
+    pub introduced: usize,
+}
+
+/// The physics case of a row: its values at the axes that are not method keys.
+fn case_key(row: &Row, method_axes: &[usize]) -> Vec<String> {
+    row.params
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !method_axes.contains(i))
+        .map(|(_, v)| v.clone())
+        .collect()
+}
+
+/// The runs by physics case.
+fn by_case<'a>(rows: &[&'a Row], method_axes: &[usize]) -> BTreeMap<Vec<String>, Vec<&'a Row>> {
+    let mut cases: BTreeMap<Vec<String>, Vec<&Row>> = BTreeMap::new();
+    for r in rows {
+        cases.entry(case_key(r, method_axes)).or_default().push(*r);
+    }
+    cases
+}
+
+/// The method's runs against the baseline's, case by case.
+pub fn paired(method_axes: &[usize], baseline: &[&Row], method: &[&Row]) -> Paired {
+    let (base, own) = (by_case(baseline, method_axes), by_case(method, method_axes));
+    let mut p = Paired::default();
+    for (case, b) in &base {
+        let Some(o) = own.get(case) else { continue };
+        if kicks(b) {
+            p.baseline_kicks += 1;
+            p.prevented += clean(o) as usize;
+        } else if clean(b) && kicks(o) {
+            p.introduced += 1;
+        }
+    }
+    p
+}
+
+/// The cure verdict: the yardsticks name a damper or a pump first; a
+/// method that prevents the baseline's kicks in more than half of its
+/// kicking cases and brings none into a clean case is a cure when the
+/// yardsticks measured it and call it neither (else it is not judged); one
+/// that prevents some and brings others moves the event; else no cure.
+pub fn verdict(p: Paired, yardstick: Option<&Yardstick>) -> String {
+    let [lo, hi] = wilson(p.prevented, p.baseline_kicks);
+    let counts = format!(
+        "prevents {} of {} [{lo:.2}, {hi:.2}], brings {}",
+        p.prevented, p.baseline_kicks, p.introduced
+    );
+    let named = yardstick.map(|y| y.verdict());
+    let name = match named {
+        Some(v @ (Verdict::Damper | Verdict::Pump | Verdict::DamperAndPump)) => v.name(),
+        _ if p.baseline_kicks == 0 => "not judged: the baseline does not kick",
+        _ if 2 * p.prevented > p.baseline_kicks && p.introduced == 0 => match named {
+            None => "not judged: no yardstick",
+            Some(_) => "cure",
+        },
+        _ if p.prevented > 0 && p.introduced > 0 => "moves the event",
+        _ => "no cure",
+    };
+    format!("{name} ({counts})")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn y(energy_growth: f64, sound_excess_rate: f64) -> Yardstick {
+        Yardstick {
+            energy_growth: Some(energy_growth),
+            sound_excess_rate: Some(sound_excess_rate),
+            ..Yardstick::default()
+        }
+    }
+
+    #[test]
+    fn a_cure_prevents_most_kicks_brings_none_and_is_no_damper_or_pump() {
+        let p = |prevented, introduced| Paired {
+            baseline_kicks: 4,
+            prevented,
+            introduced,
+        };
+        let quiet = y(0.0, 0.1);
+        assert!(verdict(p(3, 0), Some(&quiet)).starts_with("cure (prevents 3 of 4 ["));
+        assert!(verdict(p(2, 0), Some(&quiet)).starts_with("no cure"));
+        assert!(verdict(p(3, 1), Some(&quiet)).starts_with("moves the event"));
+        assert!(verdict(p(3, 0), None).starts_with("not judged: no yardstick"));
+        // The yardsticks name what prevents by damping or by pumping.
+        assert!(verdict(p(4, 0), Some(&y(0.0, 50.0))).starts_with("damper ("));
+        assert!(verdict(p(4, 0), Some(&y(0.5, 0.1))).starts_with("pump ("));
+        let none = Paired::default();
+        assert!(verdict(none, Some(&quiet)).starts_with("not judged: the baseline"));
+    }
+}
