@@ -3,7 +3,7 @@
 //! compared with the baseline on the same physics case (the same values of
 //! every axis that is not a method key), over each case's ensemble members.
 
-use crate::report::data::Row;
+use crate::report::data::{ParamKey, Row};
 use crate::report::yardsticks::{Verdict, Yardstick};
 use std::collections::BTreeMap;
 use study::replay::explain::counterfactual::{wilson, RARE_SHARE, REPRODUCED_SHARE};
@@ -39,28 +39,37 @@ pub struct Paired {
     pub introduced: usize,
 }
 
-/// The physics case of a row: its values at the axes that are not method keys.
-fn case_key(row: &Row, method_axes: &[usize]) -> Vec<String> {
-    row.params
-        .iter()
+/// The axes that set the physics case: not a method key, nor one a
+/// formulation ignores (`ignored.method.*`).
+pub fn case_axes(axes: &[ParamKey]) -> Vec<usize> {
+    axes.iter()
         .enumerate()
-        .filter(|(i, _)| !method_axes.contains(i))
-        .map(|(_, v)| v.clone())
+        .filter(|(_, k)| match k {
+            ParamKey::Method(_) => false,
+            ParamKey::Other(key) => !key.starts_with("ignored."),
+            _ => true,
+        })
+        .map(|(i, _)| i)
         .collect()
 }
 
+/// The physics case of a row: its values at the case axes.
+fn case_key(row: &Row, case_axes: &[usize]) -> Vec<String> {
+    case_axes.iter().map(|&i| row.params[i].clone()).collect()
+}
+
 /// The runs by physics case.
-fn by_case<'a>(rows: &[&'a Row], method_axes: &[usize]) -> BTreeMap<Vec<String>, Vec<&'a Row>> {
+fn by_case<'a>(rows: &[&'a Row], case_axes: &[usize]) -> BTreeMap<Vec<String>, Vec<&'a Row>> {
     let mut cases: BTreeMap<Vec<String>, Vec<&Row>> = BTreeMap::new();
     for r in rows {
-        cases.entry(case_key(r, method_axes)).or_default().push(*r);
+        cases.entry(case_key(r, case_axes)).or_default().push(*r);
     }
     cases
 }
 
 /// The method's runs against the baseline's, case by case.
-pub fn paired(method_axes: &[usize], baseline: &[&Row], method: &[&Row]) -> Paired {
-    let (base, own) = (by_case(baseline, method_axes), by_case(method, method_axes));
+pub fn paired(case_axes: &[usize], baseline: &[&Row], method: &[&Row]) -> Paired {
+    let (base, own) = (by_case(baseline, case_axes), by_case(method, case_axes));
     let mut p = Paired::default();
     for (case, b) in &base {
         let Some(o) = own.get(case) else { continue };
@@ -127,6 +136,16 @@ mod tests {
         assert!(verdict(p(4, 0), Some(&y(0.0, 50.0))).starts_with("damper ("));
         assert!(verdict(p(4, 0), Some(&y(0.5, 0.1))).starts_with("pump ("));
         let none = Paired::default();
+        let axes = [
+            ParamKey::Method("transfer".into()),
+            ParamKey::Other("ignored.method.dt".into()),
+            ParamKey::Material {
+                name: "water".into(),
+                field: "K".into(),
+            },
+            ParamKey::Other("drag.update".into()),
+        ];
+        assert_eq!(case_axes(&axes), [2, 3], "an ignored method key is no case");
         assert!(verdict(none, Some(&quiet)).starts_with("not judged: the baseline"));
     }
 }

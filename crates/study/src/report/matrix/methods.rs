@@ -216,9 +216,9 @@ pub fn methods_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
         page.p(&format!("Beside them: from the standing sound wave in a closed box (inviscid), the frequency error against c k and the excess decay as a viscosity, (rate - (2/3) nu k²) / ((2/3) k²), over nu, at mode 1 and at k h = π/4; from the inviscid Taylor-Green modes near k h = π/4 and π/2, the measured decay rates at {} MPa and at {} MPa (read as measured: the line nu_num + beta k² bends there); from every inviscid yardstick, the largest growth of the motion's energy (kinetic, potential and stored above the water at rest, averaged over an energy period, over 5 s or over any 1 s) as a share of the wave's, and the largest energy the booked terms cycled (the smaller of what they added and what they removed, each by its net over an energy period) over the wave's. The verdict, its rules fixed before the runs: a damper by nu_num (above), by the sound (mode 1's excess decay above {} /s: it loses 63 % of its amplitude within the dam break's second) or by the grid scale (the π/4 mode's rate above {} /s, twice the modern baseline's); a pump when the motion's energy grows by more than {} % of the wave's; accurate when every rule was measured and none fired; undecided otherwise. A method whose booked terms put in and take out more than the wave's energy also cycles.", yardsticks::BULK_MODULUS / 1e6, yardsticks::STIFF_BULK_MODULUS / 1e6, yardsticks::SOUND_DAMPER_RATE, yardsticks::GRID_DAMPER_RATE, 100.0 * yardsticks::PUMP_SHARE));
         headers.extend(YARDSTICK_HEADERS.map(String::from));
     }
-    page.p(&format!("The cure column, its rule fixed before the runs (docs/physics.md section 7, the cure column): each method against the baseline on the same physics case (the same values of every axis that is not a method key), over the case's ensemble members. The baseline kicks in a case when at least {:.0} % of its members kicked; the method prevents it there when at most {:.0} % of its members kicked and none blew up; it brings a kick when the baseline's case is clean and the method's kicks. A method is a cure when it prevents the baseline's kick in more than half of its kicking cases (the count with its 95 % Wilson interval), brings none, and the yardsticks measured it and call it neither a damper nor a pump; the yardsticks' damper or pump comes first, whatever it prevents; one that prevents some and brings others moves the event.", 100.0 * REPRODUCED_SHARE, 100.0 * RARE_SHARE));
+    page.p(&format!("The cure column, its rule fixed before the runs (docs/physics.md section 7, the cure column): each method against the baseline on the same physics case (the same values of every axis that is not a method key, nor a key the formulation ignores), over the case's ensemble members. The baseline kicks in a case when at least {:.0} % of its members kicked; the method prevents it there when at most {:.0} % of its members kicked and none blew up; it brings a kick when the baseline's case is clean and the method's kicks. A method is a cure when it prevents the baseline's kick in more than half of its kicking cases (the count with its 95 % Wilson interval), brings none, and the yardsticks measured it and call it neither a damper nor a pump; the yardsticks' damper or pump comes first, whatever it prevents; one that prevents some and brings others moves the event.", 100.0 * REPRODUCED_SHARE, 100.0 * RARE_SHARE));
     headers.push("cure".into());
-    let method_axes: Vec<usize> = base.iter().map(|(i, _)| *i).collect();
+    let case_axes = cure::case_axes(&m.axes);
     let baseline_runs: Vec<&Row> = groups
         .iter()
         .find(|(l, _)| l == "baseline")
@@ -233,7 +233,7 @@ pub fn methods_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
             cells.push(Cell::Text(if l == "baseline" {
                 "-".into()
             } else {
-                let p = cure::paired(&method_axes, &baseline_runs, runs);
+                let p = cure::paired(&case_axes, &baseline_runs, runs);
                 let y = runs.first().and_then(|r| sticks.of_method(&r.summary));
                 cure::verdict(p, y)
             }));
