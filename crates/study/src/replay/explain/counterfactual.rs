@@ -9,9 +9,10 @@
 
 use super::{Loaded, Window};
 use crate::output::summary::{method_id, Status};
-use crate::run::case::{toml_to_json, watches, with_threads};
+use crate::run::case::{progress_style, toml_to_json, watches, with_threads};
 use crate::run::{Probe, Rows, Run, RunOptions, Runner, Simulated, Stepper, Watch};
 use crate::study_file::{self, ENSEMBLE_JITTER};
+use indicatif::ProgressBar;
 use monitor::{Cause, CellRange, Event};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -402,10 +403,14 @@ pub(super) fn counterfactuals(
     members: usize,
 ) -> Vec<CounterfactualRow> {
     let seeds = seeds(loaded, members);
+    let changes = changes(&loaded.case.solver.method);
+    let bar = ProgressBar::new((changes.len() * members) as u64).with_style(progress_style());
+    bar.set_prefix("counterfactual replays");
     let mut rows: Vec<CounterfactualRow> = vec![];
     let mut control = Tally::default();
-    for (k, (name, change)) in changes(&loaded.case.solver.method).into_iter().enumerate() {
-        let mut row = counterfactual(loaded, window, name, &change, &seeds);
+    for (k, (name, change)) in changes.into_iter().enumerate() {
+        bar.set_message(name.clone());
+        let mut row = counterfactual(loaded, window, name, &change, &seeds, &bar);
         if row.refused.is_none() {
             let tally = tally(&row);
             if k == 0 {
@@ -421,6 +426,7 @@ pub(super) fn counterfactuals(
         }
         rows.push(row);
     }
+    bar.finish_and_clear();
     rows
 }
 
@@ -441,6 +447,7 @@ fn counterfactual(
     name: String,
     change: &Change,
     seeds: &[u64],
+    bar: &ProgressBar,
 ) -> CounterfactualRow {
     let mut row = CounterfactualRow {
         change: name,
@@ -459,7 +466,11 @@ fn counterfactual(
     };
     let replayed: Vec<Result<Member, String>> = seeds
         .par_iter()
-        .map(|&seed| member(loaded, window, change, seed))
+        .map(|&seed| {
+            let done = member(loaded, window, change, seed);
+            bar.inc(1);
+            done
+        })
         .collect();
     for r in replayed {
         match r {
