@@ -30,6 +30,10 @@ pub const REGION_CELLS: usize = 3;
 /// `RARE_SHARE` of them (1 of 5).
 pub const REPRODUCED_SHARE: f64 = 0.8;
 pub const RARE_SHARE: f64 = 0.2;
+/// Next-kick times within this of the control's range are the same time
+/// (s): half the onset window, so that round-off in an event's time does
+/// not read as a delay.
+pub const SAME_TIME: f64 = 0.5 * super::ONSET_SECONDS;
 
 /// One member of one row.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -105,7 +109,8 @@ fn at_least(share: f64, n: usize) -> usize {
 /// of 5, no member blows up or opens another non-physical event, and the
 /// median member gains less than the control's; when the event reopens in
 /// at least 4 of 5, the median time to the next kick in its region against
-/// the control's range says delayed, hastened or again; in between it is
+/// the control's range (widened by `SAME_TIME`) says delayed, hastened or
+/// again; in between it is
 /// undecided.
 pub fn verdict(control: &Tally, change: &Tally) -> &'static str {
     let n = change.members;
@@ -141,8 +146,8 @@ pub fn verdict(control: &Tally, change: &Tally) -> &'static str {
             (a.min(x), b.max(x))
         });
     match median(&own) {
-        Some(m) if m > hi => "delayed",
-        Some(m) if m < lo => "hastened",
+        Some(m) if m > hi + SAME_TIME => "delayed",
+        Some(m) if m < lo - SAME_TIME => "hastened",
         _ => "again",
     }
 }
@@ -753,6 +758,8 @@ mod tests {
         assert_eq!(verdict(&control, &tally(2, &none)), "undecided");
         assert_eq!(verdict(&control, &tally(3, &none)), "undecided");
         assert_eq!(verdict(&control, &tally(4, &at(0.0))), "again");
+        // Within 5 ms of the control's range: the same time.
+        assert_eq!(verdict(&control, &tally(5, &at(0.004))), "again");
         assert_eq!(verdict(&control, &tally(5, &at(0.1))), "delayed");
         assert_eq!(verdict(&control, &tally(5, &at(-0.01))), "hastened");
         let with = |f: &dyn Fn(&mut Tally)| {
