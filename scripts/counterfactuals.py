@@ -77,6 +77,30 @@ def wilson(k, n):
     return max(0.0, centre - half), min(1.0, centre + half)
 
 
+# counterfactual.rs SAME_TIME: records written before that margin are
+# re-judged with it (a delay or haste within it is "again").
+SAME_TIME = 0.005
+
+
+def median(values):
+    v = sorted(values)
+    n = len(v)
+    return None if n == 0 else (v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2]))
+
+
+def rejudged(control, row):
+    if row["verdict"] not in ("delayed", "hastened"):
+        return row["verdict"]
+    times = lambda r: [m["next_kick_after"] if m["next_kick_after"] is not None else math.inf
+                       for m in r["members"]]
+    theirs, own = times(control), median(times(row))
+    if own > max(theirs) + SAME_TIME:
+        return "delayed"
+    if own < min(theirs) - SAME_TIME:
+        return "hastened"
+    return "again"
+
+
 def generic(change):
     """The change's name without the remedies it names (`(without ...)`)."""
     return change.split(" (without")[0]
@@ -97,9 +121,10 @@ def tables(explained):
             if r.get("refused"):
                 cells.append(f"{name}: refused")
                 continue
-            cells.append(f"{name}: {r['reopened']}/{n} {r['verdict']}")
+            verdict = rejudged(control, r)
+            cells.append(f"{name}: {r['reopened']}/{n} {verdict}")
             if control["verdict"] == "control":
-                per_change.setdefault(name, []).append(r["verdict"])
+                per_change.setdefault(name, []).append(verdict)
         print(f"| {os.path.basename(case)} | {e['id']} | {e['t']:.3f} | {e['cause']} | "
               f"{control['reopened']} of {n} ({control['verdict']}) | {'; '.join(cells)} |")
     decided = sum(1 for _, _, r in explained if r["counterfactual"][0]["verdict"] == "control")
