@@ -114,7 +114,8 @@ fn at_least(share: f64, n: usize) -> usize {
 /// undecided.
 pub fn verdict(control: &Tally, change: &Tally) -> &'static str {
     let n = change.members;
-    if control.reopened < at_least(REPRODUCED_SHARE, control.members) {
+    // A control that did not run (refused) reproduces nothing.
+    if control.members == 0 || control.reopened < at_least(REPRODUCED_SHARE, control.members) {
         return "undecided";
     }
     if change.reopened <= (RARE_SHARE * n as f64 + 1e-9).floor() as usize {
@@ -393,7 +394,8 @@ fn region(c: CellRange) -> CellRange {
     }
 }
 
-/// The members' seeds: the same for every row, apart from the case's own.
+/// The members' seeds, derived from the case's seed and the member's
+/// number: the same for every row, each unlike the case's own.
 fn seeds(loaded: &Loaded, members: usize) -> Vec<u64> {
     let base = loaded.case.solver.scene.seed;
     (1..=members as u64)
@@ -758,8 +760,12 @@ mod tests {
         assert_eq!(verdict(&control, &tally(2, &none)), "undecided");
         assert_eq!(verdict(&control, &tally(3, &none)), "undecided");
         assert_eq!(verdict(&control, &tally(4, &at(0.0))), "again");
-        // Within 5 ms of the control's range: the same time.
+        // Within 5 ms of the control's range: the same time; beyond it, not.
         assert_eq!(verdict(&control, &tally(5, &at(0.004))), "again");
+        assert_eq!(verdict(&control, &tally(5, &at(0.006))), "delayed");
+        assert_eq!(verdict(&control, &tally(5, &at(-0.006))), "hastened");
+        // A refused control (no members) decides nothing.
+        assert_eq!(verdict(&Tally::default(), &tally(0, &none)), "undecided");
         assert_eq!(verdict(&control, &tally(5, &at(0.1))), "delayed");
         assert_eq!(verdict(&control, &tally(5, &at(-0.01))), "hastened");
         let with = |f: &dyn Fn(&mut Tally)| {

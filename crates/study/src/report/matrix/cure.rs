@@ -30,9 +30,11 @@ fn kicked(r: &Row) -> bool {
 /// What the method did to the baseline's cases.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Paired {
-    /// Cases the baseline kicks in (at least 4 of 5 members).
+    /// Cases both ran.
+    pub cases: usize,
+    /// Cases the baseline kicks in (at least 80 % of its members).
     pub baseline_kicks: usize,
-    /// Of those, the cases the method runs kick-free (at most 1 of 5
+    /// Of those, the cases the method runs kick-free (at most 20 % of its
     /// members kicked, none blew up).
     pub prevented: usize,
     /// Cases the baseline runs kick-free and the method kicks in.
@@ -73,6 +75,7 @@ pub fn paired(case_axes: &[usize], baseline: &[&Row], method: &[&Row]) -> Paired
     let mut p = Paired::default();
     for (case, b) in &base {
         let Some(o) = own.get(case) else { continue };
+        p.cases += 1;
         if kicks(b) {
             p.baseline_kicks += 1;
             p.prevented += clean(o) as usize;
@@ -86,8 +89,8 @@ pub fn paired(case_axes: &[usize], baseline: &[&Row], method: &[&Row]) -> Paired
 /// The cure verdict: the yardsticks name a damper or a pump first; a
 /// method that prevents the baseline's kicks in more than half of its
 /// kicking cases and brings none into a clean case is a cure when the
-/// yardsticks measured it and call it neither (else it is not judged); one
-/// that prevents some and brings others moves the event; else no cure.
+/// yardsticks call it accurate (else it is not judged); one that prevents
+/// some and brings others moves the event; else no cure.
 pub fn verdict(p: Paired, yardstick: Option<&Yardstick>) -> String {
     let [lo, hi] = wilson(p.prevented, p.baseline_kicks);
     let counts = format!(
@@ -97,10 +100,12 @@ pub fn verdict(p: Paired, yardstick: Option<&Yardstick>) -> String {
     let named = yardstick.map(|y| y.verdict());
     let name = match named {
         Some(v @ (Verdict::Damper | Verdict::Pump | Verdict::DamperAndPump)) => v.name(),
+        _ if p.cases == 0 => "not judged: no case run by both",
         _ if p.baseline_kicks == 0 => "not judged: the baseline does not kick",
         _ if 2 * p.prevented > p.baseline_kicks && p.introduced == 0 => match named {
             None => "not judged: no yardstick",
-            Some(_) => "cure",
+            Some(Verdict::Accurate) => "cure",
+            Some(_) => "not judged: the yardsticks are undecided",
         },
         _ if p.prevented > 0 && p.introduced > 0 => "moves the event",
         _ => "no cure",
@@ -112,8 +117,14 @@ pub fn verdict(p: Paired, yardstick: Option<&Yardstick>) -> String {
 mod tests {
     use super::*;
 
+    /// Every yardstick measured: nu_num decided (0.1 nu, uncertainty 0.01
+    /// nu, against the damper share 0.25), the sound, the grid scale.
     fn y(energy_growth: f64, sound_excess_rate: f64) -> Yardstick {
         Yardstick {
+            nu: Some(1.0),
+            nu_num: Some(0.1),
+            nu_num_uncertainty: Some(0.01),
+            grid_rate: [Some(100.0), None],
             energy_growth: Some(energy_growth),
             sound_excess_rate: Some(sound_excess_rate),
             ..Yardstick::default()
@@ -123,6 +134,7 @@ mod tests {
     #[test]
     fn a_cure_prevents_most_kicks_brings_none_and_is_no_damper_or_pump() {
         let p = |prevented, introduced| Paired {
+            cases: 5,
             baseline_kicks: 4,
             prevented,
             introduced,
@@ -131,11 +143,23 @@ mod tests {
         assert!(verdict(p(3, 0), Some(&quiet)).starts_with("cure (prevents 3 of 4 ["));
         assert!(verdict(p(2, 0), Some(&quiet)).starts_with("no cure"));
         assert!(verdict(p(3, 1), Some(&quiet)).starts_with("moves the event"));
+        assert_eq!(quiet.verdict(), Verdict::Accurate);
         assert!(verdict(p(3, 0), None).starts_with("not judged: no yardstick"));
+        let unmeasured = Yardstick {
+            nu_num: None,
+            ..quiet.clone()
+        };
+        assert!(verdict(p(3, 0), Some(&unmeasured))
+            .starts_with("not judged: the yardsticks are undecided"));
         // The yardsticks name what prevents by damping or by pumping.
         assert!(verdict(p(4, 0), Some(&y(0.0, 50.0))).starts_with("damper ("));
         assert!(verdict(p(4, 0), Some(&y(0.5, 0.1))).starts_with("pump ("));
         let none = Paired::default();
+        assert!(verdict(none, Some(&quiet)).starts_with("not judged: no case run by both"));
+        let clean = Paired {
+            cases: 3,
+            ..Paired::default()
+        };
         let axes = [
             ParamKey::Method("transfer".into()),
             ParamKey::Other("ignored.method.dt".into()),
@@ -146,6 +170,6 @@ mod tests {
             ParamKey::Other("drag.update".into()),
         ];
         assert_eq!(case_axes(&axes), [2, 3], "an ignored method key is no case");
-        assert!(verdict(none, Some(&quiet)).starts_with("not judged: the baseline"));
+        assert!(verdict(clean, Some(&quiet)).starts_with("not judged: the baseline"));
     }
 }
