@@ -1,6 +1,6 @@
 //! The statistics of the monitor and of the study's tables and reports, in
-//! one place: the detector's robust median and MAD, and the reports' median
-//! with its range.
+//! one place: the detector's robust median and MAD, the reports' median
+//! with its range, and the Wilson interval of a share.
 
 /// The lower median: the middle value, or of an even count the lower of
 /// the two middle ones (an element of `values`, found in O(n) by
@@ -24,10 +24,11 @@ pub fn median_and_mad(values: &mut [f64]) -> (f64, f64) {
     (median, lower_median(values))
 }
 
-/// Median, smallest and largest of the finite values (None when there are
-/// none). Of an even count the median is the mean of the two middle values.
-pub fn spread(values: impl Iterator<Item = f64>) -> Option<(f64, f64, f64)> {
-    let mut v: Vec<f64> = values.filter(|x| x.is_finite()).collect();
+/// Median, smallest and largest of the values `keep` keeps (None when it
+/// keeps none). Of an even count the median is the mean of the two middle
+/// values.
+fn spread_of(values: impl Iterator<Item = f64>, keep: fn(&f64) -> bool) -> Option<(f64, f64, f64)> {
+    let mut v: Vec<f64> = values.filter(keep).collect();
     if v.is_empty() {
         return None;
     }
@@ -41,9 +42,34 @@ pub fn spread(values: impl Iterator<Item = f64>) -> Option<(f64, f64, f64)> {
     Some((median, v[0], v[n - 1]))
 }
 
+/// Median, smallest and largest of the finite values (None when there are
+/// none). Of an even count the median is the mean of the two middle values.
+pub fn spread(values: impl Iterator<Item = f64>) -> Option<(f64, f64, f64)> {
+    spread_of(values, |x| x.is_finite())
+}
+
 /// The median of the finite values, as `spread` takes it (None when there are none).
 pub fn median(values: &[f64]) -> Option<f64> {
     spread(values.iter().copied()).map(|s| s.0)
+}
+
+/// The median of every value but NaN, infinities included (a time that
+/// never came counts as later than any); None when there are none.
+pub fn median_with_infinities(values: &[f64]) -> Option<f64> {
+    spread_of(values.iter().copied(), |x| !x.is_nan()).map(|s| s.0)
+}
+
+/// The 95 % Wilson score interval of a share k of n ([0, 1] when n = 0).
+pub fn wilson(k: usize, n: usize) -> [f64; 2] {
+    if n == 0 {
+        return [0.0, 1.0];
+    }
+    let z = 1.959_963_984_540_054_f64;
+    let (k, n) = (k as f64, n as f64);
+    let p = k / n;
+    let centre = (p + z * z / (2.0 * n)) / (1.0 + z * z / n);
+    let half = z / (1.0 + z * z / n) * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt();
+    [(centre - half).max(0.0), (centre + half).min(1.0)]
 }
 
 #[cfg(test)]
@@ -69,5 +95,24 @@ mod tests {
         assert_eq!(spread(v.iter().copied()), Some((2.5, 1.0, 10.0)));
         assert_eq!(median(&[f64::NAN]), None);
         assert_eq!(median(&[5.0, 1.0, 3.0]), Some(3.0));
+        assert_eq!(
+            median_with_infinities(&[3.0, 1.0, f64::INFINITY, 2.0, f64::NAN]),
+            Some(2.5)
+        );
+        assert_eq!(median_with_infinities(&[f64::NAN]), None);
+    }
+
+    #[test]
+    fn the_wilson_interval_matches_its_closed_form() {
+        // 4 of 5: the textbook values 0.376 and 0.964.
+        let [lo, hi] = wilson(4, 5);
+        assert!(
+            (lo - 0.3755).abs() < 1e-3 && (hi - 0.9638).abs() < 1e-3,
+            "{lo} {hi}"
+        );
+        let [lo, hi] = wilson(0, 5);
+        assert_eq!(lo, 0.0);
+        assert!((hi - 0.4345).abs() < 1e-3, "{hi}");
+        assert_eq!(wilson(0, 0), [0.0, 1.0]);
     }
 }

@@ -13,6 +13,7 @@ use crate::run::case::{progress_style, toml_to_json, watches, with_threads};
 use crate::run::{Probe, Rows, Run, RunOptions, Runner, Simulated, Stepper, Watch};
 use crate::study_file::{self, ENSEMBLE_JITTER};
 use indicatif::ProgressBar;
+use monitor::stats::{median_with_infinities, spread, wilson};
 use monitor::{Cause, CellRange, Event};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -98,9 +99,15 @@ pub struct Tally {
     pub next_kick: Vec<Option<f64>>,
 }
 
-/// At least `share` of `n`, rounded up (4 of 5 for 0.8).
-fn at_least(share: f64, n: usize) -> usize {
-    (share * n as f64 - 1e-9).ceil() as usize
+/// `k` of `n` members reproduce an outcome: at least `REPRODUCED_SHARE`
+/// of them (4 of 5, 3 of 3).
+pub fn reproduced(k: usize, n: usize) -> bool {
+    k as f64 >= REPRODUCED_SHARE * n as f64 - 1e-9
+}
+
+/// `k` of `n` members are rare: at most `RARE_SHARE` of them (1 of 5, 0 of 3).
+pub fn rare(k: usize, n: usize) -> bool {
+    k as f64 <= RARE_SHARE * n as f64 + 1e-9
 }
 
 /// The row's verdict, its rules fixed before the runs (docs/physics.md
@@ -115,10 +122,10 @@ fn at_least(share: f64, n: usize) -> usize {
 pub fn verdict(control: &Tally, change: &Tally) -> &'static str {
     let n = change.members;
     // A control that did not run (refused) reproduces nothing.
-    if control.members == 0 || control.reopened < at_least(REPRODUCED_SHARE, control.members) {
+    if control.members == 0 || !reproduced(control.reopened, control.members) {
         return "undecided";
     }
-    if change.reopened <= (RARE_SHARE * n as f64 + 1e-9).floor() as usize {
+    if rare(change.reopened, n) {
         return if change.blew_up > 0 {
             "blew up"
         } else if change.moved > 0 {
@@ -131,7 +138,7 @@ pub fn verdict(control: &Tally, change: &Tally) -> &'static str {
             "prevented"
         };
     }
-    if change.reopened < at_least(REPRODUCED_SHARE, n) {
+    if !reproduced(change.reopened, n) {
         return "undecided";
     }
     let times = |t: &Tally| -> Vec<f64> {
@@ -146,40 +153,11 @@ pub fn verdict(control: &Tally, change: &Tally) -> &'static str {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
             (a.min(x), b.max(x))
         });
-    match median(&own) {
+    match median_with_infinities(&own) {
         Some(m) if m > hi + SAME_TIME => "delayed",
         Some(m) if m < lo - SAME_TIME => "hastened",
         _ => "again",
     }
-}
-
-/// The median (the mean of the middle two of an even count), of finite or
-/// infinite values; None when empty.
-pub fn median(v: &[f64]) -> Option<f64> {
-    let mut s: Vec<f64> = v.iter().copied().filter(|x| !x.is_nan()).collect();
-    if s.is_empty() {
-        return None;
-    }
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    Some(if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    })
-}
-
-/// The 95 % Wilson score interval of a share k of n ([0, 1] when n = 0).
-pub fn wilson(k: usize, n: usize) -> [f64; 2] {
-    if n == 0 {
-        return [0.0, 1.0];
-    }
-    let z = 1.959_963_984_540_054_f64;
-    let (k, n) = (k as f64, n as f64);
-    let p = k / n;
-    let centre = (p + z * z / (2.0 * n)) / (1.0 + z * z / n);
-    let half = z / (1.0 + z * z / n) * (p * (1.0 - p) / n + z * z / (4.0 * n * n)).sqrt();
-    [(centre - half).max(0.0), (centre + half).min(1.0)]
 }
 
 /// What a counterfactual changes, from the onset window's start.
@@ -425,7 +403,7 @@ pub(super) fn counterfactuals(
             }
             row.verdict = if k > 0 {
                 verdict(&control, &tally).into()
-            } else if control.reopened >= at_least(REPRODUCED_SHARE, control.members) {
+            } else if reproduced(control.reopened, control.members) {
                 "control".into()
             } else {
                 "not reproduced".into()
@@ -501,11 +479,11 @@ fn summarise(row: &mut CounterfactualRow) {
     row.blew_up = ms.iter().filter(|m| m.outcome != "completed").count();
     row.moved = ms.iter().filter(|m| !m.other_events.is_empty()).count();
     let injected: Vec<f64> = ms.iter().map(|m| m.injected).collect();
-    row.injected = median(&injected).unwrap_or(f64::NAN);
+    row.injected = median_with_infinities(&injected).unwrap_or(f64::NAN);
     let next: Vec<f64> = ms.iter().filter_map(|m| m.next_kick_after).collect();
     row.no_next_kick = ms.len() - next.len();
-    let fold = |f: fn(f64, f64) -> f64| next.iter().copied().reduce(f);
-    row.next_kick = [median(&next), fold(f64::min), fold(f64::max)];
+    row.next_kick =
+        spread(next.iter().copied()).map_or([None; 3], |(m, lo, hi)| [Some(m), Some(lo), Some(hi)]);
     row.verdict = String::new();
 }
 
@@ -528,7 +506,6 @@ fn member(loaded: &Loaded, window: Window, change: &Change, seed: u64) -> Result
         .simulated
         .events
         .iter()
-        .filter(|e| e.t >= window.onset_from)
         .filter(after)
         .filter(|e| e.cause != Cause::Impact)
         .filter(|e| !(e.kind == logged.kind && overlaps(e.cells, logged.cells)))
@@ -786,17 +763,10 @@ mod tests {
     }
 
     #[test]
-    fn the_wilson_interval_matches_its_closed_form() {
-        // 4 of 5: the textbook values 0.376 and 0.964.
-        let [lo, hi] = wilson(4, 5);
-        assert!(
-            (lo - 0.3755).abs() < 1e-3 && (hi - 0.9638).abs() < 1e-3,
-            "{lo} {hi}"
-        );
-        let [lo, hi] = wilson(0, 5);
-        assert_eq!(lo, 0.0);
-        assert!((hi - 0.4345).abs() < 1e-3, "{hi}");
-        assert_eq!(wilson(0, 0), [0.0, 1.0]);
-        assert_eq!(median(&[3.0, 1.0, f64::INFINITY, 2.0]), Some(2.5));
+    fn reproduced_and_rare_are_shares_of_the_members() {
+        assert!(reproduced(4, 5) && !reproduced(3, 5));
+        assert!(reproduced(3, 3) && !reproduced(2, 3));
+        assert!(rare(1, 5) && !rare(2, 5));
+        assert!(rare(0, 3) && !rare(1, 3));
     }
 }

@@ -5,14 +5,14 @@
 
 use crate::report::data::{ParamKey, Row};
 use crate::report::yardsticks::{Verdict, Yardstick};
+use monitor::stats::wilson;
 use std::collections::BTreeMap;
-use study::replay::explain::counterfactual::{wilson, RARE_SHARE, REPRODUCED_SHARE};
+use study::replay::explain::counterfactual::{rare, reproduced};
 
-/// A case kicks when at least `REPRODUCED_SHARE` of its members kicked; it
-/// is kick-free when at most `RARE_SHARE` did and none blew up.
+/// A case kicks when its members reproduce a kick (`reproduced`); it is
+/// kick-free when kicks are rare among them (`rare`) and none blew up.
 fn kicks(runs: &[&Row]) -> bool {
-    let k = runs.iter().filter(|r| kicked(r)).count();
-    k as f64 >= REPRODUCED_SHARE * runs.len() as f64 - 1e-9
+    reproduced(runs.iter().filter(|r| kicked(r)).count(), runs.len())
 }
 
 fn clean(runs: &[&Row]) -> bool {
@@ -20,7 +20,7 @@ fn clean(runs: &[&Row]) -> bool {
     let blew = runs
         .iter()
         .any(|r| r.summary.status == study::output::summary::Status::BlewUp);
-    !blew && k as f64 <= RARE_SHARE * runs.len() as f64 + 1e-9
+    !blew && rare(k, runs.len())
 }
 
 fn kicked(r: &Row) -> bool {
