@@ -34,6 +34,14 @@ def cases(folder):
         yield path.parent.name, s
 
 
+def inviscid_checks(folder, check):
+    """(case name, summary, the check's figures) of the inviscid cases that carry `check`."""
+    for name, s in cases(folder):
+        c = s["metrics"].get("checks", {}).get(check)
+        if c and not (param(s, ".viscosity") or 0.0) > 0.0:
+            yield name, s, c
+
+
 def param(s, suffix):
     for k, v in s.get("params", {}).items():
         if k.endswith(suffix):
@@ -61,12 +69,7 @@ def mode_of(s):
 
 def sound_table(folder, nu):
     rows = {}
-    for name, s in cases(folder):
-        if (param(s, ".viscosity") or 0.0) > 0.0:
-            continue
-        c = s["metrics"].get("checks", {}).get("sound_wave")
-        if not c:
-            continue
+    for name, s, c in inviscid_checks(folder, "sound_wave"):
         k = param(s, ".K")
         key = (method_of(name), k)
         slot = 0 if mode_of(s) == 1 else 1
@@ -88,9 +91,8 @@ def sound_table(folder, nu):
 
 def grid_table(folder):
     rows = {}
-    for name, s in cases(folder):
-        c = s["metrics"].get("checks", {}).get("mode_decay")
-        if not c or (param(s, ".viscosity") or 0.0) > 0.0 or param(s, "scene.cell") != 0.01:
+    for name, s, c in inviscid_checks(folder, "mode_decay"):
+        if param(s, "scene.cell") != 0.01:
             continue
         kh = c["k"] * 0.01
         slot = 0 if abs(kh / (math.pi / 4) - 1) < 0.1 else 1 if abs(kh / (math.pi / 2) - 1) < 0.1 else None
@@ -130,12 +132,7 @@ def energy_table(folders, rest=None):
     print("|---|---|---|---|---|---|---|---|---|")
     drifts = {}
     for folder in folders:
-        for name, s in cases(folder):
-            if (param(s, ".viscosity") or 0.0) > 0.0:
-                continue
-            g = s["metrics"].get("checks", {}).get("energy_gain")
-            if not g:
-                continue
+        for name, s, g in inviscid_checks(folder, "energy_gain"):
             if rest and not drifts:
                 drifts.update(rest_drift(rest, g["energy_period_s"]))
             added = sum(t["added"] for t in g["booked"])
