@@ -11,7 +11,7 @@ export RUSTFLAGS ?= -Ctarget-cpu=x86-64
 endif
 endif
 
-.PHONY: run test build matrix bench fmt clean browser
+.PHONY: run test build matrix bench fmt clean browser slurm-check
 
 # The report's browser test needs Debian's chromium; install it when we can
 # (root with apt). Without it the test fails, unless KICK_SKIP_BROWSER=1.
@@ -58,6 +58,11 @@ bench: build
 	$(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape cpgimp --transfer flip
 	# The pressure-implicit formulation's cost per particle-step.
 	$(KICK) bench --scene dam-break --steps 2000 --threads 1 --shape bspline2 --transfer apic --set method.formulation=pressure_implicit
+
+# A live check of `kick slurm` on a single-node SLURM cluster it brings up
+# (root with apt; "skipped" otherwise). Not part of `make test`.
+slurm-check: build
+	scripts/slurm/check.sh $(or $(CARGO_TARGET_DIR),target)/release/kick
 
 fmt:
 	$(CARGO) fmt --all

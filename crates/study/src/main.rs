@@ -3,7 +3,7 @@
 mod report;
 
 use study::replay::{bench, calibrate, explain, reproduce};
-use study::run::{case, matrix};
+use study::run::{case, matrix, slurm};
 use study::study_file;
 
 use clap::{Args, Parser, Subcommand};
@@ -40,6 +40,10 @@ enum Command {
     /// each case (the study's [calibration] table), bisect the smallest
     /// found, and write OUT/detection.{parquet,csv,json}.
     Calibrate(CalibrateArgs),
+    /// Run a study on a SLURM cluster: an array job (one task per shard,
+    /// requeue-safe) and a dependent job that finishes the matrix and its
+    /// report; writes OUT/slurm/*.sbatch and submits them.
+    Slurm(SlurmArgs),
 }
 
 #[derive(Args)]
@@ -114,6 +118,39 @@ struct CalibrateArgs {
     resume: bool,
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
+}
+
+#[derive(Args)]
+struct SlurmArgs {
+    /// Study file (TOML).
+    study: PathBuf,
+    /// Output folder, on a file system every node sees (default: reports/STUDY).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Array tasks; task I runs the cases at positions I, I+N, ... (default: min(cases, 8)).
+    #[arg(long)]
+    shards: Option<usize>,
+    /// CPUs per task; --jobs and --threads follow from them.
+    #[arg(long, default_value_t = 2)]
+    cpus_per_task: usize,
+    /// Cases run at once per task (default: the task's CPUs, at most its cases).
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Wall time per task, HH:MM:SS or D-HH:MM:SS (default: estimated from measured case times).
+    #[arg(long, value_parser = slurm::parse_time)]
+    time: Option<String>,
+    /// Earlier matrix outputs of this study whose case wall times feed the estimate (OUT is read too).
+    #[arg(long, value_name = "DIR")]
+    times_from: Vec<PathBuf>,
+    #[arg(long)]
+    partition: Option<String>,
+    #[arg(long)]
+    account: Option<String>,
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// Write the scripts and print how to submit them, without submitting.
+    #[arg(long)]
+    dry_run: bool,
 }
 
 #[derive(Args)]
@@ -230,6 +267,7 @@ fn main() -> ExitCode {
         Command::List(a) => list_command(a),
         Command::Bench(a) => bench_command(a),
         Command::Calibrate(a) => calibrate_command(a),
+        Command::Slurm(a) => slurm_command(a),
     }
 }
 
@@ -411,6 +449,101 @@ fn calibrate_command(args: CalibrateArgs) -> ExitCode {
         }
         Err(e) => {
             eprintln!("kick calibrate: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// An absolute path (the batch scripts run from another directory).
+fn absolute(path: &std::path::Path) -> PathBuf {
+    std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
+}
+
+fn slurm_command(args: SlurmArgs) -> ExitCode {
+    let study = match study_file::load(&args.study, &args.set) {
+        Ok(s) => s,
+        Err(e) => return bad_input(&e.to_string()),
+    };
+    let cases = study.cases.len();
+    let shards = args.shards.unwrap_or(cases.min(8));
+    if shards == 0 || shards > cases {
+        return bad_input(&format!(
+            "--shards {shards}: out of range for {} (allowed 1 to {cases}, its cases)",
+            args.study.display()
+        ));
+    }
+    if args.cpus_per_task == 0 || args.jobs == Some(0) {
+        return bad_input("--cpus-per-task and --jobs: 0 is out of range (allowed >= 1)");
+    }
+    let stem = args.study.file_stem().unwrap_or_default();
+    let out = absolute(
+        &args
+            .out
+            .unwrap_or_else(|| PathBuf::from("reports").join(stem)),
+    );
+    let opts = slurm::SlurmOptions {
+        kick: std::env::current_exe().map_or_else(|_| PathBuf::from("kick"), |p| absolute(&p)),
+        study_file: absolute(&args.study),
+        out: out.clone(),
+        shards,
+        cpus_per_task: args.cpus_per_task,
+        jobs: args.jobs,
+        time: args.time,
+        partition: args.partition,
+        account: args.account,
+        set: args.set,
+    };
+    let mut sources = args.times_from;
+    sources.push(out.clone());
+    let jobs = args
+        .jobs
+        .unwrap_or(args.cpus_per_task.min(cases.div_ceil(shards)));
+    let estimate =
+        slurm::estimate_time(&study, shards, jobs, &slurm::measured_case_times(&sources));
+    let plan = slurm::plan(&study, &opts, &estimate);
+    let (array, finish) = match slurm::write_scripts(&plan, &out) {
+        Ok(paths) => paths,
+        Err(e) => {
+            eprintln!(
+                "kick slurm: writing {} failed: {e}",
+                out.join("slurm").display()
+            );
+            return ExitCode::FAILURE;
+        }
+    };
+    println!(
+        "{cases} cases in {shards} array tasks of {} CPU(s); wall time per task {} ({})",
+        args.cpus_per_task, plan.time, plan.basis
+    );
+    println!("scripts: {} and {}", array.display(), finish.display());
+    if args.dry_run {
+        println!(
+            "submit: id=$(sbatch --parsable {}) && sbatch --dependency=afterany:$id {}",
+            array.display(),
+            finish.display()
+        );
+        return ExitCode::SUCCESS;
+    }
+    submit_slurm(&array, &finish, &out)
+}
+
+fn submit_slurm(
+    array: &std::path::Path,
+    finish: &std::path::Path,
+    out: &std::path::Path,
+) -> ExitCode {
+    match slurm::submit(array, finish) {
+        Ok((array_id, finish_id)) => {
+            println!("submitted: array job {array_id}, finishing job {finish_id} after it");
+            println!(
+                "follow: squeue -j {array_id},{finish_id}   logs: {}   results: {}",
+                out.join("slurm").display(),
+                out.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("kick slurm: {e} (the scripts are written; submit them by hand)");
             ExitCode::FAILURE
         }
     }

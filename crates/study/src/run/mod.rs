@@ -10,6 +10,7 @@ pub mod checkpoint;
 pub mod matrix;
 pub mod mixture;
 pub mod probes;
+pub mod slurm;
 pub mod stepper;
 pub mod watch;
 

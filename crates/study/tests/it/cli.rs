@@ -2,7 +2,7 @@
 
 use crate::common;
 
-use common::{kick, stderr};
+use common::{kick, stderr, SMALL_MATRIX};
 use monitor::EventKind;
 use std::path::PathBuf;
 use std::process::Command;
@@ -594,20 +594,6 @@ fn bench_set_times_a_remedy_and_refuses_a_bad_key() {
         assert_eq!(o.status.code(), Some(2), "{bad}: {}", stderr(&o));
     }
 }
-
-const SMALL_MATRIX: &str = r#"
-[scene]
-t_end = 0.05
-[[scene.body]]
-rect = [0.0, 0.0, 0.2, 0.4]
-material = "water"
-[materials.water]
-K = 1.5e4
-[output]
-checkpoint_every = 0
-[matrix]
-"materials.water.K" = [1.5e4, 1.5e5]
-"#;
 
 fn rows(csv: &str) -> Vec<Vec<String>> {
     csv.lines()

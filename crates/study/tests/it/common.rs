@@ -53,3 +53,18 @@ pub fn stderr(o: &Output) -> String {
 pub fn summary_json(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
 }
+
+/// A two-case matrix of 0.05 s dam breaks (K = 15 and 150 kPa).
+pub const SMALL_MATRIX: &str = r#"
+[scene]
+t_end = 0.05
+[[scene.body]]
+rect = [0.0, 0.0, 0.2, 0.4]
+material = "water"
+[materials.water]
+K = 1.5e4
+[output]
+checkpoint_every = 0
+[matrix]
+"materials.water.K" = [1.5e4, 1.5e5]
+"#;

@@ -9,4 +9,5 @@ mod common;
 mod module_graph;
 mod report_browser;
 mod run_mixture;
+mod slurm;
 mod yardsticks;
