@@ -24,7 +24,7 @@ pub fn refresh_eos_of(particles: &mut Particles, materials: &[Material], p: usiz
     let j = particles.j[p];
     let state = m.eos(j);
     particles.wave_speed[p] = m.wave_speed_of(&state, j);
-    particles.stored_energy[p] = particles.vol0[p] * state.energy;
+    particles.stored_energy[p] = particles.vol0[p] * m.energy_of(j, &state);
     // The stress itself is the stress stage's (restored, or zero at seeding).
     let mut unused = crate::particles::Mat2::zeros();
     crate::solid_neo_hookean::add_to(

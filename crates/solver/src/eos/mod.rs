@@ -89,21 +89,24 @@ impl Material {
         );
         let rho0 = self.rho0;
         macro_rules! go {
-            ($je:expr, $cut:expr) => {
+            ($je:expr, $cut:expr, $energy:expr) => {
                 for i in 0..n {
-                    let (p, kt, u) = eos($je(j[i]));
+                    let je = $je(j[i]);
+                    let (p, kt, u) = eos(je);
                     pressure[i] = $cut(p);
                     wave[i] = (kt * j[i] / rho0).max(0.0).sqrt();
-                    stored[i] = vol0[i] * u;
+                    stored[i] = vol0[i] * $energy(je, p, u);
                 }
             };
         }
         let j_res = self.j_res;
+        let uncut = |_: f64, _: f64, u: f64| u;
+        let cut = |je: f64, p: f64, u: f64| self.cut_energy(je, p, u);
         match (j_res == 1.0, self.pressure_floor) {
-            (true, None) => go!(|j: f64| j, |p: f64| p),
-            (true, Some(floor)) => go!(|j: f64| j, |p: f64| p.max(floor)),
-            (false, None) => go!(|j: f64| j / j_res, |p: f64| p),
-            (false, Some(floor)) => go!(|j: f64| j / j_res, |p: f64| p.max(floor)),
+            (true, None) => go!(|j: f64| j, |p: f64| p, uncut),
+            (true, Some(floor)) => go!(|j: f64| j, |p: f64| p.max(floor), cut),
+            (false, None) => go!(|j: f64| j / j_res, |p: f64| p, uncut),
+            (false, Some(floor)) => go!(|j: f64| j / j_res, |p: f64| p.max(floor), cut),
         }
     }
 
@@ -124,6 +127,48 @@ impl Material {
         (state.tangent_modulus * j / self.rho0).max(0.0).sqrt()
     }
 
+    /// Stored energy per reference volume of `state` = `eos(j)`, consistent
+    /// with the tension cutoff: U_cut(J) = -int_1^J max(p, floor) dJ'
+    /// (docs/physics.md section 2). Without a floor, the EOS's U.
+    #[inline]
+    pub fn energy_of(&self, j: f64, state: &EosState) -> f64 {
+        if self.pressure_floor.is_none() || self.k == f64::INFINITY {
+            return state.energy;
+        }
+        let je = if self.j_res == 1.0 { j } else { j / self.j_res };
+        self.cut_energy(je, state.pressure, state.energy)
+    }
+
+    /// V0-free stored energy at J under the cutoff (`energy_of(j, eos(j))`).
+    #[inline]
+    pub fn stored(&self, j: f64) -> f64 {
+        self.energy_of(j, &self.eos(j))
+    }
+
+    /// U_cut at the effective J `je`, from the uncut pressure `p` and
+    /// energy `u` there. p decreases with J, so max(p(x), f) = p(min(x, J_f))
+    /// with p(J_f) = f: below J_f the EOS's U (shifted by a constant when
+    /// f > 0 puts J_f below 1), beyond it the floor's work -f dJ.
+    #[inline]
+    fn cut_energy(&self, je: f64, p: f64, u: f64) -> f64 {
+        let Some(f) = self.pressure_floor else {
+            return u;
+        };
+        if f <= 0.0 {
+            if p >= f {
+                return u;
+            }
+            let jf = self.je_at_pressure(f);
+            return self.eos_at(jf).energy - f * (je - jf);
+        }
+        let jf = self.je_at_pressure(f);
+        if p >= f {
+            u - self.eos_at(jf).energy - f * (jf - 1.0)
+        } else {
+            -f * (je - 1.0)
+        }
+    }
+
     /// The tension cutoff applied to an EOS pressure.
     #[inline]
     pub fn cut(&self, p: f64) -> f64 {
@@ -135,11 +180,15 @@ impl Material {
 
     /// J at which the (uncut) pressure equals `p`: the inverse EOS.
     pub fn j_at_pressure(&self, p: f64) -> f64 {
-        let je = match self.eos {
+        self.je_at_pressure(p) * self.j_res
+    }
+
+    /// The effective J / j_res at which the (uncut) pressure equals `p`.
+    fn je_at_pressure(&self, p: f64) -> f64 {
+        match self.eos {
             EosKind::Power => power::j_at(self.k, self.gamma, p),
             EosKind::Tait => tait::j_at(self.k, p),
             EosKind::Linear => linear::j_at(self.k, p),
-        };
-        je * self.j_res
+        }
     }
 }

@@ -409,14 +409,14 @@ pub fn reevaluate_eos(ps: &mut Particles, materials: &[Material]) {
         ps.stress[p] += Mat2::identity() * (ps.pressure[p] - p_new);
         ps.pressure[p] = p_new;
         ps.wave_speed[p] = m.wave_speed_of(&state, j);
-        ps.stored_energy[p] = ps.vol0[p] * state.energy;
+        ps.stored_energy[p] = ps.vol0[p] * m.energy_of(j, &state);
     }
 }
 
 /// V0 U(J) of one particle (its stored energy at J).
 #[inline]
 pub fn stored_energy_at(ps: &Particles, materials: &[Material], p: usize, j: f64) -> f64 {
-    ps.vol0[p] * materials[ps.material[p] as usize].eos(j).energy
+    ps.vol0[p] * materials[ps.material[p] as usize].stored(j)
 }
 
 /// sum 1/2 m |v|^2.

@@ -341,6 +341,6 @@ fn eval_mixed(
         let state = m.eos(j[k]);
         pressure[k] = m.cut(state.pressure);
         wave[k] = m.wave_speed_of(&state, j[k]);
-        stored[k] = vol0[k] * state.energy;
+        stored[k] = vol0[k] * m.energy_of(j[k], &state);
     }
 }

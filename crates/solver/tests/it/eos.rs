@@ -141,8 +141,75 @@ fn eval_run_matches_eos_bit_for_bit() {
                     m.wave_speed_of(&s, js[k]).to_bits(),
                     "c: {what}"
                 );
-                assert_eq!(u[k].to_bits(), (vol0[k] * s.energy).to_bits(), "U: {what}");
+                let stored = vol0[k] * m.energy_of(js[k], &s);
+                assert_eq!(u[k].to_bits(), stored.to_bits(), "U: {what}");
             }
         }
+    }
+}
+
+/// Under a tension cutoff the stored energy is the work of the cut
+/// pressure: U_cut(J) = -int_1^J max(p, floor) dJ', in J / j_res (Simpson's rule on a
+/// fine grid), so U_cut' = -p_cut, continuous at the cut, and the EOS's own
+/// U where nothing is cut (to the bit when the floor is at most 0). Floors
+/// at 0 (the bug report's "no tension"), in tension, and above 0; with J_res.
+#[test]
+fn the_stored_energy_under_a_tension_cutoff_is_the_cut_pressures_work() {
+    for base in materials() {
+        for (floor, j_res) in [(0.0, 1.0), (-0.01, 1.0), (0.002, 1.0), (0.0, 1.02)] {
+            let mut m = base.clone();
+            m.pressure_floor = Some(floor * m.k);
+            m.j_res = j_res;
+            let p_cut = |j: f64| m.pressure(j);
+            let what = |j: f64| {
+                format!(
+                    "{:?} gamma {} floor {floor} K, j_res {j_res}, J {j}",
+                    m.eos, m.gamma
+                )
+            };
+            for k in 0..=40 {
+                let j = 0.8 + 0.01 * k as f64;
+                let n = 2000;
+                // U is a function of J / j_res (docs/physics.md section 2).
+                let dx = (j / j_res - 1.0) / n as f64;
+                let simpson: f64 = (0..=n)
+                    .map(|i| {
+                        let w = if i == 0 || i == n {
+                            1.0
+                        } else if i % 2 == 1 {
+                            4.0
+                        } else {
+                            2.0
+                        };
+                        w * p_cut(j_res * (1.0 + dx * i as f64))
+                    })
+                    .sum::<f64>()
+                    * dx
+                    / 3.0;
+                let u = m.stored(j);
+                // The cut leaves a kink, which Simpson's rule meets at O(dx^2).
+                assert!(
+                    (u + simpson).abs() < 1e-7 * m.k,
+                    "{}: {u} vs {}",
+                    what(j),
+                    -simpson
+                );
+                if floor <= 0.0 && m.eos(j).pressure >= floor * m.k {
+                    assert_eq!(u.to_bits(), m.eos(j).energy.to_bits(), "{}", what(j));
+                }
+            }
+        }
+        let mut m = base.clone();
+        m.pressure_floor = Some(0.0);
+        assert!(
+            m.stored(1.1) < m.eos(1.1).energy,
+            "{:?}: no stored energy in cut tension",
+            m.eos
+        );
+        assert!(
+            m.stored(1.1).abs() < 1e-12 * m.k,
+            "{:?}: a floor at 0 stores nothing in expansion",
+            m.eos
+        );
     }
 }

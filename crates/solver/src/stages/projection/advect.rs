@@ -191,7 +191,7 @@ fn update_with<const W: usize>(
                     stress[k] = visc.stress - pressure[k] * Mat2::identity();
                     dev_rate[k] = visc.dev_rate;
                     wave[k] = 0.0;
-                    stored[k] = vol0[k] * m.eos(j_next).energy;
+                    stored[k] = vol0[k] * m.stored(j_next);
                 }
                 *work = acc;
             },
