@@ -105,13 +105,13 @@ def main():
         with ThreadPoolExecutor(a.jobs) as ex:
             results = list(ex.map(lambda c: explain(a.kick, c[1], c[2]["id"], a.counterfactual), chosen))
     keys = ["internal", "external", "walls", "jump", "small_mass_node", "cell_crossing", "stress_outlier"]
-    print("| case | event | K (Pa) | t (s) | stratum | hallmark | matched | closure | largest part | internal | jump | M1 small-mass | M2 crossing | M3 outlier | M4 drift | M5 Courant | prevented by |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| case | event | K (Pa) | t (s) | stratum | hallmark | matched | closure | largest part | internal | jump | M1 small-mass | M2 crossing | M3 outlier | M4 drift / speed | M4 drift / sqrt(gH) | M5 Courant | prevented by |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     prevented_by = {}
     by = {}
     for (k, case, e), j in zip(chosen, results):
         if j is None:
-            print(f"| {os.path.basename(case)} | {e['id']} | {k[0]:g} | {e['t']:.3f} | {k[1]} | {hallmark(e)} | not explained | | | | | | | | | | |")
+            print(f"| {os.path.basename(case)} | {e['id']} | {k[0]:g} | {e['t']:.3f} | {k[1]} | {hallmark(e)} | not explained | | | | | | | | | | | |")
             continue
         sh = j["shares"]
         by.setdefault(k[1], []).append(sh)
@@ -120,6 +120,7 @@ def main():
         print(f"| {os.path.basename(case)} | {e['id']} | {k[0]:g} | {e['t']:.3f} | {k[1]} | {hallmark(e)} | {j['matched']} | {j['closure_rest_max']:.1e} | "
               f"{j['largest_part']['part']} | {f2(sh['internal'])} | {f2(sh['jump'])} | {f2(sh['small_mass_node'])} | "
               f"{f2(sh['cell_crossing'])} | {f2(sh['stress_outlier'])} | {f2(j['m4_ringing']['drift_over_speed'])} | "
+              f"{f2(j['m4_ringing'].get('drift_over_gravity_wave'))} | "
               f"{f2(j['m5_time_step']['courant_before'])} | {prevents(j, prevented_by)} |")
     if prevented_by:
         print()

@@ -23,7 +23,8 @@
 //!   `OUTLIER_FLOOR` rho0 g h) from the median of the other particles in
 //!   the 3 x 3 cells around theirs.
 //! - M4, ringing (a flag with its value): the event particles' drift from
-//!   the grid-interpolated velocity, sum |v_p - sum N v_i| / sum |v_p|.
+//!   the grid-interpolated velocity, sum |v_p - sum N v_i| / sum |v_p|,
+//!   and its mean in m/s (the explanation divides it by sqrt(g H)).
 //! - M5, time step (a flag with its value): the event's Courant number and
 //!   nodal advective number, as the event logged them.
 
@@ -156,6 +157,11 @@ pub struct StepParts {
     /// sum |v_p - sum N v_i| / sum |v_p| over the particles (M4), v_p
     /// and v_i at the step's start (P2G).
     pub drift: f64,
+    /// The mean drift |v_p - sum N v_i| itself (m/s): M4 in a velocity
+    /// unit of the scene, not of the particles' own speed, which makes the
+    /// ratio swell for quiet particles (absent from older files).
+    #[serde(default)]
+    pub drift_speed: f64,
     /// The largest |rest| / (dv's and the parts' sizes): round-off unless
     /// after-G2P hooks or impulses act (the decomposition's closure).
     pub rest_max: f64,
@@ -233,7 +239,7 @@ impl Mechanisms {
             ..StepParts::default()
         };
         let (mut crossers, mut outliers) = (vec![], vec![]);
-        let (mut drift_sum, mut speed_sum) = (0.0, 0.0);
+        let (mut drift_sum, mut speed_sum, mut counted) = (0.0, 0.0, 0usize);
         for e in &step.explained {
             if !e.dv.iter().all(|c| c.is_finite()) {
                 continue; // deleted in the step
@@ -270,6 +276,7 @@ impl Mechanisms {
             let interpolated: Vec2 = e.nodes.iter().map(|n| n.interpolated).sum();
             drift_sum += (e.v_before - interpolated).norm();
             speed_sum += e.v_before.norm();
+            counted += 1;
             let size = e.dv.norm() + e.nodes.iter().map(|n| n.parts_size()).sum::<f64>();
             if size > 0.0 {
                 out.rest_max = out.rest_max.max(e.rest.norm() / size);
@@ -283,6 +290,9 @@ impl Mechanisms {
         out.outliers = outliers.len();
         if speed_sum > 0.0 {
             out.drift = drift_sum / speed_sum;
+        }
+        if counted > 0 {
+            out.drift_speed = drift_sum / counted as f64;
         }
         self.add_parts(&out);
         self.remember_cells(step);

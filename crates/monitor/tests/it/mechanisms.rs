@@ -164,3 +164,48 @@ fn m1_a_lone_particle_in_the_corner_of_an_empty_cell() {
     assert_eq!(name, "M1 small-mass node", "{sh:?}");
     assert!(value > 0.4, "{sh:?}");
 }
+
+/// M4's drift in m/s is Galilean: one particle 0.01 m/s off a uniform flow
+/// drifts the same from the grid at 0.01 and at 1 m/s (the grid carries
+/// the flow exactly, its shapes summing to 1), while the ratio to the
+/// particles' own speed falls by about the flows' ratio. The first is the
+/// one events are compared by (over sqrt(g H) in the explanation).
+#[test]
+fn m4_drift_speed_is_the_same_on_a_slow_and_a_fast_flow() {
+    let first_step = |u: f64| {
+        let mut scene = common::water_box(
+            [0.4, 0.3],
+            [0.0, 0.0, 0.2, 0.2],
+            common::tait(1.5e5, 0.0),
+            0.0,
+        );
+        scene.bodies[0].velocity = [u, 0.0];
+        let mut s = Solver::new(SolverConfig {
+            scene,
+            method: method(ShapeKind::Linear),
+            perturb: vec![],
+        })
+        .unwrap();
+        let h = s.config().scene.cell;
+        let q = nearest(&s, Vec2::new(0.1025, 0.1025), None)[0];
+        let x = s.view().x[q];
+        s.plant_motion(q, x, Vec2::new(u + 0.01, 0.0));
+        let around = nearest(&s, x, None)[..6].to_vec();
+        let mut m = Mechanisms::new(Vec2::zeros(), h, 1000.0, 0.0);
+        m.add(&s.step_explained(&around).unwrap())
+    };
+    let (slow, fast) = (first_step(0.01), first_step(1.0));
+    assert!(slow.drift_speed > 1e-3, "{slow:?}");
+    assert!(
+        (slow.drift_speed - fast.drift_speed).abs() < 1e-9 * slow.drift_speed.max(1.0),
+        "{} vs {}",
+        slow.drift_speed,
+        fast.drift_speed
+    );
+    assert!(
+        slow.drift > 30.0 * fast.drift,
+        "{} vs {}",
+        slow.drift,
+        fast.drift
+    );
+}

@@ -485,11 +485,18 @@ fn explain_record(
             .is_some_and(|e| e.first_step == logged.first_step);
     let shares = window_shares(&record.rows);
     let before: Vec<&StepRow> = record.rows.iter().filter(|r| !r.onset).collect();
-    let drift = if before.is_empty() {
-        f64::NAN
-    } else {
-        before.iter().map(|r| r.parts.drift).sum::<f64>() / before.len() as f64
+    let mean_before = |of: fn(&StepRow) -> f64| {
+        if before.is_empty() {
+            f64::NAN
+        } else {
+            before.iter().map(|r| of(r)).sum::<f64>() / before.len() as f64
+        }
     };
+    let drift = mean_before(|r| r.parts.drift);
+    let scene = &loaded.case.solver.scene;
+    let column = monitor::geometry::Geometry::from_scene(scene).column_height;
+    let gravity_wave = (scene.gravity.abs() * column).sqrt();
+    let drift_over_gravity_wave = mean_before(|r| r.parts.drift_speed) / gravity_wave;
     let rest_max = record
         .rows
         .iter()
@@ -521,6 +528,7 @@ fn explain_record(
         },
         m4_ringing: Ringing {
             drift_over_speed: drift,
+            drift_over_gravity_wave,
             steps: before.len(),
             window_s: window.onset_from - window.explain_from,
         },
@@ -573,6 +581,7 @@ fn write_steps(rows: &[StepRow], out: &Path) -> std::io::Result<()> {
         ("share_m2_cell_crossing", share(&|s| s.cell_crossing)),
         ("share_m3_stress_outlier", share(&|s| s.stress_outlier)),
         ("m4_drift", col(&|r| r.parts.drift)),
+        ("m4_drift_speed", col(&|r| r.parts.drift_speed)),
         ("rest_max", col(&|r| r.parts.rest_max)),
         ("crossers", col(&|r| r.parts.crossers as f64)),
         ("outliers", col(&|r| r.parts.outliers as f64)),

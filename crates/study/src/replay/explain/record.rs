@@ -54,6 +54,9 @@ pub struct LargestPart {
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct Ringing {
     pub drift_over_speed: f64,
+    /// The mean drift over sqrt(g H), H the scene's column height: the
+    /// ratio to compare across events (quiet particles do not swell it).
+    pub drift_over_gravity_wave: f64,
     pub steps: usize,
     pub window_s: f64,
 }
@@ -158,6 +161,7 @@ mod tests {
             },
             m4_ringing: Ringing {
                 drift_over_speed: f64::NAN,
+                drift_over_gravity_wave: f64::NAN,
                 steps: 0,
                 window_s: 0.09,
             },
