@@ -172,6 +172,13 @@ pub struct StepParts {
     pub min_node_share: f64,
 }
 
+/// How many distinct values `v` holds (sorted and deduplicated in place).
+fn distinct(v: &mut Vec<usize>) -> usize {
+    v.sort_unstable();
+    v.dedup();
+    v.len()
+}
+
 /// Accumulates shares over the steps of a window.
 #[derive(Clone, Debug, Default)]
 pub struct Mechanisms {
@@ -282,12 +289,8 @@ impl Mechanisms {
                 out.rest_max = out.rest_max.max(e.rest.norm() / size);
             }
         }
-        crossers.sort_unstable();
-        crossers.dedup();
-        outliers.sort_unstable();
-        outliers.dedup();
-        out.crossers = crossers.len();
-        out.outliers = outliers.len();
+        out.crossers = distinct(&mut crossers);
+        out.outliers = distinct(&mut outliers);
         if speed_sum > 0.0 {
             out.drift = drift_sum / speed_sum;
         }
