@@ -13,11 +13,12 @@ among the first kicks, and anomaly-proper events; then the pairs (same
 member): B survives longer / shorter / the same, and B's first kick later /
 earlier, with the median ratio of B's first-kick time to A's.
 
-    python3 scripts/paired_cases.py A B
+    python3 scripts/paired_cases.py A B --group '^K[^_]+_[^_]+'     # by K and EOS
     python3 scripts/paired_cases.py A A --pair _usl_ppc2=_musl_ppc2 --region 0.17,0.22,0,0.05
 """
 import argparse
 import json
+import math
 import os
 import re
 import statistics
@@ -78,9 +79,21 @@ def is_anomaly(e):
     return e.get("quiescent_before") and "strain_rate" in (e.get("deformed_by") or [])
 
 
-def group_of(name, drop):
+def group_of(name, drop, pattern):
+    if pattern:
+        m = re.match(pattern, name)
+        return m.group(0) if m else name
     g = re.sub(r"_e\d+$", "", name)
     return g.replace(drop, "_") if drop else g
+
+
+def sign_test(wins, losses):
+    """Two-sided exact sign test: P(a split at least this uneven | no effect)."""
+    n, k = wins + losses, min(wins, losses)
+    if n == 0:
+        return 1.0
+    tail = sum(math.comb(n, i) for i in range(k + 1)) / 2.0 ** n
+    return min(1.0, 2.0 * tail)
 
 
 def compare(pairs):
@@ -93,8 +106,13 @@ def compare(pairs):
             ratios.append(kb[0]["t"] / ka[0]["t"])
             later += kb[0]["t"] > ka[0]["t"]
             earlier += kb[0]["t"] < ka[0]["t"]
+    rate = lambda s: len(kicks(s)) / max(survival(s), 1e-9)
+    more = sum(rate(b) > rate(a) for a, b in pairs)
+    fewer = sum(rate(b) < rate(a) for a, b in pairs)
     ratio = f"{statistics.median(ratios):.3g} [{min(ratios):.3g}, {max(ratios):.3g}]" if ratios else "-"
-    return f"B longer {longer}, shorter {shorter}, same {len(pairs) - longer - shorter}; first kick later {later}, earlier {earlier}; t_B / t_A {ratio}"
+    return (f"B longer {longer}, shorter {shorter}, same {len(pairs) - longer - shorter} (sign test p = {sign_test(longer, shorter):.2g}); "
+            f"first kick later {later}, earlier {earlier} (p = {sign_test(later, earlier):.2g}), t_B / t_A {ratio}; "
+            f"kicks per s more {more}, fewer {fewer} (p = {sign_test(more, fewer):.2g})")
 
 
 def main():
@@ -103,6 +121,7 @@ def main():
     ap.add_argument("b")
     ap.add_argument("--pair", help="OLD=NEW: arm B is A's case with NEW for OLD in its name")
     ap.add_argument("--region", help="x0,x1,y0,y1 (m): count first kicks there")
+    ap.add_argument("--group", help="regex: a group is its match at the name's start (default: the name without member)")
     args = ap.parse_args()
     box = [float(v) for v in args.region.split(",")] if args.region else None
     a_all, b_all = load(args.a), load(args.b)
@@ -113,7 +132,7 @@ def main():
             continue
         other = name.replace(old, new) if old else name
         if other in b_all:
-            pairs.setdefault(group_of(name, old), []).append((sa, b_all[other]))
+            pairs.setdefault(group_of(name, old, args.group), []).append((sa, b_all[other]))
     head = ["group", "arm", "runs", "completed", "survival (s)", "kicks per s", "first kick (s)"]
     if box:
         head.append("first kicks in region")

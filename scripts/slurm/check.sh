@@ -38,8 +38,13 @@ done
 
 WORK=$(mktemp -d -t kick-slurm-check.XXXXXX)
 PIDS=()
+ARRAY=""
+FINISH=""
 teardown() {
-  scancel --quiet -u root >/dev/null 2>&1 || true
+  # Only this check's jobs, on this check's controller.
+  if [ -n "${ARRAY:-}" ] && [ -n "${SLURM_CONF:-}" ]; then
+    scancel --quiet "$ARRAY" ${FINISH:+"$FINISH"} >/dev/null 2>&1 || true
+  fi
   for pid in "${PIDS[@]}"; do kill "$pid" 2>/dev/null || true; done
   [ -f "$WORK/munged.pid" ] && kill "$(cat "$WORK/munged.pid")" 2>/dev/null || true
   sleep 1
