@@ -42,8 +42,13 @@ ARRAY=""
 FINISH=""
 teardown() {
   # Only this check's jobs, on this check's controller.
+  # Wait for them to stop: killing slurmd leaves its job processes running.
   if [ -n "${ARRAY:-}" ] && [ -n "${SLURM_CONF:-}" ]; then
     scancel --quiet "$ARRAY" ${FINISH:+"$FINISH"} >/dev/null 2>&1 || true
+    for _ in $(seq 30); do
+      [ -z "$(squeue -h -j "$ARRAY${FINISH:+,$FINISH}" 2>/dev/null)" ] && break
+      sleep 1
+    done
   fi
   for pid in "${PIDS[@]}"; do kill "$pid" 2>/dev/null || true; done
   [ -f "$WORK/munged.pid" ] && kill "$(cat "$WORK/munged.pid")" 2>/dev/null || true
@@ -107,10 +112,12 @@ say "cluster up: node $NODE, $CPUS CPUs, $(sinfo -V)"
 
 # --- the array job and its finishing job ------------------------------------
 OUT=$WORK/out
-"$KICK" slurm "$STUDY" --out "$OUT" --shards 2 --cpus-per-task 1 --time 00:30:00 | tee "$WORK/submit.txt"
-ARRAY=$(sed -n 's/^submitted: array job \([0-9]*\),.*/\1/p' "$WORK/submit.txt")
+submitted=0
+"$KICK" slurm "$STUDY" --out "$OUT" --shards 2 --cpus-per-task 1 --time 00:30:00 > "$WORK/submit.txt" 2>&1 || submitted=$?
+cat "$WORK/submit.txt"
+ARRAY=$(sed -n 's/.*array job \([0-9][0-9]*\).*/\1/p' "$WORK/submit.txt" | head -1)
 FINISH=$(sed -n 's/.*finishing job \([0-9]*\) after it.*/\1/p' "$WORK/submit.txt")
-[ -n "$ARRAY" ] && [ -n "$FINISH" ] || fail "kick slurm printed no job ids"
+[ "$submitted" = 0 ] && [ -n "$ARRAY" ] && [ -n "$FINISH" ] || fail "kick slurm failed (exit $submitted) or printed no job ids"
 
 # Shard 1's cases, as kick matrix --shard 1/2 takes them (positions 1, 3, ...).
 mapfile -t SHARD1 < <("$KICK" list "$STUDY" | cut -f1 | awk 'NR % 2 == 0')
@@ -133,7 +140,7 @@ for _ in $(seq 1800); do
   sleep 2
 done
 [ -z "$(squeue -h -j "$FINISH" 2>/dev/null)" ] || fail "the finishing job did not end in an hour"
-scontrol show job "$FINISH" | grep -q "JobState=COMPLETED" ||
+grep -q "JobState=COMPLETED" <<< "$(scontrol show job "$FINISH")" ||
   { cat "$OUT/slurm/finish.log"; fail "the finishing job did not complete"; }
 
 # --- the checks -------------------------------------------------------------

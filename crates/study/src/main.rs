@@ -498,9 +498,11 @@ fn slurm_command(args: SlurmArgs) -> ExitCode {
     let jobs = args
         .jobs
         .unwrap_or(args.cpus_per_task.min(cases.div_ceil(shards)));
-    let estimate =
-        slurm::estimate_time(&study, shards, jobs, &slurm::measured_case_times(&sources));
-    let plan = slurm::plan(&study, &opts, &estimate);
+    let measured = slurm::measured_case_times(&sources);
+    let estimate = slurm::estimate_time(&study, shards, jobs, &measured);
+    let finish_jobs = args.jobs.unwrap_or(args.cpus_per_task.min(cases));
+    let finishing = slurm::estimate_time(&study, 1, finish_jobs, &measured);
+    let plan = slurm::plan(&study, &opts, &estimate, &finishing);
     let (array, finish) = match slurm::write_scripts(&plan, &out) {
         Ok(paths) => paths,
         Err(e) => {

@@ -219,7 +219,11 @@ fn header(opts: &SlurmOptions, name: &str, log: &str, time: &str) -> String {
     let mut h = format!(
         "#!/bin/bash\n#SBATCH --job-name={name}\n#SBATCH --cpus-per-task={}\n#SBATCH --time={time}\n#SBATCH --output={}\n#SBATCH --open-mode=append\n",
         opts.cpus_per_task,
-        shell_word(&opts.out.join("slurm").join(log).display().to_string()),
+        // SLURM expands % in --output: the folder's own % are doubled.
+        shell_word(&format!(
+            "{}/{log}",
+            opts.out.join("slurm").display().to_string().replace('%', "%%")
+        )),
     );
     for (key, value) in [("partition", &opts.partition), ("account", &opts.account)] {
         if let Some(v) = value {
@@ -243,7 +247,14 @@ fn allocation(opts: &SlurmOptions, most_cases: usize) -> String {
 
 /// The array script (one task per shard, requeue-safe) and the finishing
 /// script (every finished case joined, any missing one run, the report).
-pub fn plan(study: &Study, opts: &SlurmOptions, estimate: &TimeEstimate) -> SlurmPlan {
+/// `finish`: the finishing job's estimate (every case on one allocation,
+/// the worst case of failed tasks), used unless `--time` was given.
+pub fn plan(
+    study: &Study,
+    opts: &SlurmOptions,
+    estimate: &TimeEstimate,
+    finish: &TimeEstimate,
+) -> SlurmPlan {
     let cases = study.cases.len();
     let most_cases = cases.div_ceil(opts.shards);
     let time = opts
@@ -254,10 +265,20 @@ pub fn plan(study: &Study, opts: &SlurmOptions, estimate: &TimeEstimate) -> Slur
         Some(_) => "given with --time".to_string(),
         None => estimate.basis.clone(),
     };
-    let name = study
+    // A job name SLURM's #SBATCH parsing keeps whole.
+    let name: String = study
         .file
         .file_stem()
-        .map_or("study".into(), |s| s.to_string_lossy().to_string());
+        .map_or("study".into(), |s| s.to_string_lossy().to_string())
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "._-".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
     let matrix = matrix_command(opts);
     let n = opts.shards;
     let array_script = format!(
@@ -269,7 +290,12 @@ pub fn plan(study: &Study, opts: &SlurmOptions, estimate: &TimeEstimate) -> Slur
     );
     let finish_script = format!(
         "{}# Written by kick slurm: after every shard of {} has ended, joins every finished\n# case of OUT into its tables, runs any case a failed task left, writes the report.\nset -euo pipefail\n{}{matrix} --jobs \"$jobs\" --threads \"$threads\" --resume\n{} report {}\n",
-        header(opts, &format!("kick-{name}-finish"), "finish.log", &time),
+        header(
+            opts,
+            &format!("kick-{name}-finish"),
+            "finish.log",
+            opts.time.as_deref().unwrap_or(&slurm_time(finish.seconds)),
+        ),
         opts.study_file.display(),
         allocation(opts, cases),
         shell_word(&opts.kick.display().to_string()),
@@ -323,7 +349,9 @@ fn sbatch(args: &[&str]) -> Result<String, String> {
 pub fn submit(array: &Path, finish: &Path) -> Result<(String, String), String> {
     let array_id = sbatch(&[&array.display().to_string()])?;
     let after = format!("--dependency=afterany:{array_id}");
-    let finish_id = sbatch(&[&after, &finish.display().to_string()])?;
+    let finish_id = sbatch(&[&after, &finish.display().to_string()]).map_err(|e| {
+        format!("{e}; array job {array_id} was submitted without its finishing job (scancel {array_id}, or submit it by hand)")
+    })?;
     Ok((array_id, finish_id))
 }
 

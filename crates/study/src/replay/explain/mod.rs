@@ -468,6 +468,31 @@ fn finish(
     })
 }
 
+/// M4 over the steps before onset: the drift over the particles' speed,
+/// and the drift in m/s over sqrt(g H) (NaN without gravity).
+fn m4_ringing(record: &Record, scene: &solver::Scene, window: &Window) -> Ringing {
+    let before: Vec<&StepRow> = record.rows.iter().filter(|r| !r.onset).collect();
+    let mean_before = |of: fn(&StepRow) -> f64| {
+        if before.is_empty() {
+            f64::NAN
+        } else {
+            before.iter().map(|r| of(r)).sum::<f64>() / before.len() as f64
+        }
+    };
+    let column = monitor::geometry::Geometry::from_scene(scene).column_height;
+    let gravity_wave = (scene.gravity.abs() * column).sqrt();
+    Ringing {
+        drift_over_speed: mean_before(|r| r.parts.drift),
+        drift_over_gravity_wave: if gravity_wave > 0.0 {
+            mean_before(|r| r.parts.drift_speed) / gravity_wave
+        } else {
+            f64::NAN
+        },
+        steps: before.len(),
+        window_s: window.onset_from - window.explain_from,
+    }
+}
+
 /// The record of an explained replay.
 fn explain_record(
     case_dir: &Path,
@@ -484,19 +509,7 @@ fn explain_record(
             .as_ref()
             .is_some_and(|e| e.first_step == logged.first_step);
     let shares = window_shares(&record.rows);
-    let before: Vec<&StepRow> = record.rows.iter().filter(|r| !r.onset).collect();
-    let mean_before = |of: fn(&StepRow) -> f64| {
-        if before.is_empty() {
-            f64::NAN
-        } else {
-            before.iter().map(|r| of(r)).sum::<f64>() / before.len() as f64
-        }
-    };
-    let drift = mean_before(|r| r.parts.drift);
-    let scene = &loaded.case.solver.scene;
-    let column = monitor::geometry::Geometry::from_scene(scene).column_height;
-    let gravity_wave = (scene.gravity.abs() * column).sqrt();
-    let drift_over_gravity_wave = mean_before(|r| r.parts.drift_speed) / gravity_wave;
+    let m4_ringing = m4_ringing(record, &loaded.case.solver.scene, &window);
     let rest_max = record
         .rows
         .iter()
@@ -526,12 +539,7 @@ fn explain_record(
             part: largest.into(),
             share: Some(largest_share),
         },
-        m4_ringing: Ringing {
-            drift_over_speed: drift,
-            drift_over_gravity_wave,
-            steps: before.len(),
-            window_s: window.onset_from - window.explain_from,
-        },
+        m4_ringing,
         m5_time_step: TimeStep {
             courant_before: ev.courant_before,
             advection_before: ev.advection_before,
