@@ -495,14 +495,7 @@ fn slurm_command(args: SlurmArgs) -> ExitCode {
     };
     let mut sources = args.times_from;
     sources.push(out.clone());
-    let jobs = args
-        .jobs
-        .unwrap_or(args.cpus_per_task.min(cases.div_ceil(shards)));
-    let measured = slurm::measured_case_times(&sources);
-    let estimate = slurm::estimate_time(&study, shards, jobs, &measured);
-    let finish_jobs = args.jobs.unwrap_or(args.cpus_per_task.min(cases));
-    let finishing = slurm::estimate_time(&study, 1, finish_jobs, &measured);
-    let plan = slurm::plan(&study, &opts, &estimate, &finishing);
+    let plan = slurm::plan(&study, &opts, &slurm::measured_case_times(&sources));
     let (array, finish) = match slurm::write_scripts(&plan, &out) {
         Ok(paths) => paths,
         Err(e) => {

@@ -46,6 +46,16 @@ pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     Ok((i, n))
 }
 
+/// The cases of shard `i` of `n`: those at positions i, i + n, ...
+pub fn shard_cases<T>(cases: &[T], i: usize, n: usize) -> Vec<&T> {
+    cases
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| k % n == i)
+        .map(|(_, c)| c)
+        .collect()
+}
+
 /// `name` contains every one of `only` (`--only`; true when empty).
 pub fn named(only: &[String], name: &str) -> bool {
     only.iter().all(|part| name.contains(part.as_str()))
@@ -86,14 +96,13 @@ pub struct MatrixResult {
 pub fn run_matrix(study: &Study, opts: &MatrixOptions) -> std::io::Result<MatrixResult> {
     let started = Instant::now();
     std::fs::create_dir_all(&opts.out)?;
-    let selected: Vec<&Case> = study
-        .cases
-        .iter()
-        .enumerate()
-        .filter(|(k, _)| opts.shard.is_none_or(|(i, n)| k % n == i))
-        .map(|(_, c)| c)
-        .filter(|c| named(&opts.only, &c.name))
-        .collect();
+    let selected: Vec<&Case> = match opts.shard {
+        Some((i, n)) => shard_cases(&study.cases, i, n),
+        None => study.cases.iter().collect(),
+    }
+    .into_iter()
+    .filter(|c| named(&opts.only, &c.name))
+    .collect();
     let mut todo: Vec<&Case> = selected
         .iter()
         .copied()

@@ -4,7 +4,7 @@
 //! report). A requeued task resumes: `--resume` skips its finished cases.
 
 use crate::output::files::write_atomic;
-use crate::run::matrix::{estimated_cost, finished_summary};
+use crate::run::matrix::{estimated_cost, finished_summary, shard_cases};
 use crate::study_file::Study;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -40,9 +40,6 @@ pub const TIME_SLACK_S: f64 = 300.0;
 #[derive(Clone, Debug, PartialEq)]
 pub struct TimeEstimate {
     pub seconds: u64,
-    /// Cases of the study whose wall time was measured.
-    pub measured: usize,
-    pub cases: usize,
     pub basis: String,
 }
 
@@ -79,16 +76,6 @@ pub fn makespan(times: &[f64], workers: usize) -> f64 {
     load.into_iter().fold(0.0, f64::max)
 }
 
-/// The cases of shard `i` of `n`, as `kick matrix --shard i/n` takes them.
-pub fn shard_cases<T>(cases: &[T], i: usize, n: usize) -> Vec<&T> {
-    cases
-        .iter()
-        .enumerate()
-        .filter(|(k, _)| k % n == i)
-        .map(|(_, c)| c)
-        .collect()
-}
-
 /// Wall time per task: the slowest shard's makespan at `jobs` cases at
 /// once, x `TIME_MARGIN` + `TIME_SLACK_S`, from the measured case times;
 /// an unmeasured case is scaled from the measured ones by its estimated
@@ -113,8 +100,6 @@ pub fn estimate_time(
     let Some(rate) = monitor::stats::median(&seconds_per_cost) else {
         return TimeEstimate {
             seconds: UNMEASURED_TIME_S,
-            measured: 0,
-            cases,
             basis: "no case of the study has been measured: a guess, pass --time".into(),
         };
     };
@@ -136,8 +121,6 @@ pub fn estimate_time(
     let seconds = ((slowest * TIME_MARGIN + TIME_SLACK_S) / 60.0).ceil() as u64 * 60;
     TimeEstimate {
         seconds,
-        measured: known,
-        cases,
         basis: format!(
             "estimated from {known} of {cases} cases' measured wall time (slowest shard {slowest:.0} s, x {TIME_MARGIN} + {TIME_SLACK_S:.0} s)"
         ),
@@ -195,7 +178,6 @@ pub struct SlurmPlan {
     pub finish_script: String,
     pub time: String,
     pub basis: String,
-    pub cases: usize,
 }
 
 /// `kick matrix STUDY --out OUT [--set ...]`, quoted for the shell.
@@ -247,16 +229,16 @@ fn allocation(opts: &SlurmOptions, most_cases: usize) -> String {
 
 /// The array script (one task per shard, requeue-safe) and the finishing
 /// script (every finished case joined, any missing one run, the report).
-/// `finish`: the finishing job's estimate (every case on one allocation,
-/// the worst case of failed tasks), used unless `--time` was given.
-pub fn plan(
-    study: &Study,
-    opts: &SlurmOptions,
-    estimate: &TimeEstimate,
-    finish: &TimeEstimate,
-) -> SlurmPlan {
+/// Unless `--time` was given, a task asks its shard's estimate from the
+/// `measured` case times, and the finishing job that of every case on one
+/// allocation (the worst case: every task failed).
+pub fn plan(study: &Study, opts: &SlurmOptions, measured: &BTreeMap<String, f64>) -> SlurmPlan {
     let cases = study.cases.len();
     let most_cases = cases.div_ceil(opts.shards);
+    // The jobs the scripts take at the allocation's CPUs (`allocation`).
+    let jobs_for = |most: usize| opts.jobs.unwrap_or(opts.cpus_per_task.min(most));
+    let estimate = estimate_time(study, opts.shards, jobs_for(most_cases), measured);
+    let finish = estimate_time(study, 1, jobs_for(cases), measured);
     let time = opts
         .time
         .clone()
@@ -306,7 +288,6 @@ pub fn plan(
         finish_script,
         time,
         basis,
-        cases,
     }
 }
 
