@@ -101,7 +101,9 @@ impl Material {
         }
         let j_res = self.j_res;
         let uncut = |_: f64, _: f64, u: f64| u;
-        let cut = |je: f64, p: f64, u: f64| self.cut_energy(je, p, u);
+        // The corner is the material's: found once for the run.
+        let corner = self.cut_corner().unwrap_or_default();
+        let cut = |je: f64, p: f64, u: f64| cut_energy_at(corner, je, p, u);
         match (j_res == 1.0, self.pressure_floor) {
             (true, None) => go!(|j: f64| j, |p: f64| p, uncut),
             (true, Some(floor)) => go!(|j: f64| j, |p: f64| p.max(floor), cut),
@@ -146,27 +148,25 @@ impl Material {
     }
 
     /// U_cut at the effective J `je`, from the uncut pressure `p` and
-    /// energy `u` there. p decreases with J, so max(p(x), f) = p(min(x, J_f))
-    /// with p(J_f) = f: below J_f the EOS's U (shifted by a constant when
-    /// f > 0 puts J_f below 1), beyond it the floor's work -f dJ.
+    /// energy `u` there (the cut's corner found only where it is needed).
     #[inline]
     fn cut_energy(&self, je: f64, p: f64, u: f64) -> f64 {
         let Some(f) = self.pressure_floor else {
             return u;
         };
-        if f <= 0.0 {
-            if p >= f {
-                return u;
-            }
-            let jf = self.je_at_pressure(f);
-            return self.eos_at(jf).energy - f * (je - jf);
+        if f <= 0.0 && p >= f {
+            return u;
         }
+        self.cut_corner()
+            .map_or(u, |corner| cut_energy_at(corner, je, p, u))
+    }
+
+    /// The cut's corner: the floor f, the effective J_f where p(J_f) = f,
+    /// and U(J_f); None without a floor.
+    fn cut_corner(&self) -> Option<(f64, f64, f64)> {
+        let f = self.pressure_floor?;
         let jf = self.je_at_pressure(f);
-        if p >= f {
-            u - self.eos_at(jf).energy - f * (jf - 1.0)
-        } else {
-            -f * (je - 1.0)
-        }
+        Some((f, jf, self.eos_at(jf).energy))
     }
 
     /// The tension cutoff applied to an EOS pressure.
@@ -190,5 +190,19 @@ impl Material {
             EosKind::Tait => tait::j_at(self.k, p),
             EosKind::Linear => linear::j_at(self.k, p),
         }
+    }
+}
+
+/// U_cut at the effective J `je` from the uncut pressure `p` and energy `u`
+/// there, and the cut's corner (f, J_f, U(J_f)). p decreases with J, so
+/// max(p(x), f) = p(min(x, J_f)): below J_f the EOS's U (shifted by a
+/// constant when f > 0 puts J_f below 1), beyond it the floor's work -f dJ.
+#[inline(always)]
+fn cut_energy_at((f, jf, u_f): (f64, f64, f64), je: f64, p: f64, u: f64) -> f64 {
+    match (f <= 0.0, p >= f) {
+        (true, true) => u,
+        (true, false) => u_f - f * (je - jf),
+        (false, true) => u - u_f - f * (jf - 1.0),
+        (false, false) => -f * (je - 1.0),
     }
 }
