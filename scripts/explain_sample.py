@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Explain a stratified sample of a matrix's injection kicks (issue 46).
+"""Explain a stratified sample of a matrix's injection kicks.
 
     python3 scripts/explain_sample.py MATRIX_DIR [--n 30] [--kick PATH] [--jobs 2] [--table-only]
         [--causes injection,inversion] [--counterfactual] [--max-window-steps N]

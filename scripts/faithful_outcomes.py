@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The faithful replica's grid from its record (issue 47):
+"""The faithful replica's grid from its record:
 
     python3 scripts/faithful_outcomes.py [docs/findings/data/faithful.csv]
 

@@ -8,7 +8,7 @@ solver thread each. Prints each round's figures and ratio, and the median.
 
     python3 scripts/implicit_speed.py [--kick target/release/kick]
         [--t-end 1.0] [--rounds 2] [--cell 0.01] [--k 1.5e6 1.5e7]
-        [--out /tmp/implicit_speed]
+        [--out reports/implicit_speed]
 """
 import argparse
 import json
@@ -64,7 +64,7 @@ def main():
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--cell", type=float, default=0.01)
     ap.add_argument("--k", type=float, nargs="+", default=[1.5e6, 1.5e7])
-    ap.add_argument("--out", default="/tmp/implicit_speed")
+    ap.add_argument("--out", default="reports/implicit_speed")
     a = ap.parse_args()
     out = pathlib.Path(a.out)
     out.mkdir(parents=True, exist_ok=True)

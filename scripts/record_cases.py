@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Run a study's cases one by one and keep a compact record of each in a CSV
-that survives the run folders (issues 45 and 46: the remedies study rerun
-with a full event store takes about 8 core-hours, more than one sitting).
+that survives the run folders (the remedies study rerun with a full event
+store takes about 8 core-hours, more than one sitting).
 
     python3 scripts/record_cases.py STUDY --record CSV --out RUNDIR [--kick PATH]
         [--jobs 2] [--set KEY=VALUE ...] [--shard I/N] [--until HH:MM]

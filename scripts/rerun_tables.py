@@ -1,6 +1,5 @@
 #!/usr/bin/env python3
-"""Tables of a study rerun's record (scripts/record_cases.py's CSV), for
-the notes of issues 45 and 46: per method (the case name after K, EOS and
+"""Tables of a study rerun's record (scripts/record_cases.py's CSV): per method (the case name after K, EOS and
 viscosity), the runs recorded and completed, kicks, anomaly-proper events
 (case and id), energy-budget events (`energy_injection`, where the record
 has the column), and the late checkerboard measures side by side (median

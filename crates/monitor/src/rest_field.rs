@@ -1,5 +1,5 @@
 //! The exact rest field the hydrostatic departure is scored against for its
-//! floor (issue 44): a flat layer spanning the box width W that holds the
+//! floor: a flat layer spanning the box width W that holds the
 //! particles' mass M, at rest under the first material's EOS. Its bottom
 //! pressure is p_b = g M / W and, with J(p) the inverse EOS,
 //! dp/dy = -rho0 g / J(p), p = 0 at the surface. Depth below the surface as

@@ -1,4 +1,4 @@
-//! The hydrostatic floor (issue 44): the exact rest field of a flat layer,
+//! The hydrostatic floor: the exact rest field of a flat layer,
 //! scored through the same departure metric. Zero on an EOS-consistent
 //! lattice, positive on a disordered one, equal to the departure when the
 //! pressure is the rest field itself; mass-conserving; all zero without

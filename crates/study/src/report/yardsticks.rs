@@ -29,7 +29,7 @@ use study::run::probes::surge_front::SurgeFrontFigures;
 pub const CELL: f64 = 0.01;
 pub const BULK_MODULUS: f64 = 1.5e6;
 /// A method whose own dissipation exceeds this share of the fluid's
-/// viscosity is a damper (issue 44).
+/// viscosity is a damper.
 pub const DAMPER_SHARE: f64 = 0.25;
 /// The stiffer water of the grid-scale figures (Pa).
 pub const STIFF_BULK_MODULUS: f64 = 1.5e7;

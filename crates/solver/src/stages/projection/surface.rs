@@ -56,7 +56,7 @@ pub(super) fn reconstruct(s: &mut Scratch, h: f64, ghost: bool) {
 /// ghost surface's thin surface cells and spray; under the cell surface
 /// every such cell is fluid) carries its own momentum and keeps u*, in
 /// free flight: overwriting it with its neighbours' velocity drove the
-/// ghost surface's injections (session 38).
+/// ghost surface's injections.
 fn is_air_node(grid: &Grid, s: &Scratch, n: usize, light: f64) -> bool {
     let free_flight = grid.mass[n] >= light && s.holds_material_around(grid, n);
     !s.fluid_node[n] && !free_flight
@@ -66,7 +66,7 @@ fn is_air_node(grid: &Grid, s: &Scratch, n: usize, light: f64) -> bool {
 /// padded nodes around in-box node `n`, each whose in-box node is a fluid
 /// node, as (padded node, in-box node). Under `mirrored` a node beyond a
 /// wall counts as its mirror partner (the wall's symmetry, as the fold
-/// has it); else only across a periodic edge (the step to session 39).
+/// has it); else only across a periodic edge.
 fn masters(grid: &Grid, s: &Scratch, n: usize, mirrored: bool) -> ([(usize, usize); 8], usize) {
     let nx = grid.dims[0] as i64;
     let (mut found, mut count) = ([(0, 0); 8], 0);

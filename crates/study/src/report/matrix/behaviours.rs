@@ -234,7 +234,7 @@ fn less_viscosity_less_stable(m: &Matrix) -> Option<String> {
 }
 
 /// Behaviour 1 per run: half of the particles deleted within this many
-/// steps of the first kick (issue 47's measure).
+/// steps of the first kick (the replica grid's measure).
 pub const BLOW_OUT_STEPS: f64 = 100.0;
 /// Behaviour 2 per run: a late hydrostatic departure of at least this.
 pub const LATE_DEPARTURE: f64 = 1.0;
