@@ -344,7 +344,7 @@ fn the_preconditioners_solve_the_same_pressure_mic0_in_the_fewest_iterations() {
 /// collapsing column it does not help (0.149 against 0.168 after 390
 /// steps): the claim is the slow flow's. It is pinned to the step it was
 /// measured on (`air_nodes = "overwritten"`): with the air nodes slaved
-/// (the default since session 40) the B-spline's drift here is 0.0013
+/// (the default since 2026-11-28) the B-spline's drift here is 0.0013
 /// and the bilinear's -0.0006.
 #[test]
 fn the_bilinear_advection_keeps_the_slosh_tanks_packing() {
@@ -422,7 +422,7 @@ fn cross_work(surface: FreeSurface, steps: usize) -> (f64, f64) {
 /// u^{n+1} is not zero and can add kinetic energy (measured over these
 /// 300 steps: at most 1.3e-14 and 2.9e-14 J/m against 0.15 and 0.36 J/m
 /// removed; the ghost gradient 3.8e-4 J/m against 0.18;
-/// docs/findings/pressure_implicit.md, session 37).
+/// docs/findings/pressure_implicit.md, "The ghost projection is oblique").
 #[test]
 fn the_orthogonal_surfaces_only_remove_kinetic_energy_the_ghost_gradient_moves_it() {
     for surface in [FreeSurface::Cell, FreeSurface::GhostOrthogonal] {
@@ -512,9 +512,9 @@ fn slosh_at(depth: f64, adjust: impl Fn(&mut ProjectionSettings)) -> (f64, f64) 
 /// damps the wave (inviscid, h = 1 cm; linear theory's decay is 0).
 /// Measured here over 5 s (checkerboard 1.5, air nodes slaved, the decay
 /// fitted over the peaks), surface on a line and mid-row: the floor of
-/// 0.25 (the default before session 38) -0.5 % and 0.123 /s, -7.9 % and
+/// 0.25 (the default before the light-node floor change) -0.5 % and 0.123 /s, -7.9 % and
 /// 0.272 /s; the default 0.01 +0.02 % and 0.009 /s, +0.05 % and 0.004 /s
-/// (docs/findings/pressure_implicit.md, sessions 38 and 40).
+/// (docs/findings/pressure_implicit.md, "The light-node floor" and "The air nodes' weight").
 #[test]
 fn a_light_node_floor_under_the_surface_nodes_damps_the_slosh() {
     for depth in [DEPTH, DEPTH + 0.005] {
@@ -550,7 +550,7 @@ fn a_light_node_floor_under_the_surface_nodes_damps_the_slosh() {
 /// incompressible, h = 1 cm, 5 s; measured here, surface on a line and
 /// mid-row: slaved +0.02 % and 0.009 /s, +0.05 % and 0.004 /s;
 /// overwritten +1.6 % and 0.042 /s, -2.0 % and 0.034 /s;
-/// docs/findings/pressure_implicit.md, session 40).
+/// docs/findings/pressure_implicit.md, "The air nodes' weight").
 #[test]
 fn the_air_nodes_weight_rests_on_the_pressure_so_the_slosh_keeps_its_period() {
     for depth in [DEPTH, DEPTH + 0.005] {
