@@ -6,7 +6,7 @@
 //! the particles whose stress reached them coloured by pressure; the
 //! event's particles ringed in black.
 
-use crate::report::plot::{colour_bar, err, render, ColourScale, Figure, Res, SANS};
+use crate::report::plot::{colour_bar, draw_title, err, render, ColourScale, Figure, Res, SANS};
 use monitor::mechanisms::SMALL_NODE_SHARE;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
@@ -89,8 +89,8 @@ impl Picture<'_> {
         title: &str,
     ) -> Res {
         let mut chart = ChartBuilder::on(area)
-            .caption(format!("{title}: t = {:.5} s", f.time), (SANS, 18))
             .margin(10)
+            .margin_top(10 + draw_title(area, &format!("{title}: t = {:.5} s", f.time), 18)?)
             .x_label_area_size(35)
             .y_label_area_size(50)
             .build_cartesian_2d(self.lo.x..self.hi.x, self.lo.y..self.hi.y)

@@ -202,12 +202,18 @@ pub fn heatmaps(m: &Matrix, out: &Path, page: &mut Page) -> Res {
     );
     let hydro: Vec<f64> = m.rows.iter().map(|r| r.hydro_late()).collect();
     let scale = ColourScale::robust(&hydro, true);
+    // An empty map says why: the departure is read on completed runs only.
+    let key = if hydro.iter().any(|h| *h > 0.0) {
+        HeatKey::Bar(scale, "rel. RMS (log)".into())
+    } else {
+        HeatKey::Legend(vec![("no case completed".into(), NO_VALUE)])
+    };
     let hydro_map = layout.figure(
         "Late hydrostatic departure (relative RMS, last second of completed runs)",
-        HeatKey::Bar(scale, "rel. RMS (log)".into()),
+        key,
         |runs| match spread(runs.iter().map(|r| r.hydro_late()).filter(|h| *h > 0.0)) {
             Some((h, _, _)) => (scale.colour(h), short(h)),
-            None => (RGBColor(220, 220, 220), "-".into()),
+            None => (NO_VALUE, why_no_departure(runs).into()),
         },
     );
     page.figure(
@@ -215,6 +221,20 @@ pub fn heatmaps(m: &Matrix, out: &Path, page: &mut Page) -> Res {
         "Late hydrostatic departure (log colour scale)",
     );
     Ok(())
+}
+
+/// The grey of a heatmap cell without a value.
+const NO_VALUE: RGBColor = RGBColor(220, 220, 220);
+
+/// Why a case has no late hydrostatic departure.
+fn why_no_departure(runs: &[&Row]) -> &'static str {
+    if runs.iter().all(|r| r.status() == Status::BlewUp) {
+        "blew up"
+    } else if runs.iter().all(|r| r.status() == Status::Failed) {
+        "failed"
+    } else {
+        "no value"
+    }
 }
 
 /// Heatmap form: the median, with ± half the range when the runs differ.

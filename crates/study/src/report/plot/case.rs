@@ -3,8 +3,8 @@
 //! maps (pressure and a/g with colour bars) and the animation of a kick.
 
 use crate::report::plot::{
-    colour_bar, decade_label, err, fonts, legend, series_colour, short, ColourScale, Figure,
-    LogAxis, Res, SANS,
+    colour_bar, draw_title, err, fonts, legend, log_label, series_colour, short, titled,
+    ColourScale, Figure, LogAxis, Res, SANS,
 };
 use plotters::coord::ranged1d::ValueFormatter;
 use plotters::coord::types::RangedCoordf64;
@@ -167,7 +167,7 @@ impl Figure for TimeseriesFigure<'_> {
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Res {
-        let root = root.titled(&self.title, (SANS, 22)).map_err(err)?;
+        let root = titled(root, &self.title, 22)?;
         let panels = self.panels();
         let areas = root.split_evenly((panels.len(), 1));
         let t_max = self.series.t.iter().copied().fold(0.0, f64::max).max(1e-9);
@@ -179,7 +179,7 @@ impl Figure for TimeseriesFigure<'_> {
                 t_max,
             };
             if panel.log {
-                self.draw_panel(area, panel, at, LogAxis::new(lo, hi), &decade_label)?;
+                self.draw_panel(area, panel, at, LogAxis::new(lo, hi), &log_label)?;
             } else {
                 let y: RangedCoordf64 = (lo..hi).into();
                 self.draw_panel(area, panel, at, y, &|v| short(*v))?;
@@ -289,8 +289,8 @@ impl Figure for FrontFigure<'_> {
             .min(12.0);
         let z_max = self.z_wall * 1.1;
         let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, (SANS, 20))
             .margin(12)
+            .margin_top(12 + draw_title(root, &self.title, 20)?)
             .x_label_area_size(46)
             .y_label_area_size(60)
             .build_cartesian_2d(0.0..t_max, 0.0..z_max)
@@ -363,8 +363,8 @@ impl Figure for PressureDepthFigure<'_> {
         let finite = p_kpa.iter().copied().filter(|p| p.is_finite());
         let (p_lo, p_hi) = finite.fold((0.0f64, p_line), |(a, b), p| (a.min(p), b.max(p)));
         let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, (SANS, 20))
             .margin(12)
+            .margin_top(12 + draw_title(root, &self.title, 20)?)
             .x_label_area_size(46)
             .y_label_area_size(60)
             .build_cartesian_2d(p_lo..p_hi * 1.05, d_max..d_min)
@@ -456,8 +456,8 @@ pub fn draw_map<DB: DrawingBackend>(
     let (w, _) = area.dim_in_pixel();
     let (map, bar) = area.split_horizontally(w.saturating_sub(125));
     let mut chart = ChartBuilder::on(&map)
-        .caption(title, (SANS, 16))
         .margin(6)
+        .margin_top(6 + draw_title(&map, title, 16)?)
         .x_label_area_size(40)
         .y_label_area_size(52)
         .build_cartesian_2d(bbox[0]..bbox[2], bbox[1]..bbox[3])
@@ -513,7 +513,7 @@ impl Figure for MapsFigure<'_> {
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Res {
-        let root = root.titled(&self.title, (SANS, 20)).map_err(err)?;
+        let root = titled(root, &self.title, 20)?;
         let cells = root.split_evenly((2, self.snaps.len().max(1)));
         let all = |f: MapField| -> Vec<f64> {
             self.snaps

@@ -3,8 +3,8 @@
 //! its Pareto front.
 
 use crate::report::plot::{
-    colour_bar, decade_label, err, legend, series_colour, short, ColourScale, Figure, LogAxis, Res,
-    SANS,
+    colour_bar, draw_title, err, legend, log_label, series_colour, short, titled, ColourScale,
+    Figure, LogAxis, Res, SANS,
 };
 use plotters::coord::ranged1d::ValueFormatter;
 use plotters::coord::types::RangedCoordf64;
@@ -51,7 +51,7 @@ impl Figure for HeatmapFigure {
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Res {
-        let root = root.titled(&self.title, (SANS, 20)).map_err(err)?;
+        let root = titled(root, &self.title, 20)?;
         let (w, _) = root.dim_in_pixel();
         let (plots, key) = root.split_horizontally(w.saturating_sub(170));
         let (cols, rows) = self.grid();
@@ -95,8 +95,8 @@ impl HeatmapFigure {
         let (nx, ny) = (self.x_cats.len() as i32, self.y_cats.len() as i32);
         let longest = self.y_cats.iter().map(|c| c.len()).max().unwrap_or(4) as u32;
         let mut chart = ChartBuilder::on(area)
-            .caption(&panel.title, (SANS, 16))
             .margin(8)
+            .margin_top(8 + draw_title(area, &panel.title, 16)?)
             .x_label_area_size(50)
             .y_label_area_size(30 + 7 * longest)
             .build_cartesian_2d(
@@ -188,7 +188,7 @@ impl Figure for LinesFigure {
             (0.0, 1.0)
         };
         if self.x_log {
-            self.draw_on(root, LogAxis::new(lo, hi), &decade_label)
+            self.draw_on(root, LogAxis::new(lo, hi), &log_label)
         } else {
             let x: RangedCoordf64 = (lo..hi).into();
             self.draw_on(root, x, &|v| short(*v))
@@ -218,8 +218,8 @@ impl LinesFigure {
         X: Ranged<ValueType = f64> + ValueFormatter<f64>,
     {
         let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, (SANS, 20))
             .margin(12)
+            .margin_top(12 + draw_title(root, &self.title, 20)?)
             .x_label_area_size(46)
             .y_label_area_size(60)
             .build_cartesian_2d(x, 0.0..self.y_max * 1.08)
@@ -266,8 +266,8 @@ fn log_log_chart<'a, DB: DrawingBackend>(
     [x_label, y_label]: [&str; 2],
 ) -> Res<ChartContext<'a, DB, Cartesian2d<LogAxis, LogAxis>>> {
     let mut chart = ChartBuilder::on(root)
-        .caption(title, (SANS, 20))
         .margin(12)
+        .margin_top(12 + draw_title(root, title, 20)?)
         .x_label_area_size(46)
         .y_label_area_size(70)
         .build_cartesian_2d(x, y)
@@ -276,8 +276,8 @@ fn log_log_chart<'a, DB: DrawingBackend>(
         .configure_mesh()
         .x_desc(x_label)
         .y_desc(y_label)
-        .x_label_formatter(&decade_label)
-        .y_label_formatter(&decade_label)
+        .x_label_formatter(&log_label)
+        .y_label_formatter(&log_label)
         .label_style((SANS, 14))
         .axis_desc_style((SANS, 16))
         .draw()

@@ -10,6 +10,7 @@ use plotters::coord::ranged1d::{KeyPointHint, NoDefaultFormatting, ValueFormatte
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::{CoordTranslate, Shift};
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::FontStyle;
 use std::ops::Range;
 use std::path::Path;
@@ -64,6 +65,69 @@ pub fn render(fig: &impl Figure, dir: &Path, stem: &str) -> Res<[String; 2]> {
     }
     write_atomic(&dir.join(&svg), text.as_bytes()).map_err(err)?;
     Ok([png, svg])
+}
+
+/// Draws `title` centred at the top of `area`, wrapped at spaces into as
+/// many lines as the width needs (a plotters caption is one line and is
+/// clipped at the figure's edges); returns the height it took, in pixels.
+pub fn draw_title<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    title: &str,
+    size: u32,
+) -> Res<u32> {
+    if title.trim().is_empty() {
+        return Ok(0);
+    }
+    let style = TextStyle::from((SANS, size).into_font()).pos(Pos::new(HPos::Center, VPos::Top));
+    let (w, _) = area.dim_in_pixel();
+    let room = w.saturating_sub(2 * TITLE_SIDE);
+    let width = |s: &str| {
+        area.estimate_text_size(s, &style)
+            .map(|(x, _)| x)
+            .unwrap_or(u32::MAX)
+    };
+    let lines = wrap_words(title, room, width);
+    let line_h = size + size / 4;
+    for (k, line) in lines.iter().enumerate() {
+        let y = TITLE_TOP + line_h * k as u32;
+        area.draw(&Text::new(
+            line.clone(),
+            ((w / 2) as i32, y as i32),
+            style.clone(),
+        ))
+        .map_err(err)?;
+    }
+    Ok(TITLE_TOP + line_h * lines.len() as u32)
+}
+
+/// Pixels kept clear beside and above a title.
+const TITLE_SIDE: u32 = 10;
+const TITLE_TOP: u32 = 4;
+
+/// `area` below its wrapped title (the counterpart of plotters' `titled`).
+pub fn titled<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    title: &str,
+    size: u32,
+) -> Res<DrawingArea<DB, Shift>> {
+    let h = draw_title(area, title, size)?;
+    Ok(area.margin(h + if h > 0 { 6 } else { 0 }, 0, 0, 0))
+}
+
+/// Greedy word wrap: each line as long as fits `room` by `width`; a single
+/// word wider than `room` stands alone on its line.
+pub fn wrap_words(text: &str, room: u32, width: impl Fn(&str) -> u32) -> Vec<String> {
+    let mut lines: Vec<String> = vec![];
+    for word in text.split_whitespace() {
+        match lines.last_mut() {
+            Some(line) if width(&format!("{line} {word}")) <= room => {
+                line.push(' ');
+                line.push_str(word);
+            }
+            _ => lines.push(word.to_string()),
+        }
+    }
+    lines
 }
 
 /// Viridis, interpolated between 6 stops; s in [0, 1].
@@ -153,7 +217,7 @@ pub fn colour_bar<DB: DrawingBackend>(
         let mut chart = bar_builder(area)
             .build_cartesian_2d(0.0..1.0, axis)
             .map_err(err)?;
-        let fmt = |v: &f64| decade_label(v);
+        let fmt = |v: &f64| log_label(v);
         bar_body(&mut chart, (lo, hi), label, &fmt, |y| (y - a) / (b - a))?;
         chart
             .draw_series(
@@ -234,7 +298,7 @@ impl LogAxis {
         let (lo, hi) = log_range(lo, hi);
         LogAxis(
             (lo..hi)
-                .with_key_points(log_decades(lo, hi))
+                .with_key_points(log_ticks(lo, hi))
                 .with_light_points(log_minors(lo, hi)),
         )
     }
@@ -274,12 +338,13 @@ impl Ranged for LogAxis {
 
 impl ValueFormatter<f64> for LogAxis {
     fn format(value: &f64) -> String {
-        decade_label(value)
+        log_label(value)
     }
 }
 
 /// `lo..hi` (log10 values) widened to floor..ceil when it holds no whole
-/// decade, so a log axis always has a labelled tick; a non-finite range
+/// decade or fewer than two of [`log_ticks`], so a log axis always has two
+/// labelled ticks; a non-finite range
 /// becomes 0..1 and a single whole decade k the range k-1..k+1.
 pub fn log_range(lo: f64, hi: f64) -> (f64, f64) {
     if !(lo.is_finite() && hi.is_finite()) {
@@ -290,7 +355,7 @@ pub fn log_range(lo: f64, hi: f64) -> (f64, f64) {
     if hi - lo < LOG_EPS && (lo - k).abs() < LOG_EPS {
         return (k - 1.0, k + 1.0);
     }
-    if log_decades(lo, hi).is_empty() {
+    if log_decades(lo, hi).is_empty() || log_ticks(lo, hi).len() < 2 {
         (lo.floor(), hi.ceil())
     } else {
         (lo, hi)
@@ -308,6 +373,37 @@ pub fn log_decades(lo: f64, hi: f64) -> Vec<f64> {
     }
     let (a, b) = ((lo - LOG_EPS).ceil() as i64, (hi + LOG_EPS).floor() as i64);
     (a..=b).map(|k| k as f64).collect()
+}
+
+/// The labelled points of a log axis: its whole decades, and 2 and 5 times
+/// each decade as well when fewer than two decades fall inside, so that
+/// every log axis and colour bar has at least two labelled ticks.
+pub fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let decades = log_decades(lo, hi);
+    if decades.len() >= 2 {
+        return decades;
+    }
+    let mut ticks: Vec<f64> = (lo.floor() as i64..=hi.floor() as i64)
+        .flat_map(|k| [1.0, 2.0, 5.0].map(|m: f64| k as f64 + m.log10()))
+        .filter(|v| (lo - LOG_EPS..=hi + LOG_EPS).contains(v))
+        .collect();
+    ticks.sort_by(f64::total_cmp);
+    ticks
+}
+
+/// The label of a log axis's tick: "10ᵏ" for a whole decade, the plain
+/// number for 2 or 5 times one ("2", "0.5"), empty for anything else.
+pub fn log_label(v: &f64) -> String {
+    let decade = decade_label(v);
+    if !decade.is_empty() || !v.is_finite() {
+        return decade;
+    }
+    let mantissa = 10f64.powf(v - v.floor());
+    if [2.0, 5.0].iter().any(|m| (mantissa - m).abs() < 1e-6) {
+        short(10f64.powf(*v))
+    } else {
+        String::new()
+    }
 }
 
 /// The minor points k + log10(m), m = 2..9, inside `lo..=hi` (log10 values).

@@ -10,7 +10,8 @@ use super::matrix::{
     RefinementFigure,
 };
 use super::{
-    decade_label, log_decades, log_minors, log_range, render, ColourScale, Figure, LogAxis,
+    decade_label, log_decades, log_label, log_minors, log_range, log_ticks, render, wrap_words,
+    ColourScale, Figure, LogAxis,
 };
 use crate::report::matrix::speed::cheapest_for_error;
 use plotters::style::RGBColor;
@@ -67,7 +68,53 @@ fn check(fig: &impl Figure, dir: &Path, stem: &str, labels: &[&str]) -> Vec<Stri
     for l in labels {
         assert!(texts.contains(l), "{svg} lacks the text element {l:?}");
     }
+    texts_fit(&text, w, &svg);
     texts.into_iter().map(String::from).collect()
+}
+
+/// Every horizontal text of an SVG (titles, labels, legends) lies within
+/// the figure's width: its extent from its x, anchor and size, measured
+/// with the embedded font (a browser cannot see into the PNG).
+fn texts_fit(svg_text: &str, width: u32, name: &str) {
+    use plotters::style::IntoFont;
+    super::fonts();
+    let attr = |head: &str, key: &str| -> Option<String> {
+        let at = head.find(&format!(" {key}=\""))? + key.len() + 3;
+        Some(head[at..at + head[at..].find('"')?].to_string())
+    };
+    for element in svg_text.split("<text").skip(1) {
+        let (Some(close), Some(end)) = (element.find('>'), element.find("</text>")) else {
+            continue;
+        };
+        let (head, body) = (&element[..close], element[close + 1..end].trim());
+        if head.contains("transform=") || body.is_empty() {
+            continue; // a rotated axis description runs along the height
+        }
+        let body = body
+            .replace("&lt;", "<")
+            .replace("&gt;", ">")
+            .replace("&amp;", "&");
+        let x: f64 = attr(head, "x")
+            .and_then(|v| v.parse().ok())
+            .expect("text x");
+        let size: f64 = attr(head, "font-size")
+            .and_then(|v| v.parse().ok())
+            .expect("font-size");
+        let font = (super::SANS, size * 1.24).into_font();
+        let w = font
+            .box_size(&body)
+            .expect("the embedded font measures text")
+            .0 as f64;
+        let (left, right) = match attr(head, "text-anchor").as_deref() {
+            Some("middle") => (x - w / 2.0, x + w / 2.0),
+            Some("end") => (x - w, x),
+            _ => (x, x + w),
+        };
+        assert!(
+            left >= -0.5 && right <= width as f64 + 0.5,
+            "{name}: the text {body:?} spans {left:.0}..{right:.0} px, outside the figure's 0..{width}"
+        );
+    }
 }
 
 /// A log figure's SVG: its decades labelled "10ᵏ" in superscript digits and
@@ -347,6 +394,63 @@ fn heatmaps_render_as_png_and_svg() {
     check_log_ticks(&texts, "heatmap_hydro", &["10⁻³", "10⁻²", "10⁻¹", "10⁰"]);
 }
 
+/// The narrowest matrix (one case per panel) with the matrix page's longest
+/// title: the title wraps onto lines inside the figure instead of losing
+/// its ends, and a map with no value carries its reason.
+#[test]
+fn long_titles_wrap_inside_a_narrow_heatmap() {
+    let dir = scratch("narrow");
+    let title = "Outcome by the cause of the first kick; time of first kick and blow-up (s)";
+    let grey = RGBColor(220, 220, 220);
+    let fig = HeatmapFigure {
+        title: title.into(),
+        x_label: "K".into(),
+        y_label: "eos".into(),
+        x_cats: vec!["1.5e6".into()],
+        y_cats: vec!["tait".into()],
+        panels: vec![HeatPanel {
+            title: "materials.water.viscosity = 0.5".into(),
+            cells: vec![HeatCell {
+                x: 0,
+                y: 0,
+                colour: grey,
+                text: "blew up".into(),
+            }],
+        }],
+        key: HeatKey::Legend(vec![("no case completed".into(), grey)]),
+    };
+    let (w, _) = fig.size();
+    assert!(w < 600, "the figure is narrower than its title's one line");
+    let texts = check(
+        &fig,
+        &dir,
+        "heatmap_narrow",
+        &["no case completed", "blew up"],
+    );
+    let lines: Vec<&String> = texts
+        .iter()
+        .filter(|t| title.contains(t.as_str()))
+        .collect();
+    assert!(lines.len() >= 2, "the title wraps: {texts:?}");
+    let joined = lines
+        .iter()
+        .map(|t| t.as_str())
+        .collect::<Vec<_>>()
+        .join(" ");
+    assert_eq!(joined, title, "no word of the title is lost");
+}
+
+#[test]
+fn words_wrap_greedily_and_a_long_word_stands_alone() {
+    let width = |s: &str| 10 * s.chars().count() as u32;
+    assert_eq!(wrap_words("aa bb cc", 50, width), ["aa bb", "cc"]);
+    assert_eq!(
+        wrap_words("aa bbbbbbbbbb cc", 50, width),
+        ["aa", "bbbbbbbbbb", "cc"]
+    );
+    assert!(wrap_words("   ", 50, width).is_empty());
+}
+
 #[test]
 fn stability_lines_render_as_png_and_svg() {
     let dir = scratch("stability");
@@ -540,11 +644,13 @@ fn log_axes_mark_decades_and_the_minors_between() {
         assert!(!decade_label(d).is_empty());
     }
 
-    // A range inside one decade is widened to it, so there is a labelled
-    // tick; one holding a decade is kept; a lone decade gets one each side.
+    // A range inside one decade is widened to it, so there are labelled
+    // ticks; one holding a decade and a 2 or 5 is kept; one holding a decade
+    // alone is widened; a lone decade gets one each side.
     assert_eq!(log_range(0.2, 0.8), (0.0, 1.0));
     assert_eq!(log_range(-1.7, -1.2), (-2.0, -1.0));
-    assert_eq!(log_range(-0.2, 0.3), (-0.2, 0.3));
+    assert_eq!(log_range(-0.2, 0.4), (-0.2, 0.4));
+    assert_eq!(log_range(-0.2, 0.3), (-1.0, 1.0));
     assert_eq!(log_range(2.0, 2.0), (1.0, 3.0));
     assert_eq!(log_range(0.5, 0.5), (0.0, 1.0));
     assert_eq!(log_range(f64::NAN, 1.0), (0.0, 1.0));
@@ -552,4 +658,14 @@ fn log_axes_mark_decades_and_the_minors_between() {
     assert_eq!(axis.decades(), &[0.0, 1.0]);
     assert_eq!(axis.minors().len(), 8);
     assert!(log_decades(0.2, 0.8).is_empty());
+
+    // Fewer than two decades: 2 and 5 times each are labelled too.
+    let ticks = log_ticks(-0.2, 0.4);
+    assert_eq!(ticks.len(), 2, "{ticks:?}");
+    let labels: Vec<String> = ticks.iter().map(log_label).collect();
+    assert_eq!(labels, ["10⁰", "2"]);
+    let labels: Vec<String> = log_ticks(-1.5, -0.1).iter().map(log_label).collect();
+    assert_eq!(labels, ["0.05", "10⁻¹", "0.2", "0.5"]);
+    assert_eq!(log_ticks(-2.3, 1.7), log_decades(-2.3, 1.7));
+    assert_eq!(log_label(&3f64.log10()), "");
 }
