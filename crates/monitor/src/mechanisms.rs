@@ -148,6 +148,61 @@ impl Shares {
     }
 }
 
+/// How many of a set of explained particles meet each mechanism's
+/// criterion at one step, before its velocity change: the precursors
+/// (docs/physics.md section 4c), counted over the quiet window before
+/// an event and in matched quiet regions of the same run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Flags {
+    pub particles: usize,
+    /// M1: a stencil node lighter than `SMALL_NODE_SHARE` of a full node.
+    pub light_node: usize,
+    /// M2: a cell other than at the previous step's P2G.
+    pub crossed: usize,
+    /// M3: a stress outlier among its neighbours.
+    pub outlier: usize,
+}
+
+impl Flags {
+    pub fn add(&mut self, b: &Flags) {
+        self.particles += b.particles;
+        self.light_node += b.light_node;
+        self.crossed += b.crossed;
+        self.outlier += b.outlier;
+    }
+
+    /// The shares of particle-steps flagged (M1, M2, M3); NaN when empty.
+    pub fn fractions(&self) -> [f64; 3] {
+        let n = self.particles as f64;
+        if self.particles == 0 {
+            return [f64::NAN; 3];
+        }
+        [self.light_node, self.crossed, self.outlier].map(|k| k as f64 / n)
+    }
+}
+
+/// The cancellation index of a split, sum |s_i| / |sum s_i|: 1 when every
+/// part pushes the same way; above `CANCELLING` the parts mostly cancel
+/// and no mechanism is named.
+pub fn cancellation(s: &Shares) -> f64 {
+    let parts = [
+        s.internal,
+        s.external,
+        s.walls,
+        s.jump,
+        s.hourglass,
+        s.pressure_correction,
+        s.extrapolation,
+        s.impulse,
+        s.rest,
+    ];
+    let sum: f64 = parts.iter().sum();
+    parts.iter().map(|x| x.abs()).sum::<f64>() / sum.abs()
+}
+
+/// The cancellation index above which the mechanism is undecided.
+pub const CANCELLING: f64 = 2.0;
+
 /// One step's c . dv per part, summed over the event's particles, with sum |dv|^2.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StepParts {
@@ -222,8 +277,43 @@ impl Mechanisms {
         }
     }
 
+    /// The precursor flags of the explained particles `member` selects, at
+    /// this step (call before `add`, which moves the cell memory on).
+    pub fn flags(&self, step: &ExplainedStep, member: impl Fn(usize) -> bool) -> Flags {
+        let cells: Vec<(i64, i64)> = step.x.iter().map(|&x| self.cell(x)).collect();
+        let mut bins: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+        for (q, &c) in cells.iter().enumerate() {
+            bins.entry(c).or_default().push(q);
+        }
+        let mut f = Flags::default();
+        for e in step.explained.iter().filter(|e| member(e.particle)) {
+            f.particles += 1;
+            let q = e.particle;
+            if e.nodes.iter().any(|n| n.mass_share < SMALL_NODE_SHARE) {
+                f.light_node += 1;
+            }
+            if self
+                .previous_cell
+                .get(&step.id[q])
+                .is_some_and(|&c| c != cells[q])
+            {
+                f.crossed += 1;
+            }
+            if self.outlier(q, &cells, &bins, &step.pressure) {
+                f.outlier += 1;
+            }
+        }
+        f
+    }
+
     /// Counts one step of the window; its parts.
     pub fn add(&mut self, step: &ExplainedStep) -> StepParts {
+        self.add_where(step, |_| true)
+    }
+
+    /// Counts one step of the window over the explained particles `member`
+    /// selects (the others are a control's); its parts.
+    pub fn add_where(&mut self, step: &ExplainedStep, member: impl Fn(usize) -> bool) -> StepParts {
         let cells: Vec<(i64, i64)> = step.x.iter().map(|&x| self.cell(x)).collect();
         let crossed = |q: usize| {
             self.previous_cell
@@ -247,7 +337,7 @@ impl Mechanisms {
         };
         let (mut crossers, mut outliers) = (vec![], vec![]);
         let (mut drift_sum, mut speed_sum, mut counted) = (0.0, 0.0, 0usize);
-        for e in &step.explained {
+        for e in step.explained.iter().filter(|e| member(e.particle)) {
             if !e.dv.iter().all(|c| c.is_finite()) {
                 continue; // deleted in the step
             }

@@ -174,10 +174,8 @@ impl Solver {
     /// planted between steps, for the mechanisms' test scenes. Its stress
     /// follows at its next stress update.
     pub fn plant_j(&mut self, p: usize, j: f64) {
-        let ps = &mut self.particles;
-        ps.f[p] *= (j / ps.j[p]).sqrt();
-        ps.j[p] = j;
-        ps.vol[p] = j * ps.vol0[p];
+        let factor = j / self.particles.j[p];
+        self.particles.scale_j(p, factor);
     }
 
     /// Moves particle `p` to `x` with velocity `v` between steps (the next

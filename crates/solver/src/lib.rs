@@ -791,6 +791,8 @@ impl Solver {
             };
             // An impulse: it drives the particle, so it is part of its force-driven acceleration.
             let da = dv / self.dt;
+            let j_scale = pert.j_scale.unwrap_or(1.0);
+            let dx = Vec2::from(pert.dx.unwrap_or([0.0; 2]));
             let ps = &mut self.particles;
             let mut count = 0;
             for p in 0..ps.len() {
@@ -800,6 +802,9 @@ impl Solver {
                         0.5 * ps.mass[p] * ((v + dv).norm_squared() - v.norm_squared());
                     ps.v[p] = v + dv;
                     ps.accel[p] += da;
+                    // The stress follows from J at the next stress update.
+                    ps.scale_j(p, j_scale);
+                    ps.x[p] += dx;
                     count += 1;
                 }
             }
@@ -810,6 +815,8 @@ impl Solver {
                 region,
                 dv: [dv.x, dv.y],
                 particles: count,
+                j_scale,
+                dx: [dx.x, dx.y],
             });
         }
     }

@@ -42,6 +42,14 @@ pub struct Particles {
 }
 
 impl Particles {
+    /// Scales particle `p`'s J by `factor` (F isotropically, V = J V0):
+    /// a planted stress outlier, whose stress follows at the next stress update.
+    pub fn scale_j(&mut self, p: usize, factor: f64) {
+        self.j[p] *= factor;
+        self.f[p] *= factor.sqrt();
+        self.vol[p] = self.vol0[p] * self.j[p];
+    }
+
     pub fn len(&self) -> usize {
         self.x.len()
     }

@@ -82,6 +82,15 @@ pub struct Perturb {
     pub speed: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub direction: Option<Direction>,
+    /// A planted stress outlier: the particles' J (and F, isotropically)
+    /// scaled by this factor, so their pressure departs from their
+    /// neighbours' at the next stress update.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub j_scale: Option<f64>,
+    /// A planted displacement (m): the particles moved by it, for example
+    /// just across a node line beside empty cells (a sliver node).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dx: Option<[f64; 2]>,
 }
 
 /// An impulse as it was applied.
@@ -95,6 +104,18 @@ pub struct Planted {
     pub region: [f64; 4],
     pub dv: [f64; 2],
     pub particles: usize,
+    /// The J factor and the displacement planted with it (1 and 0 when
+    /// only a velocity was).
+    #[serde(default = "Planted::unscaled")]
+    pub j_scale: f64,
+    #[serde(default)]
+    pub dx: [f64; 2],
+}
+
+impl Planted {
+    fn unscaled() -> f64 {
+        1.0
+    }
 }
 
 impl Perturb {
@@ -115,6 +136,8 @@ impl Perturb {
             dv: Some(dv),
             speed: None,
             direction: None,
+            j_scale: None,
+            dx: None,
         }
     }
 
@@ -144,7 +167,29 @@ impl Perturb {
             self.place.is_some(),
             "region | place",
         )?;
-        one(self.dv.is_some(), self.speed.is_some(), "dv | speed")?;
+        let velocity = self.dv.is_some() || self.speed.is_some();
+        if self.dv.is_some() && self.speed.is_some() {
+            one(true, true, "dv | speed")?;
+        }
+        check(
+            velocity || self.j_scale.is_some() || self.dx.is_some(),
+            &key("dv | speed | j_scale | dx"),
+            "at least one is required (got none)",
+        )?;
+        if let Some(s) = self.j_scale {
+            check(
+                s.is_finite() && (0.5..=2.0).contains(&s),
+                &key("j_scale"),
+                format!("{s} is outside 0.5 ..= 2"),
+            )?;
+        }
+        if let Some(dx) = &self.dx {
+            check(
+                dx.iter().all(|v| v.is_finite()),
+                &key("dx"),
+                "must be finite",
+            )?;
+        }
         if let Some(s) = self.step {
             check(s >= 1, &key("step"), "must be >= 1")?;
         }
@@ -197,7 +242,8 @@ impl Perturb {
         let dv = match (self.dv, self.speed, self.direction) {
             (Some(dv), _, _) => Vec2::from(dv),
             (None, Some(speed), Some(direction)) => speed * direction_in(region, ps, direction),
-            _ => return None,
+            (None, Some(_), None) => return None,
+            (None, None, _) => Vec2::zeros(),
         };
         Some((region, dv))
     }

@@ -209,3 +209,24 @@ fn m4_drift_speed_is_the_same_on_a_slow_and_a_fast_flow() {
         fast.drift
     );
 }
+
+#[test]
+fn the_cancellation_index_is_one_when_the_parts_agree_and_large_when_they_cancel() {
+    use monitor::mechanisms::{cancellation, CANCELLING};
+    let agree = Shares {
+        internal: 0.7,
+        jump: 0.3,
+        ..Shares::default()
+    };
+    assert!((cancellation(&agree) - 1.0).abs() < 1e-12);
+    // A burst read as internal force 145 against a transfer jump of -142
+    // (and gravity -2): the parts cancel, no mechanism is named.
+    let cancel = Shares {
+        internal: 145.0,
+        jump: -142.0,
+        external: -2.0,
+        ..Shares::default()
+    };
+    assert!((cancellation(&cancel) - 289.0).abs() < 1e-9);
+    assert!(cancellation(&cancel) > CANCELLING);
+}

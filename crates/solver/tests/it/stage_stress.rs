@@ -432,6 +432,8 @@ fn a_timed_placed_push_is_the_push_its_record_names() {
         dv: None,
         speed: Some(0.05),
         direction: Some(Direction::Up),
+        j_scale: None,
+        dx: None,
     };
     let run = |perturb: Vec<Perturb>| {
         let cfg = SolverConfig {

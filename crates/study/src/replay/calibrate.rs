@@ -405,6 +405,8 @@ fn planted_run(
             dv: None,
             speed: speeds[k],
             direction: Some(spec.direction),
+            j_scale: None,
+            dx: None,
         })
         .collect();
     cfg.scene.t_end = twin.t_plant + spec.window;

@@ -358,6 +358,23 @@ fn bad_study_files_exit_2_naming_file_key_and_range() {
         e.contains("perturb[0].direction") && e.contains("required"),
         "{e}"
     );
+    // A planted stress outlier's J factor out of range, and a plant of nothing.
+    let e = bad(
+        &format!("{GOOD}\n[[perturb]]\nt = 0.1\nregion = [0, 0, 1, 1]\nj_scale = 3.0\n"),
+        &[],
+    );
+    assert!(
+        e.contains("perturb[0].j_scale") && e.contains("0.5 ..= 2"),
+        "{e}"
+    );
+    let e = bad(
+        &format!("{GOOD}\n[[perturb]]\nt = 0.1\nregion = [0, 0, 1, 1]\n"),
+        &[],
+    );
+    assert!(
+        e.contains("perturb[0].dv | speed | j_scale | dx") && e.contains("at least one"),
+        "{e}"
+    );
     let e = bad(
         &format!(
             "{GOOD}\n[[perturb]]\nt = 0.1\nplace = \"middle\"\nspeed = 0.05\ndirection = \"up\"\n"
@@ -949,6 +966,120 @@ fn reproduce_replays_an_injected_kick_bit_for_bit_on_one_thread() {
     let o = kick(&["reproduce", dir.to_str().unwrap(), "--event", &id]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("corrupted"), "{}", stderr(&o));
+}
+
+/// Water at rest (hydrostatic start, linear shapes, FLIP, USL), with one
+/// plant at t = 0.05 s: `PLANT` is its region and what it plants.
+fn planted_study(out: &std::path::Path, name: &str, plant: &str) -> std::path::PathBuf {
+    let study = out.join(format!("{name}.toml"));
+    let text = format!(
+        r#"
+[scene]
+box = [0.4, 0.3]
+t_end = 0.1
+initial = "hydrostatic"
+[[scene.body]]
+rect = [0.0, 0.0, 0.4, 0.2]
+material = "water"
+[materials.water]
+K = 1.5e5
+eos = "tait"
+[method]
+shape = "linear"
+transfer = "flip"
+scheme = "usl"
+[output]
+checkpoint_every = 100
+[[perturb]]
+t = 0.05
+{plant}
+"#
+    );
+    std::fs::write(&study, text).unwrap();
+    study
+}
+
+/// Runs a planted study and explains its first kick: explain.json.
+fn explain_first_kick(out: &std::path::Path, name: &str, plant: &str) -> serde_json::Value {
+    let study = planted_study(out, name, plant);
+    let o = kick(&[
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let dir = out.join(name);
+    let s = summary(&dir);
+    let event = s
+        .events
+        .iter()
+        .find(|e| e.kind == EventKind::Kick)
+        .unwrap_or_else(|| panic!("{name}: the plant kicks: {:?}", s.events));
+    let id = event.id.to_string();
+    let o = kick(&["explain", dir.to_str().unwrap(), "--event", &id]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let file = dir
+        .join("explain")
+        .join(format!("event_{id}"))
+        .join("explain.json");
+    serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap()
+}
+
+#[test]
+fn explain_names_a_planted_stress_outlier_and_a_planted_sliver_node() {
+    let out = scratch("planted");
+    let f = |j: &serde_json::Value, path: &[&str]| {
+        path.iter()
+            .fold(j, |v, k| &v[*k])
+            .as_f64()
+            .unwrap_or(f64::NAN)
+    };
+    // A stress outlier: one cell of the bulk compressed 5 % (7.5 kPa
+    // against the neighbours' 1 kPa). It kicks its neighbours at once:
+    // the burst's shares name M3, with no light node and no quiet precursor.
+    let j = explain_first_kick(
+        &out,
+        "outlier",
+        "region = [0.2, 0.1, 0.21, 0.11]\nj_scale = 0.95",
+    );
+    assert_eq!(j["leading"]["mechanism"], "M3 stress outlier", "{j}");
+    assert_eq!(f(&j, &["shares", "small_mass_node"]), 0.0, "{j}");
+    assert!(f(&j, &["cancellation"]) < 2.0, "{j}");
+    assert_eq!(j["precursors"]["named"], "none", "{j}");
+    assert!(
+        f(&j, &["precursors", "onset_event", "m3_stress_outlier"]) > 0.0,
+        "{j}"
+    );
+    assert_eq!(
+        f(&j, &["precursors", "onset_control", "m3_stress_outlier"]),
+        0.0
+    );
+    // A sliver node: the top row's 4 particles of two cells moved 0.2 mm
+    // across the surface's node line, their stress untouched. Nothing
+    // happens for about 0.04 s, while the light nodes above them drive
+    // their velocity gradient; then they kick, as stress outliers (measured:
+    // M3 1.0 of the burst, M1 0.45). The precursor over the quiet window
+    // is M1, absent from the matched surface boxes.
+    let j = explain_first_kick(
+        &out,
+        "sliver",
+        "region = [0.19, 0.195, 0.21, 0.2]\ndx = [0.0, 0.00395]",
+    );
+    assert_eq!(j["precursors"]["named"], "M1 small-mass node", "{j}");
+    assert!(
+        j["precursors"]["control_boxes"].as_u64().unwrap() >= 2,
+        "{j}"
+    );
+    assert_eq!(
+        f(&j, &["precursors", "quiet_control", "m1_light_node"]),
+        0.0,
+        "{j}"
+    );
+    assert!(f(&j, &["shares", "small_mass_node"]) > 0.3, "{j}");
+    // The kick came at least 0.02 s after the plant (its onset window is
+    // the 0.01 s before its first step).
+    assert!(f(&j, &["window", "onset_from"]) > 0.06, "{j}");
 }
 
 #[test]

@@ -8,6 +8,7 @@
 //! ensemble per single change, applied from the onset window's start
 //! (`counterfactual`).
 
+pub mod precursors;
 pub mod record;
 
 use crate::output::summary::Summary;
@@ -78,6 +79,11 @@ struct Record {
     /// The explained step at the onset window's start, and at the event's first step.
     before: Option<ExplainedStep>,
     onset: Option<ExplainedStep>,
+    /// The matched quiet regions' particle ids (ascending) and boxes, and
+    /// the precursor flags counted.
+    control_ids: Vec<u32>,
+    control_boxes: usize,
+    counts: precursors::Counts,
 }
 
 /// The window's times and steps.
@@ -136,12 +142,41 @@ struct Explaining<'a> {
     cells: CellRange,
     mechanisms: Mechanisms,
     primed: bool,
+    /// The cells of the run's other events in the window.
+    others: Vec<CellRange>,
     record: &'a mut Record,
 }
 
 impl Explaining<'_> {
+    /// The explained particles: the event's, then the controls' (chosen
+    /// at the first explained step).
     fn indices(&mut self) -> Vec<usize> {
         let v = self.solver.view();
+        if !self.primed {
+            let geometry = monitor::Geometry::from_scene(v.scene);
+            let mut count = vec![0usize; geometry.cells[0] * geometry.cells[1]];
+            for &x in v.x.iter() {
+                let (i, j) = geometry.cell_of(x);
+                count[j * geometry.cells[0] + i] += 1;
+            }
+            let boxes = precursors::control_boxes(
+                self.cells,
+                geometry.cells[0],
+                |i, j| count[j * geometry.cells[0] + i] > 0,
+                &self.others,
+            );
+            self.record.control_boxes = boxes.len();
+            self.record.control_ids = (0..v.x.len())
+                .filter(|&p| {
+                    let (i, j) = geometry.cell_of(v.x[p]);
+                    boxes.iter().any(|b| {
+                        (b.i_min..=b.i_max).contains(&i) && (b.j_min..=b.j_max).contains(&j)
+                    })
+                })
+                .map(|p| v.id[p])
+                .collect();
+            self.record.control_ids.sort_unstable();
+        }
         if self.record.ids.is_empty() {
             // An energy event names no particle: those in its cells, by
             // the monitor's own cell rule.
@@ -154,10 +189,36 @@ impl Explaining<'_> {
                 }
             }
         }
-        let ids = &self.record.ids;
+        let (ids, controls) = (&self.record.ids, &self.record.control_ids);
         (0..v.id.len())
-            .filter(|&p| ids.binary_search(&v.id[p]).is_ok())
+            .filter(|&p| {
+                ids.binary_search(&v.id[p]).is_ok() || controls.binary_search(&v.id[p]).is_ok()
+            })
             .collect()
+    }
+
+    /// Counts the precursor flags of a quiet step or of the onset step.
+    fn count_flags(&mut self, step: u64, explained: &ExplainedStep, onset: bool) {
+        let quiet = !onset;
+        if !(quiet || step == self.window.first_step) {
+            return;
+        }
+        let (ids, controls) = (&self.record.ids, &self.record.control_ids);
+        let event = self
+            .mechanisms
+            .flags(explained, |q| ids.binary_search(&explained.id[q]).is_ok());
+        let control = self.mechanisms.flags(explained, |q| {
+            controls.binary_search(&explained.id[q]).is_ok()
+        });
+        let c = &mut self.record.counts;
+        if quiet {
+            c.quiet_event.add(&event);
+            c.quiet_control.add(&control);
+            c.quiet_steps += 1;
+        } else {
+            c.onset_event = event;
+            c.onset_control = control;
+        }
     }
 }
 
@@ -185,7 +246,11 @@ impl Stepper for Explaining<'_> {
             self.primed = true;
             return Ok(());
         }
-        let parts = self.mechanisms.add(&explained);
+        self.count_flags(step, &explained, onset);
+        let ids = &self.record.ids;
+        let parts = self
+            .mechanisms
+            .add_where(&explained, |q| ids.binary_search(&explained.id[q]).is_ok());
         self.record.rows.push(StepRow {
             step,
             time: explained.time,
@@ -210,6 +275,9 @@ struct Loaded {
     checkpoint_name: String,
     /// The time the replays start from.
     checkpoint_t: f64,
+    /// The cells of the run's other events that overlap the quiet and
+    /// onset windows in time (kept clear of the precursors' controls).
+    others: Vec<CellRange>,
 }
 
 fn load(case_dir: &Path, id: u32) -> Result<Loaded, ExplainError> {
@@ -245,7 +313,13 @@ fn load(case_dir: &Path, id: u32) -> Result<Loaded, ExplainError> {
     let from = logged.t - case.monitor.quiet_seconds;
     let (checkpoint_name, checkpoint, checkpoint_t) =
         replay_checkpoint(case_dir, &checkpoint_name, from)?;
+    let others = events
+        .iter()
+        .filter(|e| e.id != id && e.last_t >= from && e.t <= logged.last_t)
+        .map(|e| e.cells)
+        .collect();
     Ok(Loaded {
+        others,
         study_path,
         logged,
         case,
@@ -376,6 +450,7 @@ fn explained_replay(
         window,
         cells: loaded.logged.cells,
         primed: false,
+        others: loaded.others.clone(),
         record,
     };
     if let Err(e) = stepper.load(&loaded.checkpoint, &mut watches) {
@@ -435,7 +510,7 @@ fn finish(
     write_steps(&record.rows, out)?;
     let (lead, part) = (&explained.leading, &explained.largest_part);
     let mut message = format!(
-        "event {}: {} from {} (hash {}); largest part {} {:.3}; leading mechanism {} {:.3}; closure {:.1e}",
+        "event {}: {} from {} (hash {}); largest part {} {:.3}; leading mechanism {} {:.3} (cancellation {:.2}); precursor {} ({:+.2} over {} control boxes); closure {:.1e}",
         explained.event,
         if explained.matched { "replayed" } else { "DIVERGED" },
         loaded.checkpoint_name,
@@ -444,6 +519,10 @@ fn finish(
         part.share.unwrap_or(f64::NAN),
         lead.mechanism,
         lead.share.unwrap_or(f64::NAN),
+        explained.cancellation,
+        explained.precursors.named,
+        explained.precursors.excess,
+        explained.precursors.control_boxes,
         explained.closure_rest_max
     );
     if loaded.checkpoint_t > window.explain_from + 1e-12 {
@@ -515,7 +594,12 @@ fn explain_record(
         .iter()
         .map(|r| r.parts.rest_max)
         .fold(0.0, f64::max);
-    let (leading, leading_share) = shares.leading();
+    let cancellation = monitor::mechanisms::cancellation(&shares);
+    let (leading, leading_share) = if cancellation > monitor::mechanisms::CANCELLING {
+        ("undecided", f64::NAN)
+    } else {
+        shares.leading()
+    };
     let (largest, largest_share) = shares.largest_part();
     let ev = &logged.evidence;
     ExplainRecord {
@@ -531,6 +615,12 @@ fn explain_record(
         steps_explained: record.rows.len(),
         closure_rest_max: rest_max,
         shares,
+        cancellation,
+        precursors: precursors::Precursors::new(
+            &record.counts,
+            record.control_boxes,
+            record.control_ids.len(),
+        ),
         leading: Leading {
             mechanism: leading.into(),
             share: Some(leading_share),

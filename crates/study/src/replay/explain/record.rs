@@ -2,6 +2,7 @@
 //! `ExplainRecord`; the report reads it back through `ExplainedHead`, the
 //! part it shows (a NaN figure is written as null, so it reads as None).
 
+use super::precursors::Precursors;
 use super::{CounterfactualRow, Window};
 use monitor::mechanisms::Shares;
 use serde::{Deserialize, Serialize};
@@ -28,15 +29,20 @@ pub struct ExplainRecord {
     /// Largest part of the velocity change no term explains.
     pub closure_rest_max: f64,
     pub shares: Shares,
+    /// sum |s_i| / |sum s_i| over the split's parts: above
+    /// `monitor::mechanisms::CANCELLING` the leading mechanism is "undecided".
+    pub cancellation: f64,
     pub leading: Leading,
     pub largest_part: LargestPart,
+    pub precursors: Precursors,
     pub m4_ringing: Ringing,
     pub m5_time_step: TimeStep,
     pub criteria: Criteria,
     pub counterfactual: Vec<CounterfactualRow>,
 }
 
-/// The mechanism with the largest share (M1-M3), and the share.
+/// The mechanism with the largest share (M1-M3), and the share; "undecided"
+/// when the split's parts cancel.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Leading {
     pub mechanism: String,
@@ -145,6 +151,8 @@ mod tests {
             particles: vec![3, 4],
             steps_explained: 2,
             closure_rest_max: 1e-12,
+            cancellation: 1.0,
+            precursors: Precursors::new(&Default::default(), 0, 0),
             shares: Shares {
                 internal: 0.75,
                 small_mass_node: f64::NAN,
