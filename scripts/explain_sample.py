@@ -4,6 +4,7 @@
     python3 scripts/explain_sample.py MATRIX_DIR [--n 30] [--kick PATH] [--jobs 2] [--table-only]
         [--causes injection,inversion] [--counterfactual] [--max-window-steps N]
     python3 scripts/explain_sample.py MATRIX_DIR --all-explained
+    python3 scripts/explain_sample.py MATRIX_DIR --table-only --causes impact --precursors
 
 Picks kicks of cause `injection` (or the `--causes` given) from every
 case's summary.json (events open for at most `--max-window-steps` steps
@@ -91,6 +92,8 @@ def main():
     ap.add_argument("--causes", default="injection")
     ap.add_argument("--counterfactual", action="store_true")
     ap.add_argument("--max-window-steps", type=int, default=None)
+    ap.add_argument("--precursors", action="store_true",
+                    help="also table each event's precursors against its matched quiet boxes, and their tally")
     ap.add_argument("--all-explained", action="store_true",
                     help="table every event of the matrix already explained (picked or not); runs nothing")
     a = ap.parse_args()
@@ -122,6 +125,8 @@ def main():
               f"{f2(sh['cell_crossing'])} | {f2(sh['stress_outlier'])} | {f2(j['m4_ringing']['drift_over_speed'])} | "
               f"{f2(j['m4_ringing'].get('drift_over_gravity_wave'))} | "
               f"{f2(j['m5_time_step']['courant_before'])} | {prevents(j, prevented_by)} |")
+    if a.precursors:
+        precursor_table(chosen, results)
     if prevented_by:
         print()
         print("single changes that prevent the event (counterfactual replays): "
@@ -138,6 +143,37 @@ def main():
             v = [x[k] for x in lst]
             cells.append(f"{statistics.median(v):.2f} [{min(v):.2f}, {max(v):.2f}]")
         print(f"| {s} | {len(lst)} | " + " | ".join(cells) + " |")
+
+
+def precursor_table(chosen, results):
+    """Each event's precursors (quiet-window shares of its particle-steps
+    flagged M1, M2, M3 against its matched quiet boxes'), and the tally of
+    the named precursor by the event's cause."""
+    f = lambda x: "-" if x is None else f"{x:.2f}"
+    print()
+    print("| case | event | cause | t (s) | named | excess | M1 event / control | M2 event / control "
+          "| M3 event / control | at first step M1 / M2 / M3 | boxes | cancellation | leading |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    tally = {}
+    for (_, case, e), j in zip(chosen, results):
+        p = (j or {}).get("precursors")
+        if p is None:
+            continue
+        ev, ct, on = p["quiet_event"], p["quiet_control"], p["onset_event"]
+        pair = lambda k: f"{f(ev[k])} / {f(ct[k])}"
+        print(f"| {os.path.basename(case)} | {e['id']} | {e['cause']} | {e['t']:.3f} | {p['named']} | "
+              f"{f(p['excess'])} | {pair('m1_light_node')} | {pair('m2_cell_crossing')} | "
+              f"{pair('m3_stress_outlier')} | {f(on['m1_light_node'])} / {f(on['m2_cell_crossing'])} / "
+              f"{f(on['m3_stress_outlier'])} | {p['control_boxes']} | {f(j['cancellation'])} | "
+              f"{j['leading']['mechanism']} |")
+        cause = "impact" if e["cause"] == "impact" else "kick"
+        tally.setdefault(cause, {}).setdefault(p["named"], 0)
+        tally[cause][p["named"]] += 1
+    print()
+    for cause, names in sorted(tally.items()):
+        n = sum(names.values())
+        print(f"{cause}: {n} explained; named precursor: "
+              + ", ".join(f"{k} {v} of {n}" for k, v in sorted(names.items(), key=lambda x: -x[1])))
 
 
 def hallmark(e):

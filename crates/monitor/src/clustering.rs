@@ -32,6 +32,8 @@ pub(crate) struct Cluster {
     pub(crate) speed_before: f64,
     /// Largest transfer jump of its particles this step (m/s).
     pub(crate) transfer_jump: f64,
+    /// It opened its event this step (else it joined one, or none).
+    pub(crate) opened: bool,
 }
 
 impl Cluster {
@@ -53,6 +55,7 @@ impl Cluster {
             j_min: f64::INFINITY,
             speed_before: 0.0,
             transfer_jump: 0.0,
+            opened: false,
         }
     }
 }
@@ -64,13 +67,16 @@ impl Monitor {
         self.tally_clusters(v);
         for k in 0..self.clusters.len() {
             let cluster = self.clusters[k].clone();
+            let before = self.events.len();
             self.clusters[k].event = if cluster.count >= self.cfg.min_cluster_particles {
                 self.attach(EventKind::Kick, cluster, v, g, false)
             } else {
                 usize::MAX
             };
+            self.clusters[k].opened = self.events.len() > before;
         }
         self.count_members(v);
+        self.log_hallmark(v);
     }
 
     /// Labels the cells holding flagged particles by 8-connected component,

@@ -52,6 +52,11 @@ pub struct MonitorConfig {
     /// Blow-out: a particle faster than this multiple of sqrt(2 g H_box), or
     /// of the bodies' largest initial speed when that is larger.
     pub escape_speed_factor: f64,
+    /// Log the hallmark's raw figures of every opening kick's particles at
+    /// quiet speeds a factor of 3 each way (`monitor::hallmark_log`), to
+    /// re-apply the hallmark offline. Off by default: it adds to the
+    /// monitor's memory and checkpoints.
+    pub hallmark_log: bool,
 }
 
 impl Default for MonitorConfig {
@@ -75,6 +80,7 @@ impl Default for MonitorConfig {
             injection_seconds: 0.03,
             injection_share: 0.1,
             escape_speed_factor: 10.0,
+            hallmark_log: false,
         }
     }
 }

@@ -15,6 +15,7 @@ mod energy_terms;
 pub mod events;
 pub mod front;
 pub mod geometry;
+pub mod hallmark_log;
 pub mod hydrostatic;
 pub mod jump;
 pub mod mechanisms;

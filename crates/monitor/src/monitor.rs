@@ -71,6 +71,8 @@ pub struct Monitor {
     pub(crate) booking: RemedyBooking,
     /// E at t = 0 (the budgets' drifts are measured from it).
     pub(crate) initial_total: f64,
+    /// The hallmark log (`hallmark_log`).
+    pub(crate) hallmark_rows: Vec<crate::hallmark_log::HallmarkRow>,
 }
 
 /// Nodes lighter than this fraction of a full cell's mass rho0 h^2 are left
@@ -107,6 +109,12 @@ impl Monitor {
             let (speed2, rate) = (v.v[p].norm_squared(), v.dev_rate[p]);
             let active = speed2 > quiet2 || rate > quiet_rate;
             history.start(p, v.time, active, rate);
+        }
+        if cfg.hallmark_log {
+            let at = |f: f64, p: usize| {
+                v.v[p].norm_squared() > (f * cfg.quiet_speed).powi(2) || v.dev_rate[p] > quiet_rate
+            };
+            history = history.with_levels(v.time, at);
         }
         Monitor {
             accel: vec![0.0; n],
@@ -148,6 +156,7 @@ impl Monitor {
             transfer_loss: 0.0,
             booking: RemedyBooking::default(),
             initial_total: v.energy.total_with_affine(),
+            hallmark_rows: vec![],
             geom,
             cfg,
         }

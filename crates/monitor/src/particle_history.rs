@@ -22,6 +22,114 @@ pub struct ParticleHistory {
     /// `peak_rate` and `peak_rate_t` as they stood at `active_since`.
     pub settled_peak: Vec<f64>,
     pub settled_peak_t: Vec<f64>,
+    /// The same activity memory at other quiet speeds (`[monitor]
+    /// hallmark_log`): the hallmark re-thresholded offline. Empty unless logged.
+    pub levels: Vec<LevelHistory>,
+}
+
+/// The quiet speeds the hallmark log follows, as multiples of `quiet_speed`:
+/// a factor of 3 each way.
+pub const SPEED_FACTORS: [f64; 5] = [
+    1.0 / 3.0,
+    0.577_350_269_189_625_8,
+    1.0,
+    1.732_050_807_568_877_2,
+    3.0,
+];
+
+/// One quiet speed's activity memory: as `ParticleHistory`'s, the running
+/// peak |dev D| shared with it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LevelHistory {
+    /// The quiet speed's multiple of `quiet_speed`.
+    pub factor: f64,
+    pub last_active: Vec<f64>,
+    pub active_since: Vec<f64>,
+    pub quiet_before: Vec<f64>,
+    pub settled_peak: Vec<f64>,
+    pub settled_peak_t: Vec<f64>,
+}
+
+impl LevelHistory {
+    pub fn new(n: usize, factor: f64) -> Self {
+        LevelHistory {
+            factor,
+            last_active: vec![NEVER; n],
+            active_since: vec![NEVER; n],
+            quiet_before: vec![f64::INFINITY; n],
+            settled_peak: vec![0.0; n],
+            settled_peak_t: vec![NEVER; n],
+        }
+    }
+
+    /// As `ParticleHistory::record`, `peak` and `peak_t` the running peak
+    /// before this observation's rate.
+    #[inline(always)]
+    pub fn record(&mut self, p: usize, t: f64, prev_t: f64, active: bool, peak: (f64, f64)) {
+        if active {
+            if self.last_active[p] != prev_t {
+                self.quiet_before[p] = t - self.last_active[p];
+                self.active_since[p] = t;
+                self.settled_peak[p] = peak.0;
+                self.settled_peak_t[p] = peak.1;
+            }
+            self.last_active[p] = t;
+        }
+    }
+
+    /// As `ParticleHistory::calm`, `peak` the running peak now.
+    pub fn calm(&self, p: usize, t: f64, grace: f64, peak: (f64, f64)) -> Calm {
+        if self.last_active[p] == t {
+            let recent = t - self.active_since[p] <= grace;
+            Calm {
+                quiet_for: if recent { self.quiet_before[p] } else { 0.0 },
+                peak_rate: self.settled_peak[p],
+                peak_rate_t: self.settled_peak_t[p],
+            }
+        } else {
+            Calm {
+                quiet_for: t - self.last_active[p],
+                peak_rate: peak.0,
+                peak_rate_t: peak.1,
+            }
+        }
+    }
+
+    fn arrays_mut(&mut self) -> [&mut Vec<f64>; 5] {
+        [
+            &mut self.last_active,
+            &mut self.active_since,
+            &mut self.quiet_before,
+            &mut self.settled_peak,
+            &mut self.settled_peak_t,
+        ]
+    }
+
+    fn arrays(&self) -> [&Vec<f64>; 5] {
+        [
+            &self.last_active,
+            &self.active_since,
+            &self.quiet_before,
+            &self.settled_peak,
+            &self.settled_peak_t,
+        ]
+    }
+}
+
+/// Moves `v`'s entries of the particles kept (the first `kept` of
+/// `new_ids`, found in `old_ids`; both in id order) down to their new slots
+/// and sizes it to `new_ids`, new entries set to `fill`. Allocates nothing.
+fn compact_array(v: &mut Vec<f64>, old_ids: &[u32], new_ids: &[u32], kept: usize, fill: f64) {
+    let mut from = 0;
+    for (to, &id) in new_ids[..kept].iter().enumerate() {
+        while old_ids[from] != id {
+            from += 1;
+        }
+        v[to] = v[from];
+        from += 1;
+    }
+    v.truncate(kept);
+    v.resize(new_ids.len(), fill);
 }
 
 /// A particle's quiet spell and earlier peak |dev D| as seen at an onset.
@@ -43,7 +151,27 @@ impl ParticleHistory {
             peak_rate_t: vec![NEVER; n],
             settled_peak: vec![0.0; n],
             settled_peak_t: vec![NEVER; n],
+            levels: vec![],
         }
+    }
+
+    /// Follows the `SPEED_FACTORS` quiet speeds too (the hallmark log);
+    /// `active(factor, p)` is particle p's activity at the first observation.
+    pub fn with_levels(mut self, t0: f64, active: impl Fn(f64, usize) -> bool) -> Self {
+        let n = self.len();
+        self.levels = SPEED_FACTORS
+            .iter()
+            .map(|&f| {
+                let mut level = LevelHistory::new(n, f);
+                for p in (0..n).filter(|&p| active(f, p)) {
+                    level.last_active[p] = t0;
+                    level.active_since[p] = t0;
+                    level.quiet_before[p] = 0.0;
+                }
+                level
+            })
+            .collect();
+        self
     }
 
     /// The particles it follows.
@@ -117,39 +245,31 @@ impl ParticleHistory {
     /// spell before it, as an already moving body does at t = 0: its entry
     /// is not a burst out of calm.
     pub fn compact(&mut self, old_ids: &[u32], new_ids: &[u32], t: f64) {
-        let mut from = 0;
         let kept = new_ids
             .iter()
             .take_while(|&&id| old_ids.last().is_some_and(|&last| id <= last))
             .count();
-        for (to, &id) in new_ids[..kept].iter().enumerate() {
-            while old_ids[from] != id {
-                from += 1;
-            }
-            self.last_active[to] = self.last_active[from];
-            self.active_since[to] = self.active_since[from];
-            self.quiet_before[to] = self.quiet_before[from];
-            self.peak_rate[to] = self.peak_rate[from];
-            self.peak_rate_t[to] = self.peak_rate_t[from];
-            self.settled_peak[to] = self.settled_peak[from];
-            self.settled_peak_t[to] = self.settled_peak_t[from];
-            from += 1;
+        let fills = [t, t, 0.0, 0.0, NEVER, 0.0, NEVER];
+        for (a, fill) in self.arrays_mut().into_iter().zip(fills) {
+            compact_array(a, old_ids, new_ids, kept, fill);
         }
-        let n = new_ids.len();
-        self.last_active.resize(kept, NEVER);
-        self.last_active.resize(n, t);
-        self.active_since.resize(kept, NEVER);
-        self.active_since.resize(n, t);
-        self.quiet_before.resize(kept, 0.0);
-        self.quiet_before.resize(n, 0.0);
-        self.peak_rate.resize(kept, 0.0);
-        self.peak_rate.resize(n, 0.0);
-        self.peak_rate_t.resize(kept, NEVER);
-        self.peak_rate_t.resize(n, NEVER);
-        self.settled_peak.resize(kept, 0.0);
-        self.settled_peak.resize(n, 0.0);
-        self.settled_peak_t.resize(kept, NEVER);
-        self.settled_peak_t.resize(n, NEVER);
+        for level in &mut self.levels {
+            for (a, fill) in level.arrays_mut().into_iter().zip([t, t, 0.0, 0.0, NEVER]) {
+                compact_array(a, old_ids, new_ids, kept, fill);
+            }
+        }
+    }
+
+    /// The levels' arrays, in checkpoint order (after `arrays`).
+    pub fn level_arrays(&self) -> Vec<&Vec<f64>> {
+        self.levels.iter().flat_map(|l| l.arrays()).collect()
+    }
+
+    pub fn level_arrays_mut(&mut self) -> Vec<&mut Vec<f64>> {
+        self.levels
+            .iter_mut()
+            .flat_map(|l| l.arrays_mut())
+            .collect()
     }
 
     /// Every array, in checkpoint order.

@@ -70,6 +70,9 @@ impl Monitor {
         for a in self.history.arrays() {
             w.f64s(a);
         }
+        for a in self.history.level_arrays() {
+            w.f64s(a);
+        }
         w.u32s(&self.event_mark);
         w.f64(self.prev_time);
         let (ledger, run_minimum) = self.ledger.state();
@@ -87,6 +90,9 @@ impl Monitor {
         w.u64(self.events_dropped);
         w.bytes(&encode_events(&self.events));
         w.bytes(&encode(&self.steps).expect("step history serialises"));
+        if self.cfg.hallmark_log {
+            w.bytes(&encode(&self.hallmark_rows).expect("hallmark rows serialise"));
+        }
         w.u64(self.jumps.snaps.len() as u64);
         for snap in &self.jumps.snaps {
             w.f64(snap.t);
@@ -123,6 +129,10 @@ impl Monitor {
             a.resize(n as usize, 0.0);
             r.f64s(a)?;
         }
+        for a in self.history.level_arrays_mut() {
+            a.resize(n as usize, 0.0);
+            r.f64s(a)?;
+        }
         self.adopt_ids = true;
         r.u32s(&mut self.event_mark)?;
         self.prev_time = r.f64()?;
@@ -154,6 +164,9 @@ impl Monitor {
             return Err(CheckpointError::Truncated);
         }
         self.steps = steps;
+        if self.cfg.hallmark_log {
+            self.hallmark_rows = decode(r.bytes()?)?;
+        }
         self.jumps.snaps = read_snapshots(&mut r)?;
         r.finish()?;
         self.events = events;

@@ -30,6 +30,23 @@ struct Run {
 /// A viscous column at rest (VISCOSITY, so that the shear settles), sheared row by row at SHEAR_STEP (v_x = rate (y -
 /// y_c)), then pushed by `push_dv` at `push_step` over `push` cells.
 fn run(push: [usize; 4], push_step: u64, push_dv: [f64; 2], steps: u64) -> Run {
+    run_watched(
+        monitor::MonitorConfig::default(),
+        push,
+        push_step,
+        push_dv,
+        steps,
+    )
+}
+
+/// `run` under a monitor with `mcfg`.
+fn run_watched(
+    mcfg: monitor::MonitorConfig,
+    push: [usize; 4],
+    push_step: u64,
+    push_dv: [f64; 2],
+    steps: u64,
+) -> Run {
     let mut scene = Scene::dam_break(common::tait(1.5e6, VISCOSITY));
     scene.size = [0.4, 0.6];
     scene.bodies[0].rect = [0.0, 0.0, 0.4, 0.4];
@@ -56,7 +73,7 @@ fn run(push: [usize; 4], push_step: u64, push_dv: [f64; 2], steps: u64) -> Run {
         perturb,
     };
     let mut s = Solver::new(cfg).unwrap();
-    let mut m = common::fresh_monitor(&s);
+    let mut m = Monitor::new(mcfg, &s.view());
     let inside = |x: Vec2| {
         let r = common::region(H, i0, j0, i1, j1);
         x.x >= r[0] && x.x <= r[2] && x.y >= r[1] && x.y <= r[3]
@@ -130,4 +147,57 @@ fn a_push_into_a_once_sheared_patch_at_rest_is_an_anomaly() {
     assert!(!e.deformed_by.contains(&DeformedBy::StrainRate), "{e:?}");
     assert!(!e.hallmark() && !e.is_anomaly(), "{e:?}");
     assert!(e.evidence.peak_dev_rate < cfg.deformed_rate, "{e:?}");
+}
+
+/// The hallmark log of the same anomaly, re-applied offline: at the
+/// monitor's own thresholds it gives the event's own fractions and
+/// hallmark; the logging changes no event; and the hallmark moves with
+/// each threshold the way its definition says.
+#[test]
+fn the_logged_hallmark_reapplied_offline_matches_the_monitor_and_moves_with_its_thresholds() {
+    use monitor::hallmark_log::{reapply, Setting};
+    let cfg = monitor::MonitorConfig {
+        hallmark_log: true,
+        ..monitor::MonitorConfig::default()
+    };
+    let steps = PUSH_STEP + 100;
+    let logged = run_watched(cfg.clone(), SHEARED, PUSH_STEP, PUSH_DV, steps);
+    let plain = run(SHEARED, PUSH_STEP, PUSH_DV, steps);
+    assert_eq!(logged.monitor.events(), plain.monitor.events());
+    assert!(plain.monitor.hallmark_rows().is_empty());
+    let e = push_event(&logged.monitor, "logged");
+    let rows = logged.monitor.hallmark_rows();
+    let at = |speed_factor: f64, quiet: f64, deformed: f64| {
+        let setting = Setting {
+            speed_factor,
+            quiet_seconds: quiet * cfg.quiet_seconds,
+            deformed_rate: deformed * cfg.deformed_rate,
+            distortion_ratio: cfg.distortion_ratio,
+        };
+        reapply(rows, e.id, &setting)
+    };
+    let own = at(1.0, 1.0, 1.0);
+    assert!(own.particles >= cfg.min_cluster_particles, "{own:?}");
+    assert_eq!(
+        own.quiescent, e.evidence.quiescent_fraction,
+        "{own:?} {e:?}"
+    );
+    assert_eq!(
+        own.deformed_rate, e.evidence.deformed_fraction,
+        "{own:?} {e:?}"
+    );
+    assert!(own.hallmark() && e.hallmark(), "{own:?}");
+    // Every logged quiet speed has the same particles.
+    for f in monitor::particle_history::SPEED_FACTORS {
+        assert_eq!(at(f, 1.0, 1.0).particles, own.particles);
+    }
+    // The shear's in-plane |dev D| (150 / sqrt 2 = 106 1/s) is below three
+    // times the default deformed rate: no longer highly deformed.
+    assert!(!at(1.0, 1.0, 3.0).hallmark(), "{:?}", at(1.0, 1.0, 3.0));
+    // A quiet window three times as long reaches back into the shear's
+    // settling: no longer quiet before.
+    let long = at(1.0, 3.0, 1.0);
+    assert!(long.quiescent < 0.5 && !long.hallmark(), "{long:?}");
+    // A higher quiet speed keeps it quiet at least as long.
+    assert!(at(3.0, 1.0, 1.0).quiescent >= own.quiescent);
 }

@@ -27,11 +27,22 @@ fn run_to(s: &mut Solver, m: &mut Monitor, end: u64) -> Vec<monitor::StepReport>
 /// Runs to `mid`, saves solver and monitor, runs on to `end`; restores both
 /// into fresh copies and checks the restored events and the continuation.
 fn assert_restart_is_exact(cfg: SolverConfig, start: Option<&[u8]>, mid: u64, end: u64) -> Monitor {
+    restart_is_exact_under(monitor::MonitorConfig::default(), cfg, start, mid, end)
+}
+
+/// `assert_restart_is_exact` under a monitor with `mcfg`.
+fn restart_is_exact_under(
+    mcfg: monitor::MonitorConfig,
+    cfg: SolverConfig,
+    start: Option<&[u8]>,
+    mid: u64,
+    end: u64,
+) -> Monitor {
     let mut s = Solver::new(cfg.clone()).unwrap();
     if let Some(bytes) = start {
         s.restore(bytes).unwrap();
     }
-    let fresh = common::fresh_monitor(&s);
+    let fresh = Monitor::new(mcfg, &s.view());
     let mut m = fresh.clone();
     run_to(&mut s, &mut m, mid);
     let (solver_bytes, monitor_bytes) = (s.checkpoint(), m.save_state());
@@ -48,6 +59,7 @@ fn assert_restart_is_exact(cfg: SolverConfig, start: Option<&[u8]>, mid: u64, en
     assert_eq!(reports, reports2);
     assert_eq!(m.events(), m2.events());
     assert_eq!(m.events_dropped(), m2.events_dropped());
+    assert_eq!(m.hallmark_rows(), m2.hallmark_rows());
     m
 }
 
@@ -90,6 +102,42 @@ fn a_restart_after_deletions_continues_exactly() {
     s.step().unwrap();
     assert_eq!(s.particle_count(), n - 1, "the particle was deleted");
     assert_eq!(m.report().step, 80);
+}
+
+#[test]
+fn the_hallmark_log_restarts_exactly_after_deletions_with_an_event_open() {
+    // The deletion test's scene and the column's pushes, logged: the
+    // levels' histories compact with the rest and the rows carry over.
+    let mcfg = monitor::MonitorConfig {
+        hallmark_log: true,
+        ..monitor::MonitorConfig::default()
+    };
+    let col = common::column();
+    let mut cfg = col.cfg.clone();
+    cfg.scene.initial = InitialState::ZeroStress;
+    cfg.scene.on_escape = OnLoss::Delete;
+    let region = common::region(0.01, 18, 15, 21, 18);
+    cfg.perturb = [30, 70]
+        .map(|step| Perturb::at_step(step, region, [1.0, 0.0]))
+        .to_vec();
+    let mut s = Solver::new(cfg.clone()).unwrap();
+    s.restore(&col.start).unwrap();
+    s.plant_motion(7, Vec2::new(-0.004, 0.1), Vec2::zeros());
+    let start = s.checkpoint();
+    let m = restart_is_exact_under(mcfg, cfg, Some(&start), 40, 150);
+    let first = m
+        .events()
+        .iter()
+        .find(|e| e.kind == monitor::EventKind::Kick)
+        .unwrap()
+        .id;
+    let rows = m.hallmark_rows();
+    assert!(rows.iter().any(|r| r.event == first), "{:?}", m.events());
+    assert_eq!(
+        rows.len() % monitor::particle_history::SPEED_FACTORS.len(),
+        0,
+        "a row per quiet speed"
+    );
 }
 
 #[test]

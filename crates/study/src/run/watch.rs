@@ -6,6 +6,7 @@ use crate::output::metrics;
 use crate::output::summary::{LossFigures, Metrics, PhaseSummary};
 use crate::output::tables;
 use crate::output::timeseries::{Peaks, Timeseries};
+use monitor::hallmark_log::HallmarkRow;
 use monitor::{Monitor, MonitorConfig, StepReport};
 use solver::StateView;
 
@@ -90,6 +91,7 @@ pub(super) fn summarise<S: Stepper>(
     for (k, w) in watches.iter().enumerate() {
         if let Some(dir) = &opts.dir {
             tables::write_timeseries_as(&w.series, dir, &stepper.timeseries_stem(k), opts.csv)?;
+            write_hallmark(w.monitor.hallmark_rows(), dir, &stepper.timeseries_stem(k))?;
         }
         let own = w.monitor.events().to_vec();
         outcome.particles += stepper.phase(k).initial_particle_count();
@@ -115,6 +117,28 @@ pub(super) fn summarise<S: Stepper>(
     let all: Vec<usize> = (0..watches.len()).collect();
     fill_losses(&mut outcome.metrics, stepper, watches, &all);
     Ok(())
+}
+
+/// The hallmark log (`[monitor] hallmark_log`) as `hallmark.csv` and
+/// `.parquet` beside the timeseries (a mixture's phase: its stem's suffix).
+fn write_hallmark(rows: &[HallmarkRow], dir: &std::path::Path, stem: &str) -> std::io::Result<()> {
+    if rows.is_empty() {
+        return Ok(());
+    }
+    let col = |f: fn(&HallmarkRow) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
+    let columns = [
+        ("event", col(|r| r.event as f64)),
+        ("particle", col(|r| r.particle as f64)),
+        ("t", col(|r| r.t)),
+        ("speed_factor", col(|r| r.speed_factor)),
+        ("quiet_for", col(|r| r.quiet_for)),
+        ("peak_rate", col(|r| r.peak_rate)),
+        ("peak_rate_t", col(|r| r.peak_rate_t)),
+        ("distortion", col(|r| r.distortion)),
+    ];
+    let refs: Vec<(&str, &[f64])> = columns.iter().map(|(n, v)| (*n, v.as_slice())).collect();
+    let name = stem.replacen("timeseries", "hallmark", 1);
+    tables::write_columns(&refs, dir, &name, true)
 }
 
 /// Dropped events and particles deleted, drained and injected in `phases`,

@@ -1,0 +1,117 @@
+#!/usr/bin/env python3
+"""Count the anomaly proper (a kick with the hallmark) under other hallmark
+thresholds, offline, from runs made with `[monitor] hallmark_log = true`
+(docs/physics.md section 4b; `kick matrix STUDY --set monitor.hallmark_log=true`).
+
+    python3 scripts/hallmark_sweep.py MATRIX_DIR [MATRIX_DIR ...] [--csv OUT.csv]
+
+For every case folder with a hallmark.csv, each kick (cause injection,
+inversion or jump) is re-judged at every combination of quiet speed (the
+logged multiples of `quiet_speed`), `quiet_seconds` and `deformed_rate`
+(1/3, 1/sqrt 3, 1, sqrt 3 and 3 times the case's own), under both readings
+of "highly deformed earlier": a past peak of the strain rate before the
+quiet window (`rate`, the monitor's) or a distorted F now (`distortion`).
+The rule is the monitor's (`monitor::hallmark_log::reapply`): each part
+holds when at least half the opening cluster's particles meet it. At the
+case's own thresholds the re-judged hallmark must equal the monitor's own
+for every event; the script stops if it does not.
+"""
+import argparse
+import csv
+import glob
+import json
+import math
+import os
+import sys
+import tomllib
+
+FACTORS = [1 / 3, 1 / math.sqrt(3), 1.0, math.sqrt(3), 3.0]
+DEFAULTS = {"quiet_seconds": 0.05, "quiet_speed": 0.1, "deformed_rate": 50.0, "distortion_ratio": 4.0}
+KICKS = ("injection", "inversion", "jump")
+
+
+def monitor_config(case_dir):
+    with open(os.path.join(case_dir, "case.toml"), "rb") as f:
+        cfg = tomllib.load(f).get("monitor", {})
+    return {k: float(cfg.get(k, v)) for k, v in DEFAULTS.items()}
+
+
+# The tables write a non-finite figure as an empty cell: a particle never
+# active has been quiet for ever, one never deformed peaked at -inf.
+EMPTY = {"quiet_for": math.inf, "peak_rate_t": -math.inf}
+
+
+def number(key, text):
+    return float(text) if text != "" else EMPTY.get(key, math.nan)
+
+
+def rows_by_event(case_dir):
+    rows = {}
+    with open(os.path.join(case_dir, "hallmark.csv")) as f:
+        for r in csv.DictReader(f):
+            e = int(float(r["event"]))
+            rows.setdefault(e, []).append({k: number(k, v) for k, v in r.items()})
+    return rows
+
+
+def reapply(rows, speed_factor, quiet_seconds, deformed_rate, distortion_ratio):
+    """(quiescent, deformed by rate, distorted) shares of the rows at one quiet speed."""
+    sel = [r for r in rows if abs(r["speed_factor"] - speed_factor) < 1e-9 * speed_factor]
+    if not sel:
+        return 0.0, 0.0, 0.0
+    n = len(sel)
+    quiet = sum(r["quiet_for"] >= quiet_seconds for r in sel) / n
+    rate = sum(r["peak_rate"] >= deformed_rate and r["peak_rate_t"] < r["t"] - quiet_seconds for r in sel) / n
+    dist = sum(r["distortion"] >= distortion_ratio for r in sel) / n
+    return quiet, rate, dist
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("matrices", nargs="+")
+    ap.add_argument("--csv", help="write every setting's counts here")
+    a = ap.parse_args()
+    counts = {}
+    kicks = 0
+    cases = 0
+    for matrix in a.matrices:
+        for summary in sorted(glob.glob(os.path.join(matrix, "*", "summary.json"))):
+            case = os.path.dirname(summary)
+            if not os.path.exists(os.path.join(case, "hallmark.csv")):
+                continue
+            cases += 1
+            cfg = monitor_config(case)
+            rows = rows_by_event(case)
+            for e in json.load(open(summary))["events"]:
+                if e["kind"] != "kick" or e["cause"] not in KICKS or e["id"] not in rows:
+                    continue
+                kicks += 1
+                own = reapply(rows[e["id"]], 1.0, cfg["quiet_seconds"], cfg["deformed_rate"], cfg["distortion_ratio"])
+                online = e["quiescent_before"] and "strain_rate" in e["deformed_by"]
+                if (own[0] >= 0.5 and own[1] >= 0.5) != online:
+                    sys.exit(f"{case} event {e['id']}: re-judged {own} but the monitor said hallmark={online}")
+                for fs in FACTORS:
+                    for fq in FACTORS:
+                        for fd in FACTORS:
+                            q, r, d = reapply(rows[e["id"]], fs, fq * cfg["quiet_seconds"],
+                                              fd * cfg["deformed_rate"], cfg["distortion_ratio"])
+                            key = (round(fs, 3), round(fq, 3), round(fd, 3))
+                            c = counts.setdefault(key, [0, 0])
+                            c[0] += q >= 0.5 and r >= 0.5
+                            c[1] += q >= 0.5 and d >= 0.5
+    print(f"{cases} cases with a hallmark log, {kicks} kicks")
+    print("| quiet speed x | quiet seconds x | deformed rate x | anomaly (rate) | anomaly (distortion) |")
+    print("|---|---|---|---|---|")
+    for key in sorted(counts):
+        print(f"| {key[0]:g} | {key[1]:g} | {key[2]:g} | {counts[key][0]} | {counts[key][1]} |")
+    if a.csv:
+        with open(a.csv, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["quiet_speed_factor", "quiet_seconds_factor", "deformed_rate_factor",
+                        "anomaly_rate", "anomaly_distortion", "kicks"])
+            for key in sorted(counts):
+                w.writerow([*key, *counts[key], kicks])
+
+
+if __name__ == "__main__":
+    main()
