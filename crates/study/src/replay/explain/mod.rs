@@ -595,10 +595,10 @@ fn explain_record(
         .map(|r| r.parts.rest_max)
         .fold(0.0, f64::max);
     let cancellation = monitor::mechanisms::cancellation(&shares);
-    let (leading, leading_share) = if cancellation > monitor::mechanisms::CANCELLING {
-        ("undecided", f64::NAN)
-    } else {
-        shares.leading()
+    let (leading, leading_share) = match shares.leading() {
+        _ if cancellation > monitor::mechanisms::CANCELLING => ("undecided", f64::NAN),
+        (_, share) if share < monitor::mechanisms::NAMED_SHARE => ("none", share),
+        named => named,
     };
     let (largest, largest_share) = shares.largest_part();
     let ev = &logged.evidence;

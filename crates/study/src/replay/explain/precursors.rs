@@ -68,7 +68,8 @@ pub struct Precursors {
     pub control_boxes: usize,
     pub control_particles: usize,
     /// The precursor whose quiet-window share exceeds the controls' most,
-    /// by at least `NAMED_EXCESS`; "none" otherwise.
+    /// by at least `NAMED_EXCESS`; "none" otherwise, and "no control" when
+    /// no matched box was found.
     pub named: String,
     pub excess: f64,
 }
@@ -97,7 +98,9 @@ impl Precursors {
             onset_control: Fractions::of(&c.onset_control),
             control_boxes,
             control_particles,
-            named: if best.1 >= NAMED_EXCESS {
+            named: if control_boxes == 0 {
+                "no control".into()
+            } else if best.1 >= NAMED_EXCESS {
                 best.0.into()
             } else {
                 "none".into()
@@ -205,6 +208,7 @@ mod tests {
         };
         let p = Precursors::new(&counts, 4, 100);
         assert_eq!(p.named, "M1 small-mass node");
+        assert_eq!(Precursors::new(&counts, 0, 0).named, "no control");
         assert!((p.excess - 0.7).abs() < 1e-12);
         let counts = Counts {
             quiet_event: flags(100, 20, 10, 5),
