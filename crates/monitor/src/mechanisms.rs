@@ -204,8 +204,8 @@ pub fn cancellation(s: &Shares) -> f64 {
 pub const CANCELLING: f64 = 2.0;
 
 /// The share below which the largest mechanism is not named: it explains
-/// too little of the velocity change.
-pub const NAMED_SHARE: f64 = 0.25;
+/// too little of the velocity change (the matrix report's rule too).
+pub const NAMED_SHARE: f64 = 0.1;
 
 /// One step's c . dv per part, summed over the event's particles, with sum |dv|^2.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -13,7 +13,7 @@ use std::path::Path;
 use study::replay::explain::record::ExplainedHead;
 
 /// A mechanism leads an event when its share is at least this (else none).
-pub const LEADS_FROM: f64 = 0.1;
+pub const LEADS_FROM: f64 = monitor::mechanisms::NAMED_SHARE;
 /// The time strata (s): collapse before the first, impact before the second.
 pub const STRATA: (f64, f64) = (0.15, 0.6);
 const LEADERS: [&str; 4] = [
