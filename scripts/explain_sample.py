@@ -48,13 +48,16 @@ def pick(matrix, n, causes=("injection",), max_window=None):
             strata.setdefault((k, stratum(e["t"])), []).append((case, e))
     keys = sorted(strata, key=lambda k: (k[0], ["collapse", "impact", "late"].index(k[1])))
     chosen, round_ = [], 0
+    # Spread over each stratum rather than its first events: a stride of a
+    # quarter of it, then the offsets between (a permutation: no event twice).
+    order = {}
+    for k in keys:
+        step = max(1, len(strata[k]) // 4)
+        order[k] = [i for off in range(step) for i in range(off, len(strata[k]), step)]
     while len(chosen) < n and any(round_ < len(strata[k]) for k in keys):
         for k in keys:
             if round_ < len(strata[k]) and len(chosen) < n:
-                # Spread over the stratum rather than its first events.
-                lst = strata[k]
-                step = max(1, len(lst) // 4)
-                chosen.append((k, *lst[(round_ * step) % len(lst)]))
+                chosen.append((k, *strata[k][order[k][round_]]))
         round_ += 1
     # The same event twice (small strata wrap): keep one.
     seen, out = set(), []
