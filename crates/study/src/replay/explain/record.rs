@@ -92,6 +92,12 @@ pub struct ShareFigures {
     pub stress_outlier: Option<f64>,
 }
 
+/// The precursor the report tables (absent from older records).
+#[derive(Clone, Debug, Default, Deserialize)]
+pub struct PrecursorHead {
+    pub named: String,
+}
+
 /// What the report reads of a record.
 #[derive(Clone, Debug, Deserialize)]
 pub struct ExplainedHead {
@@ -99,6 +105,12 @@ pub struct ExplainedHead {
     pub shares: ShareFigures,
     pub leading: Leading,
     pub largest_part: LargestPart,
+    /// The split's cancellation index and the precursors (absent from
+    /// records written before they were measured).
+    #[serde(default)]
+    pub cancellation: Option<f64>,
+    #[serde(default)]
+    pub precursors: Option<PrecursorHead>,
 }
 
 impl ExplainRecord {
@@ -199,6 +211,11 @@ mod tests {
         assert_eq!(head.shares.small_mass_node, None);
         assert_eq!(head.leading.mechanism, "M3");
         assert_eq!(head.largest_part.share, Some(0.75));
+        assert_eq!(head.cancellation, Some(1.0));
+        assert_eq!(
+            head.precursors.map(|p| p.named).as_deref(),
+            Some("no control")
+        );
         assert!(ExplainedHead::read(&dir, 8).is_none());
         std::fs::remove_dir_all(&dir).unwrap();
     }
