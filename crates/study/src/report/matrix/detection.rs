@@ -3,7 +3,7 @@
 //! detector found, the largest it missed, the delay to detection, and the
 //! kicks away from the patches (`study::replay::calibrate`).
 
-use crate::report::data::Matrix;
+use crate::report::data::{spread, Matrix};
 use crate::report::html::{escape, link, Cell, Page};
 use crate::report::plot::Res;
 use std::path::Path;
@@ -46,7 +46,130 @@ pub fn detection_table(m: &Matrix, out: &Path, page: &mut Page) -> Res {
     .to_vec();
     let rows: Vec<(String, Vec<Cell>)> = d.rows.iter().map(|r| row(m, r)).collect();
     page.table("detection", &headers, &rows);
+    sites_tables(&d.rows, page);
     Ok(())
+}
+
+/// Where a study plants several patches of one placement (an ensemble of
+/// sites, as a state that differs per method needs), each case's sites
+/// summed up, and each placement's spread across the cases: the instrument
+/// is the same when the largest case median is within 2 times the smallest.
+fn sites_tables(rows: &[DetectionRow], page: &mut Page) {
+    let groups = site_groups(rows);
+    if groups.iter().all(|g| g.found.len() + g.unfound <= 1) {
+        return;
+    }
+    let text = |v: Option<(f64, f64, f64)>| {
+        v.map_or("-".into(), |(m, lo, hi)| {
+            format!("{m:.3} [{lo:.3}, {hi:.3}]")
+        })
+    };
+    let rows_out: Vec<(String, Vec<Cell>)> = groups
+        .iter()
+        .map(|g| {
+            let n = g.found.len() + g.unfound;
+            let cells = vec![
+                Cell::Text(escape(&g.case)),
+                Cell::Text(escape(&g.place)),
+                Cell::Num(g.cells.to_string()),
+                Cell::Num(format!("{} of {n}", g.found.len())),
+                Cell::Num(text(spread(g.found.iter().copied()))),
+            ];
+            (String::new(), cells)
+        })
+        .collect();
+    let headers = [
+        "case",
+        "place",
+        "cells",
+        "sites found",
+        "smallest found, median [min, max] (m/s)",
+    ]
+    .map(String::from)
+    .to_vec();
+    page.p("Over the sites of each placement (a site where no planted speed was found, or no patch qualified, is not in the median):");
+    page.table("detection_sites", &headers, &rows_out);
+    let across = case_medians(&groups);
+    let rows_out: Vec<(String, Vec<Cell>)> = across
+        .iter()
+        .map(|(place, cells, v)| {
+            let (lo, hi) = v
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+            let cells = vec![
+                Cell::Text(escape(place)),
+                Cell::Num(cells.to_string()),
+                Cell::Num(v.len().to_string()),
+                Cell::Num(format!("{lo:.3} - {hi:.3}")),
+                Cell::Num(format!("{:.2}", hi / lo)),
+            ];
+            (String::new(), cells)
+        })
+        .collect();
+    let headers = [
+        "place",
+        "cells",
+        "cases",
+        "case medians (m/s)",
+        "largest / smallest",
+    ]
+    .map(String::from)
+    .to_vec();
+    page.table("detection_across", &headers, &rows_out);
+}
+
+/// Per placement and size, each case's median over its sites found.
+fn case_medians(groups: &[SiteGroup]) -> Vec<(String, usize, Vec<f64>)> {
+    let mut across: Vec<(String, usize, Vec<f64>)> = vec![];
+    for g in groups {
+        let Some((median, _, _)) = spread(g.found.iter().copied()) else {
+            continue;
+        };
+        match across
+            .iter_mut()
+            .find(|(p, c, _)| *p == g.place && *c == g.cells)
+        {
+            Some((_, _, v)) => v.push(median),
+            None => across.push((g.place.clone(), g.cells, vec![median])),
+        }
+    }
+    across
+}
+
+/// The rows of one case, placement and size.
+struct SiteGroup {
+    case: String,
+    place: String,
+    cells: usize,
+    found: Vec<f64>,
+    unfound: usize,
+}
+
+fn site_groups(rows: &[DetectionRow]) -> Vec<SiteGroup> {
+    let mut groups: Vec<SiteGroup> = vec![];
+    for r in rows {
+        let at = groups
+            .iter()
+            .position(|g| g.case == r.case && g.place == r.place && g.cells == r.cells);
+        let g = match at {
+            Some(k) => &mut groups[k],
+            None => {
+                groups.push(SiteGroup {
+                    case: r.case.clone(),
+                    place: r.place.clone(),
+                    cells: r.cells,
+                    found: vec![],
+                    unfound: 0,
+                });
+                groups.last_mut().expect("just pushed")
+            }
+        };
+        match r.dv_found {
+            Some(v) => g.found.push(v),
+            None => g.unfound += 1,
+        }
+    }
+    groups
 }
 
 fn row(m: &Matrix, r: &DetectionRow) -> (String, Vec<Cell>) {
@@ -80,4 +203,56 @@ fn row(m: &Matrix, r: &DetectionRow) -> (String, Vec<Cell>) {
             Cell::Num(r.false_alarms.to_string()),
         ],
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(case: &str, place: &str, dv_found: Option<f64>) -> DetectionRow {
+        DetectionRow {
+            case: case.into(),
+            t_plant_s: 2.0,
+            place: place.into(),
+            cells: 2,
+            dv_found,
+            dv_missed: None,
+            delay_s: None,
+            cause: None,
+            runs: 7,
+            placed: true,
+            region: None,
+            step: None,
+            particles: None,
+            twin_kicks: 0,
+            false_alarms: 0,
+        }
+    }
+
+    #[test]
+    fn sites_of_a_placement_give_each_case_a_median_and_the_cases_a_spread() {
+        let rows = [
+            row("a", "bulk", Some(0.02)),
+            row("a", "bulk", Some(0.04)),
+            row("a", "bulk", Some(0.03)),
+            row("a", "surface", None),
+            row("b", "bulk", Some(0.05)),
+            row("b", "bulk", None),
+            row("b", "bulk", Some(0.07)),
+        ];
+        let groups = site_groups(&rows);
+        assert_eq!(groups.len(), 3);
+        assert_eq!((groups[0].found.len(), groups[0].unfound), (3, 0));
+        assert_eq!((groups[2].found.len(), groups[2].unfound), (2, 1));
+        let across = case_medians(&groups);
+        // The surface placement found nothing: no median, no entry.
+        assert_eq!(across.len(), 1);
+        let (place, cells, medians) = &across[0];
+        assert_eq!((place.as_str(), *cells), ("bulk", 2));
+        assert_eq!(medians.len(), 2);
+        assert!(
+            (medians[0] - 0.03).abs() < 1e-12 && (medians[1] - 0.06).abs() < 1e-12,
+            "{medians:?}"
+        );
+    }
 }
