@@ -100,6 +100,20 @@ def main():
                             c[0] += q >= 0.5 and r >= 0.5
                             c[1] += q >= 0.5 and d >= 0.5
     print(f"{cases} cases with a hallmark log, {kicks} kicks")
+    print()
+    print("One threshold at a time (the others at the case's own):")
+    print()
+    print("| threshold | x 1/3 | x 1/sqrt 3 | x 1 | x sqrt 3 | x 3 |")
+    print("|---|---|---|---|---|---|")
+    one = lambda f: round(f, 3)
+    for name, at in (("quiet_speed", lambda f: (one(f), 1.0, 1.0)),
+                     ("quiet_seconds", lambda f: (1.0, one(f), 1.0)),
+                     ("deformed_rate", lambda f: (1.0, 1.0, one(f)))):
+        cells = [f"{counts[at(f)][0]} ({counts[at(f)][1]})" for f in FACTORS]
+        print(f"| {name} | " + " | ".join(cells) + " |")
+    print()
+    print("Anomaly proper by the strain-rate reading (by the distortion reading in brackets). Every setting:")
+    print()
     print("| quiet speed x | quiet seconds x | deformed rate x | anomaly (rate) | anomaly (distortion) |")
     print("|---|---|---|---|---|")
     for key in sorted(counts):
