@@ -82,7 +82,7 @@ fn sites_tables(rows: &[DetectionRow], page: &mut Page) {
         "case",
         "place",
         "cells",
-        "sites found",
+        "distinct sites found",
         "smallest found, median [min, max] (m/s)",
     ]
     .map(String::from)
@@ -145,9 +145,17 @@ struct SiteGroup {
     unfound: usize,
 }
 
+/// Sites that resolved to the same patch (the one block that qualified
+/// nearest to several points) count once.
 fn site_groups(rows: &[DetectionRow]) -> Vec<SiteGroup> {
     let mut groups: Vec<SiteGroup> = vec![];
-    for r in rows {
+    for (k, r) in rows.iter().enumerate() {
+        let same = |o: &DetectionRow| {
+            o.case == r.case && o.place == r.place && o.cells == r.cells && o.region == r.region
+        };
+        if r.region.is_some() && rows[..k].iter().any(same) {
+            continue;
+        }
         let at = groups
             .iter()
             .position(|g| g.case == r.case && g.place == r.place && g.cells == r.cells);
@@ -239,7 +247,12 @@ mod tests {
             row("b", "bulk", Some(0.05)),
             row("b", "bulk", None),
             row("b", "bulk", Some(0.07)),
+            row("b", "bulk", Some(0.07)),
         ];
+        // The last two resolved to the same patch: it counts once.
+        let mut rows = rows;
+        rows[6].region = Some([0.1, 0.0, 0.12, 0.02]);
+        rows[7].region = Some([0.1, 0.0, 0.12, 0.02]);
         let groups = site_groups(&rows);
         assert_eq!(groups.len(), 3);
         assert_eq!((groups[0].found.len(), groups[0].unfound), (3, 0));
