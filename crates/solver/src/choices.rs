@@ -14,6 +14,7 @@ pub const METHOD_KEYS: &[&str] = &[
     "cfl",
     "dt",
     "dt_value",
+    "dt_min",
     "j_update",
     "force",
     "quadrature",

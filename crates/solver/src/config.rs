@@ -220,6 +220,11 @@ pub struct Method {
     /// Use this time step (s) instead of the CFL one (benchmarks); absent = CFL.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dt_value: Option<f64>,
+    /// A floor under the CFL step (s): a step that falls below it is raised
+    /// to it, as Uintah's `delt_min` does, past the CFL limit if need be
+    /// (docs/findings/four_behaviours_candidates.md); absent = none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dt_min: Option<f64>,
     pub j_update: JUpdate,
     /// Force and velocity-gradient discretisation (`gradient` or `mls`).
     pub force: ForceKind,
@@ -250,6 +255,7 @@ impl Default for Method {
             cfl: 0.2,
             dt: DtMode::Fixed,
             dt_value: None,
+            dt_min: None,
             j_update: JUpdate::Det,
             force: ForceKind::Gradient,
             quadrature: QuadratureKind::Particles,
@@ -461,6 +467,9 @@ impl SolverConfig {
         within(m.cfl, 1e-4, 1.0, "method.cfl")?;
         if let Some(dt) = m.dt_value {
             within(dt, 1e-12, 1.0, "method.dt_value")?;
+        }
+        if let Some(dt) = m.dt_min {
+            within(dt, 1e-12, 1.0, "method.dt_min")?;
         }
         within(m.xpic_order as f64, 1.0, 16.0, "method.xpic_order")?;
         if m.force == ForceKind::Mls {

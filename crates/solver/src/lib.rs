@@ -352,7 +352,8 @@ impl Solver {
             DtMode::PerAxis => self.axis_signal_speed,
             DtMode::Fixed | DtMode::Dynamic => self.signal_speed,
         };
-        timestep::cfl_step(self.cfg.method.cfl, self.cfg.scene.cell, speed)
+        let step = timestep::cfl_step(self.cfg.method.cfl, self.cfg.scene.cell, speed);
+        self.cfg.method.dt_min.map_or(step, |floor| step.max(floor))
     }
 
     pub fn config(&self) -> &SolverConfig {

@@ -474,3 +474,39 @@ fn a_timed_placed_push_is_the_push_its_record_names() {
     assert_eq!(replayed.state_hash(), s.state_hash());
     assert_eq!(replayed.planted(), planted.as_slice());
 }
+
+/// `method.dt_min` raises a CFL step below it (Uintah's `delt_min`) and
+/// leaves a larger one alone, under a dynamic and a fixed step.
+#[test]
+fn a_step_floor_raises_the_cfl_step_and_leaves_a_larger_one() {
+    let scene = common::box_scene(
+        [0.4, 0.3],
+        [0.0, 0.0, 0.2, 0.2],
+        Material::tait(1.5e5),
+        9.81,
+    );
+    for dt in [DtMode::Dynamic, DtMode::Fixed] {
+        let mut method = common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usl);
+        method.dt = dt;
+        let solver = |method: Method| {
+            Solver::new(SolverConfig {
+                scene: scene.clone(),
+                method,
+                perturb: vec![],
+            })
+            .unwrap()
+        };
+        let cfl_step = solver(method.clone()).next_dt();
+        let floor = 4.0 * cfl_step;
+        let raised = solver(Method {
+            dt_min: Some(floor),
+            ..method.clone()
+        });
+        assert_eq!(raised.next_dt(), floor, "{dt:?}");
+        let kept = solver(Method {
+            dt_min: Some(0.25 * cfl_step),
+            ..method
+        });
+        assert_eq!(kept.next_dt(), cfl_step, "{dt:?}");
+    }
+}
