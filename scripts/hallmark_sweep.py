@@ -38,7 +38,8 @@ def monitor_config(case_dir):
 
 # The tables write a non-finite figure as an empty cell: a particle never
 # active has been quiet for ever, one never deformed peaked at -inf.
-EMPTY = {"quiet_for": math.inf, "peak_rate_t": -math.inf}
+# A distortion of F with no smallest stretch (an inverted F) is infinite.
+EMPTY = {"quiet_for": math.inf, "peak_rate_t": -math.inf, "distortion": math.inf}
 
 
 def number(key, text):
@@ -100,6 +101,8 @@ def main():
                             c[0] += q >= 0.5 and r >= 0.5
                             c[1] += q >= 0.5 and d >= 0.5
     print(f"{cases} cases with a hallmark log, {kicks} kicks")
+    if kicks == 0:
+        return
     print()
     print("One threshold at a time (the others at the case's own):")
     print()

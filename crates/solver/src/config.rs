@@ -470,6 +470,11 @@ impl SolverConfig {
         }
         if let Some(dt) = m.dt_min {
             within(dt, 1e-12, 1.0, "method.dt_min")?;
+            check(
+                m.formulation == Formulation::Explicit,
+                "method.dt_min",
+                "applies to the explicit formulation only (the pressure-implicit step follows the flow)",
+            )?;
         }
         within(m.xpic_order as f64, 1.0, 16.0, "method.xpic_order")?;
         if m.force == ForceKind::Mls {

@@ -34,7 +34,7 @@ pub fn relax(s: &mut Solver) -> Result<(), StepError> {
         if t >= duration {
             break Ok(());
         }
-        let dt = s.cfl_dt();
+        let dt = s.cfl_step();
         if let Err(e) = s.step_with_dt(dt) {
             break Err(e);
         }

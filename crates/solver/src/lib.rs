@@ -332,7 +332,20 @@ impl Solver {
         self.dt = self.dt_fixed;
     }
 
+    /// The step the method takes: the CFL step, raised to `method.dt_min`.
     fn cfl_dt(&self) -> f64 {
+        let step = self.cfl_step();
+        match self.cfg.method.dt_min {
+            Some(floor) if !self.implicit() && self.cfg.method.dt_value.is_none() => {
+                step.max(floor)
+            }
+            _ => step,
+        }
+    }
+
+    /// The CFL step (or `dt_value`), with no floor: the hydrostatic
+    /// relaxation's, which must stay stable whatever the method's floor.
+    pub(crate) fn cfl_step(&self) -> f64 {
         if let Some(dt) = self.cfg.method.dt_value {
             return dt;
         }
@@ -352,8 +365,7 @@ impl Solver {
             DtMode::PerAxis => self.axis_signal_speed,
             DtMode::Fixed | DtMode::Dynamic => self.signal_speed,
         };
-        let step = timestep::cfl_step(self.cfg.method.cfl, self.cfg.scene.cell, speed);
-        self.cfg.method.dt_min.map_or(step, |floor| step.max(floor))
+        timestep::cfl_step(self.cfg.method.cfl, self.cfg.scene.cell, speed)
     }
 
     pub fn config(&self) -> &SolverConfig {

@@ -84,7 +84,8 @@ pub struct Perturb {
     pub direction: Option<Direction>,
     /// A planted stress outlier: the particles' J (and F, isotropically)
     /// scaled by this factor, so their pressure departs from their
-    /// neighbours' at the next stress update.
+    /// neighbours' at the next stress update. Like `dx`, its energy is not
+    /// booked: the plant is an injection the detector is meant to see.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub j_scale: Option<f64>,
     /// A planted displacement (m): the particles moved by it, for example

@@ -235,11 +235,19 @@ impl Stepper for Explaining<'_> {
             .step_explained(&particles)
             .map_err(|e| format!("step {step}: {e}"))?;
         let onset = explained.time >= self.window.onset_from;
+        // The picture shows the event's particles, not the controls'.
+        let event_only = || {
+            let mut only = explained.clone();
+            let ids = &self.record.ids;
+            only.explained
+                .retain(|e| ids.binary_search(&explained.id[e.particle]).is_ok());
+            only
+        };
         if onset && self.record.before.is_none() {
-            self.record.before = Some(explained.clone());
+            self.record.before = Some(event_only());
         }
         if step == self.window.first_step {
-            self.record.onset = Some(explained.clone());
+            self.record.onset = Some(event_only());
         }
         if !self.primed {
             self.mechanisms.prime(&explained);
@@ -316,7 +324,7 @@ fn load(case_dir: &Path, id: u32) -> Result<Loaded, ExplainError> {
     let others = events
         .iter()
         .filter(|e| e.id != id && e.last_t >= from && e.t <= logged.last_t)
-        .map(|e| e.cells)
+        .map(|e| e.extent)
         .collect();
     Ok(Loaded {
         others,

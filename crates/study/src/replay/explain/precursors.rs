@@ -98,7 +98,7 @@ impl Precursors {
             onset_control: Fractions::of(&c.onset_control),
             control_boxes,
             control_particles,
-            named: if control_boxes == 0 {
+            named: if control_boxes == 0 || c.quiet_control.particles == 0 {
                 "no control".into()
             } else if best.1 >= NAMED_EXCESS {
                 best.0.into()
