@@ -92,11 +92,9 @@ impl Monitor {
                 s.det_min = s.det_min.min(def[p].determinant());
             }
             let rate = dev_rate[p];
-            for level in h.levels.iter_mut() {
-                let fast = speed2 > quiet2 * level.factor * level.factor;
-                let peak = (h.peak_rate[p], h.peak_rate_t[p]);
-                level.record(p, time, prev_time, fast || rate > quiet_rate, peak);
-            }
+            h.record_levels(p, time, prev_time, |factor| {
+                speed2 > quiet2 * factor * factor || rate > quiet_rate
+            });
             h.record(
                 p,
                 time,

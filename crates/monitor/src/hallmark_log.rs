@@ -44,7 +44,7 @@ impl Monitor {
             }
             let event = self.events[c.event].id;
             let h = &self.history;
-            let peak = (h.peak_rate[p], h.peak_rate_t[p]);
+            let peak = h.peak(p);
             let distortion = isochoric_stretch_ratio(&v.deformation[p]);
             for level in &h.levels {
                 let calm = level.calm(p, v.time, grace, peak);

@@ -112,7 +112,7 @@ impl Monitor {
         }
         if cfg.hallmark_log {
             let at = |f: f64, p: usize| {
-                v.v[p].norm_squared() > (f * cfg.quiet_speed).powi(2) || v.dev_rate[p] > quiet_rate
+                v.v[p].norm_squared() > quiet2 * f * f || v.dev_rate[p] > quiet_rate
             };
             history = history.with_levels(v.time, at);
         }

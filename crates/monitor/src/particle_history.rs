@@ -9,19 +9,12 @@ pub const NEVER: f64 = f64::NEG_INFINITY;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParticleHistory {
-    /// Last time the particle was active.
-    pub last_active: Vec<f64>,
-    /// Start of its current (or last) active stretch.
-    pub active_since: Vec<f64>,
-    /// Length of the quiet spell that ended at `active_since` (infinite when
-    /// it had never been active before).
-    pub quiet_before: Vec<f64>,
+    /// When it was last active, since when, the quiet spell before, and the
+    /// peak as it stood then, at `quiet_speed` itself.
+    pub activity: LevelHistory,
     /// Running maximum of the in-plane |dev D| (1/s) and when it was reached.
     pub peak_rate: Vec<f64>,
     pub peak_rate_t: Vec<f64>,
-    /// `peak_rate` and `peak_rate_t` as they stood at `active_since`.
-    pub settled_peak: Vec<f64>,
-    pub settled_peak_t: Vec<f64>,
     /// The same activity memory at other quiet speeds (`[monitor]
     /// hallmark_log`): the hallmark re-thresholded offline. Empty unless logged.
     pub levels: Vec<LevelHistory>,
@@ -37,15 +30,20 @@ pub const SPEED_FACTORS: [f64; 5] = [
     3.0,
 ];
 
-/// One quiet speed's activity memory: as `ParticleHistory`'s, the running
-/// peak |dev D| shared with it.
+/// One quiet speed's activity memory; the running peak |dev D| is
+/// `ParticleHistory`'s, shared by every quiet speed.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LevelHistory {
     /// The quiet speed's multiple of `quiet_speed`.
     pub factor: f64,
+    /// Last time the particle was active.
     pub last_active: Vec<f64>,
+    /// Start of its current (or last) active stretch.
     pub active_since: Vec<f64>,
+    /// Length of the quiet spell that ended at `active_since` (infinite when
+    /// it had never been active before).
     pub quiet_before: Vec<f64>,
+    /// The running peak and its time as they stood at `active_since`.
     pub settled_peak: Vec<f64>,
     pub settled_peak_t: Vec<f64>,
 }
@@ -62,8 +60,17 @@ impl LevelHistory {
         }
     }
 
-    /// As `ParticleHistory::record`, `peak` and `peak_t` the running peak
-    /// before this observation's rate.
+    /// Active at `t` with no quiet spell before it: nothing is known of
+    /// the time before the first observation.
+    fn start(&mut self, p: usize, t0: f64) {
+        self.last_active[p] = t0;
+        self.active_since[p] = t0;
+        self.quiet_before[p] = 0.0;
+    }
+
+    /// Records particle `p` at time `t`; `prev_t` is the time of the
+    /// previous observation (an active particle then has `last_active ==
+    /// prev_t`); `peak` is the running peak before this observation's rate.
     #[inline(always)]
     pub fn record(&mut self, p: usize, t: f64, prev_t: f64, active: bool, peak: (f64, f64)) {
         if active {
@@ -77,7 +84,10 @@ impl LevelHistory {
         }
     }
 
-    /// As `ParticleHistory::calm`, `peak` the running peak now.
+    /// The calm of particle `p` before a burst seen at time `t` (after
+    /// `record`), `peak` the running peak now. A burst that began within
+    /// `grace` seconds counts from its start, so a kick caught a few steps
+    /// late still finds the quiet before it.
     pub fn calm(&self, p: usize, t: f64, grace: f64, peak: (f64, f64)) -> Calm {
         if self.last_active[p] == t {
             let recent = t - self.active_since[p] <= grace;
@@ -92,6 +102,14 @@ impl LevelHistory {
                 peak_rate: peak.0,
                 peak_rate_t: peak.1,
             }
+        }
+    }
+
+    /// Its arrays, each sized to the kept particles (see `compact_array`),
+    /// new entries active since `t`.
+    fn compact(&mut self, old_ids: &[u32], new_ids: &[u32], kept: usize, t: f64) {
+        for (a, fill) in self.arrays_mut().into_iter().zip([t, t, 0.0, 0.0, NEVER]) {
+            compact_array(a, old_ids, new_ids, kept, fill);
         }
     }
 
@@ -144,13 +162,9 @@ pub struct Calm {
 impl ParticleHistory {
     pub fn new(n: usize) -> Self {
         ParticleHistory {
-            last_active: vec![NEVER; n],
-            active_since: vec![NEVER; n],
-            quiet_before: vec![f64::INFINITY; n],
+            activity: LevelHistory::new(n, 1.0),
             peak_rate: vec![0.0; n],
             peak_rate_t: vec![NEVER; n],
-            settled_peak: vec![0.0; n],
-            settled_peak_t: vec![NEVER; n],
             levels: vec![],
         }
     }
@@ -164,9 +178,7 @@ impl ParticleHistory {
             .map(|&f| {
                 let mut level = LevelHistory::new(n, f);
                 for p in (0..n).filter(|&p| active(f, p)) {
-                    level.last_active[p] = t0;
-                    level.active_since[p] = t0;
-                    level.quiet_before[p] = 0.0;
+                    level.start(p, t0);
                 }
                 level
             })
@@ -176,11 +188,11 @@ impl ParticleHistory {
 
     /// The particles it follows.
     pub fn len(&self) -> usize {
-        self.last_active.len()
+        self.peak_rate.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.last_active.is_empty()
+        self.peak_rate.is_empty()
     }
 
     /// The state at the first observation (t = `t0`): a particle already
@@ -188,9 +200,7 @@ impl ParticleHistory {
     /// quiet spell before it: nothing is known of the time before t0.
     pub fn start(&mut self, p: usize, t0: f64, active: bool, rate: f64) {
         if active {
-            self.last_active[p] = t0;
-            self.active_since[p] = t0;
-            self.quiet_before[p] = 0.0;
+            self.activity.start(p, t0);
         }
         if rate > 0.0 {
             self.peak_rate[p] = rate;
@@ -198,43 +208,39 @@ impl ParticleHistory {
         }
     }
 
-    /// Records particle `p` at time `t`; `prev_t` is the time of the previous
-    /// observation (an active particle then has `last_active == prev_t`).
+    /// The running peak of particle `p` and its time.
+    #[inline(always)]
+    pub fn peak(&self, p: usize) -> (f64, f64) {
+        (self.peak_rate[p], self.peak_rate_t[p])
+    }
+
+    /// Records particle `p` at time `t` (see `LevelHistory::record`), then
+    /// its rate into the running peak.
     #[inline(always)]
     pub fn record(&mut self, p: usize, t: f64, prev_t: f64, active: bool, rate: f64) {
-        if active {
-            if self.last_active[p] != prev_t {
-                self.quiet_before[p] = t - self.last_active[p];
-                self.active_since[p] = t;
-                self.settled_peak[p] = self.peak_rate[p];
-                self.settled_peak_t[p] = self.peak_rate_t[p];
-            }
-            self.last_active[p] = t;
-        }
+        let peak = self.peak(p);
+        self.activity.record(p, t, prev_t, active, peak);
         if rate > self.peak_rate[p] {
             self.peak_rate[p] = rate;
             self.peak_rate_t[p] = t;
         }
     }
 
-    /// The calm of particle `p` before a burst seen at time `t` (after
-    /// `record`). A burst that began within `grace` seconds counts from its
-    /// start, so a kick caught a few steps late still finds the quiet before it.
-    pub fn calm(&self, p: usize, t: f64, grace: f64) -> Calm {
-        if self.last_active[p] == t {
-            let recent = t - self.active_since[p] <= grace;
-            Calm {
-                quiet_for: if recent { self.quiet_before[p] } else { 0.0 },
-                peak_rate: self.settled_peak[p],
-                peak_rate_t: self.settled_peak_t[p],
-            }
-        } else {
-            Calm {
-                quiet_for: t - self.last_active[p],
-                peak_rate: self.peak_rate[p],
-                peak_rate_t: self.peak_rate_t[p],
-            }
+    /// Records particle `p` at the hallmark log's quiet speeds (before
+    /// `record`, which moves the peak on); `active(factor)` is its activity
+    /// at `factor` times `quiet_speed`. Nothing unless logged.
+    #[inline(always)]
+    pub fn record_levels(&mut self, p: usize, t: f64, prev_t: f64, active: impl Fn(f64) -> bool) {
+        let peak = self.peak(p);
+        for level in &mut self.levels {
+            level.record(p, t, prev_t, active(level.factor), peak);
         }
+    }
+
+    /// The calm of particle `p` before a burst seen at time `t` (after
+    /// `record`; see `LevelHistory::calm`).
+    pub fn calm(&self, p: usize, t: f64, grace: f64) -> Calm {
+        self.activity.calm(p, t, grace, self.peak(p))
     }
 
     /// Keeps the entries of the particles still present and opens entries
@@ -249,14 +255,11 @@ impl ParticleHistory {
             .iter()
             .take_while(|&&id| old_ids.last().is_some_and(|&last| id <= last))
             .count();
-        let fills = [t, t, 0.0, 0.0, NEVER, 0.0, NEVER];
-        for (a, fill) in self.arrays_mut().into_iter().zip(fills) {
-            compact_array(a, old_ids, new_ids, kept, fill);
-        }
+        compact_array(&mut self.peak_rate, old_ids, new_ids, kept, 0.0);
+        compact_array(&mut self.peak_rate_t, old_ids, new_ids, kept, NEVER);
+        self.activity.compact(old_ids, new_ids, kept, t);
         for level in &mut self.levels {
-            for (a, fill) in level.arrays_mut().into_iter().zip([t, t, 0.0, 0.0, NEVER]) {
-                compact_array(a, old_ids, new_ids, kept, fill);
-            }
+            level.compact(old_ids, new_ids, kept, t);
         }
     }
 
@@ -274,26 +277,28 @@ impl ParticleHistory {
 
     /// Every array, in checkpoint order.
     pub fn arrays_mut(&mut self) -> [&mut Vec<f64>; 7] {
+        let a = &mut self.activity;
         [
-            &mut self.last_active,
-            &mut self.active_since,
-            &mut self.quiet_before,
+            &mut a.last_active,
+            &mut a.active_since,
+            &mut a.quiet_before,
             &mut self.peak_rate,
             &mut self.peak_rate_t,
-            &mut self.settled_peak,
-            &mut self.settled_peak_t,
+            &mut a.settled_peak,
+            &mut a.settled_peak_t,
         ]
     }
 
     pub fn arrays(&self) -> [&Vec<f64>; 7] {
+        let a = &self.activity;
         [
-            &self.last_active,
-            &self.active_since,
-            &self.quiet_before,
+            &a.last_active,
+            &a.active_since,
+            &a.quiet_before,
             &self.peak_rate,
             &self.peak_rate_t,
-            &self.settled_peak,
-            &self.settled_peak_t,
+            &a.settled_peak,
+            &a.settled_peak_t,
         ]
     }
 }

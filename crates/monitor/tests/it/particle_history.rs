@@ -15,9 +15,9 @@ fn compaction_keeps_survivors_and_opens_entries_for_new_particles() {
     h.compact(&[0, 1, 2, 3], &[0, 2, 3, 7, 8], 1.0);
     assert_eq!(h.len(), 5);
     assert_eq!(h.peak_rate, vec![0.0, 20.0, 30.0, 0.0, 0.0]);
-    assert_eq!(h.last_active[3], 1.0);
-    assert_eq!(h.active_since[4], 1.0);
-    assert_eq!(h.quiet_before[3], 0.0);
+    assert_eq!(h.activity.last_active[3], 1.0);
+    assert_eq!(h.activity.active_since[4], 1.0);
+    assert_eq!(h.activity.quiet_before[3], 0.0);
     assert_eq!(h.peak_rate_t[4], NEVER);
     // Moving on at entry is not a burst out of calm: no quiet spell.
     h.record(3, 1.5, 1.0, true, 0.0);
