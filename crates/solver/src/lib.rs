@@ -592,6 +592,30 @@ impl Solver {
         Ok(())
     }
 
+    /// Switches the materials' constants mid-run (the detector's calibration
+    /// from one state shared by several methods, one of them at K = inf):
+    /// validated with the current method; the same materials, by count and
+    /// name, since the particles hold their material by index.
+    pub fn set_materials(&mut self, materials: Vec<Material>) -> Result<(), ConfigError> {
+        let now = &self.cfg.scene.materials;
+        if materials.len() != now.len() || materials.iter().zip(now).any(|(a, b)| a.name != b.name)
+        {
+            return Err(ConfigError {
+                key: "materials".into(),
+                message: "cannot change mid-run but for their constants (the particles hold \
+                          them by index)"
+                    .into(),
+            });
+        }
+        let mut cfg = self.cfg.clone();
+        cfg.scene.materials = materials;
+        cfg.validate()?;
+        self.cfg = cfg;
+        self.refresh_eos_cache();
+        self.measure();
+        Ok(())
+    }
+
     // The state as the multiphase coupling and the set-up read and change it:
     // through these methods, never through the fields.
 

@@ -421,7 +421,10 @@ fn calibrate_command(args: CalibrateArgs) -> ExitCode {
         .iter()
         .map(|c| c.solver.scene.t_end)
         .fold(f64::INFINITY, f64::min);
-    if let Err((key, message)) = spec.fits(t_end) {
+    let fits = spec
+        .fits(t_end)
+        .and_then(|()| calibrate::common_state::check(&study, spec));
+    if let Err((key, message)) = fits {
         return bad_input(&format!("{}: key `{key}`: {message}", args.study.display()));
     }
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());

@@ -99,3 +99,57 @@ fn a_method_it_cannot_run_is_refused_and_changes_nothing() {
     assert_eq!(s.state_hash(), again.state_hash());
     assert_ne!(before, s.state_hash());
 }
+
+#[test]
+fn switching_the_materials_constants_is_restart_safe_and_changes_the_step() {
+    // A CFL step taken every step, so the sound speed sets it.
+    let dynamic = || Method {
+        dt: DtMode::Dynamic,
+        ..plain()
+    };
+    let mut straight = common::solver(scene(), dynamic());
+    steps(&mut straight, 30);
+    let checkpoint = straight.checkpoint();
+    let before_dt = straight.next_dt();
+
+    // The same constants: nothing moves.
+    let mut same = straight.clone();
+    same.set_materials(straight.config().scene.materials.clone())
+        .unwrap();
+    assert_eq!(same.next_dt(), before_dt);
+    steps(&mut same, 20);
+    let mut reference = straight.clone();
+    steps(&mut reference, 20);
+    assert_eq!(same.state_hash(), reference.state_hash());
+
+    // Four times the bulk modulus: twice the sound speed, about half the
+    // step; after a restart, the same bits as in the run.
+    let stiffer = |s: &Solver| {
+        let mut m = s.config().scene.materials.clone();
+        m[0].k *= 4.0;
+        m
+    };
+    let mut switched = straight.clone();
+    switched.set_materials(stiffer(&straight)).unwrap();
+    let ratio = switched.next_dt() / before_dt;
+    assert!((0.45..0.6).contains(&ratio), "dt ratio {ratio}");
+    let mut restarted = common::solver(scene(), dynamic());
+    restarted.restore(&checkpoint).unwrap();
+    restarted.set_materials(stiffer(&restarted)).unwrap();
+    steps(&mut switched, 20);
+    steps(&mut restarted, 20);
+    assert_eq!(restarted.state_hash(), switched.state_hash());
+    assert_ne!(switched.state_hash(), reference.state_hash());
+
+    // Another material, or a constant out of range: refused, nothing changed.
+    let mut renamed = straight.config().scene.materials.clone();
+    renamed[0].name = "oil".into();
+    assert_eq!(
+        straight.set_materials(renamed).unwrap_err().key,
+        "materials"
+    );
+    let mut infinite = straight.config().scene.materials.clone();
+    infinite[0].k = f64::INFINITY;
+    assert!(straight.set_materials(infinite).is_err());
+    assert_eq!(straight.next_dt(), before_dt);
+}

@@ -32,6 +32,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Instant;
 
+pub mod common_state;
+
 pub struct CalibrateOptions {
     pub out: PathBuf,
     pub jobs: usize,
@@ -112,7 +114,11 @@ pub fn calibrate(study: &Study, opts: &CalibrateOptions) -> std::io::Result<Dete
         progress: opts.progress,
         plant_checkpoint: Some(spec.plant_t),
     };
-    run_matrix(study, &matrix)?;
+    if spec.common_state.is_some() {
+        common_state::run_twins(study, &spec, opts)?;
+    } else {
+        run_matrix(study, &matrix)?;
+    }
     let twins_wall_s = started.elapsed().as_secs_f64();
     let started = Instant::now();
     let tasks: Vec<(&Case, usize)> = study

@@ -63,7 +63,7 @@ pub fn run_case(case: &Case, dir: &Path, opts: &CaseOptions) -> std::io::Result<
     Ok(summary)
 }
 
-fn summary(case: &Case, run: Simulated, wall_s: f64) -> Summary {
+pub(crate) fn summary(case: &Case, run: Simulated, wall_s: f64) -> Summary {
     let particle_steps = run.particles as f64 * run.steps as f64;
     Summary {
         schema_version: SCHEMA_VERSION,

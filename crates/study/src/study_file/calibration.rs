@@ -39,6 +39,14 @@ pub struct CalibrationSpec {
     /// ... or plant exactly these speeds (m/s).
     #[serde(default)]
     pub dv: Vec<f64>,
+    /// Every case's twin starts from this case's state `switch_lead`
+    /// seconds before the plant, switched to its own method there: the
+    /// methods are then compared on one flow, not on their own (None:
+    /// each case runs from t = 0).
+    #[serde(default)]
+    pub common_state: Option<String>,
+    #[serde(default = "CalibrationSpec::default_switch_lead")]
+    pub switch_lead: f64,
 }
 
 type KeyError = (String, String);
@@ -54,6 +62,12 @@ impl CalibrationSpec {
 
     fn default_ratio() -> f64 {
         1.2
+    }
+
+    /// Past the detector's 30 ms energy window: the switch's own step is
+    /// out of every window the plant is judged over.
+    fn default_switch_lead() -> f64 {
+        0.1
     }
 
     /// Reads the table; Err: (dotted key, message).
@@ -92,6 +106,19 @@ impl CalibrationSpec {
             return bad(
                 "window",
                 format!("{} is out of range (allowed > 0 s)", self.window),
+            );
+        }
+        if self.common_state.is_some()
+            && !(self.switch_lead.is_finite()
+                && self.switch_lead > 0.0
+                && self.switch_lead < self.plant_t)
+        {
+            return bad(
+                "switch_lead",
+                format!(
+                    "{} is out of range (allowed 0 < switch_lead < plant_t = {} s)",
+                    self.switch_lead, self.plant_t
+                ),
             );
         }
         if self.sizes.is_empty() || self.sizes.iter().any(|&s| !(1..=64).contains(&s)) {
@@ -169,5 +196,17 @@ mod tests {
         );
         assert_eq!(spec("dv = [-1.0]").unwrap_err().0, "calibration.dv");
         assert_eq!(spec("dv = [0.1]\nhunch = 1").unwrap_err().0, "calibration");
+    }
+
+    #[test]
+    fn a_common_state_switches_before_the_plant() {
+        let s = spec("dv = [0.1]\ncommon_state = \"a\"").unwrap();
+        assert_eq!((s.common_state.as_deref(), s.switch_lead), (Some("a"), 0.1));
+        for lead in ["0.0", "0.5", "-0.1"] {
+            let extra = format!("dv = [0.1]\ncommon_state = \"a\"\nswitch_lead = {lead}");
+            assert_eq!(spec(&extra).unwrap_err().0, "calibration.switch_lead");
+        }
+        // Without a common state the lead is not read.
+        assert!(spec("dv = [0.1]\nswitch_lead = 0.5").is_ok());
     }
 }
