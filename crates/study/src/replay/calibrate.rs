@@ -63,6 +63,11 @@ pub struct DetectionRow {
     pub runs: usize,
     /// False when no patch qualified for the placement at the plant time.
     pub placed: bool,
+    /// The twin logged an event of its own near the patch in the window: no
+    /// planted speed can be told from it there, so the site is judged at no
+    /// speed (it is neither found nor missed).
+    #[serde(default)]
+    pub masked: bool,
     /// The patch as placed ([x0, y0, x1, y1], m; the same at every speed:
     /// the placement reads the state at the plant) and the step it went in.
     pub region: Option<[f64; 4]>,
@@ -232,6 +237,7 @@ struct Bracket {
     delay: Option<f64>,
     cause: Option<Cause>,
     placed: bool,
+    masked: bool,
     region: Option<[f64; 4]>,
     step: Option<u64>,
     particles: Option<usize>,
@@ -299,8 +305,13 @@ fn plant_and_record(
 #[derive(Clone, Copy, Debug)]
 enum Verdict {
     NotPlaced,
+    /// The twin logged an event near the patch in the window.
+    Masked,
     Missed,
-    Found { delay: f64, cause: Cause },
+    Found {
+        delay: f64,
+        cause: Cause,
+    },
 }
 
 /// Where a patch went: its region, step and particle count, when it was placed.
@@ -314,6 +325,7 @@ fn record(b: &mut Bracket, dv: f64, (verdict, placed): (Verdict, Placed)) {
     }
     match verdict {
         Verdict::NotPlaced => b.placed = false,
+        Verdict::Masked => b.masked = true,
         Verdict::Missed => b.missed = Some(b.missed.map_or(dv, |m: f64| m.max(dv))),
         Verdict::Found { delay, cause } => {
             if b.found.is_none_or(|f| dv < f) {
@@ -331,7 +343,7 @@ fn record(b: &mut Bracket, dv: f64, (verdict, placed): (Verdict, Placed)) {
 fn next_speeds([lo, hi]: [f64; 2], ratio: f64, brackets: &[Bracket]) -> Option<Vec<Option<f64>>> {
     let speeds: Vec<Option<f64>> = brackets
         .iter()
-        .map(|b| match (b.placed, b.found, b.missed) {
+        .map(|b| match (b.placed && !b.masked, b.found, b.missed) {
             (false, _, _) => None,
             (true, None, None) => Some(hi),
             (true, Some(f), None) if f > lo => Some(lo),
@@ -364,6 +376,7 @@ fn rows_of(
             cause: b.cause.map(|c| c.name().to_string()),
             runs,
             placed: b.placed,
+            masked: b.masked,
             region: b.region,
             step: b.step,
             particles: b.particles,
@@ -442,6 +455,9 @@ fn planted_run(
         .map(|k| match planted.iter().find(|(e, ..)| *e == k) {
             _ if speeds[k].is_none() => (Verdict::Missed, None),
             None => (Verdict::NotPlaced, None),
+            Some(&(_, cells, placed)) if twin_kicked_near(twin, cells, reach, window) => {
+                (Verdict::Masked, placed)
+            }
             Some(&(_, cells, placed)) => {
                 (find(&simulated.events, twin, cells, reach, window), placed)
             }
@@ -479,6 +495,15 @@ fn twin_has(
     twin.events.iter().any(|e| {
         e.kind == kind && e.cells.near(&cells, reach) && e.last_t >= window.0 && e.t <= window.1
     })
+}
+
+/// The twin logged an event (any kind and cause: `find` credits no planted
+/// event of a kind the twin has there) near these cells, open at some time
+/// in the window.
+fn twin_kicked_near(twin: &Twin, cells: CellRange, reach: usize, window: (f64, f64)) -> bool {
+    twin.events
+        .iter()
+        .any(|e| e.cells.near(&cells, reach) && e.last_t >= window.0 && e.t <= window.1 + 1e-12)
 }
 
 /// The first kick near the patch in the window that the twin lacks.
@@ -550,6 +575,10 @@ fn write_detection(d: &Detection, out: &Path) -> std::io::Result<()> {
         Column::new(
             "placed".into(),
             r.iter().map(|x| x.placed).collect::<Vec<_>>(),
+        ),
+        Column::new(
+            "masked".into(),
+            r.iter().map(|x| x.masked).collect::<Vec<_>>(),
         ),
         col_f("x0", |x| x.region.map(|r| r[0])),
         col_f("y0", |x| x.region.map(|r| r[1])),

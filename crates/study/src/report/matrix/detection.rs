@@ -6,6 +6,7 @@
 use crate::report::data::{spread, Matrix};
 use crate::report::html::{escape, link, Cell, Page};
 use crate::report::plot::Res;
+use monitor::stats::median_with_infinities;
 use std::path::Path;
 use study::replay::calibrate::{Detection, DetectionRow};
 
@@ -56,7 +57,10 @@ pub fn detection_table(m: &Matrix, out: &Path, page: &mut Page) -> Res {
 /// is the same when the largest case median is within 2 times the smallest.
 fn sites_tables(rows: &[DetectionRow], page: &mut Page) {
     let groups = site_groups(rows);
-    if groups.iter().all(|g| g.found.len() + g.unfound <= 1) {
+    if groups
+        .iter()
+        .all(|g| g.found.len() + g.unfound + g.masked <= 1)
+    {
         return;
     }
     let text = |v: Option<(f64, f64, f64)>| {
@@ -73,6 +77,7 @@ fn sites_tables(rows: &[DetectionRow], page: &mut Page) {
                 Cell::Text(escape(&g.place)),
                 Cell::Num(g.cells.to_string()),
                 Cell::Num(format!("{} of {n}", g.found.len())),
+                Cell::Num(g.masked.to_string()),
                 Cell::Num(text(spread(g.found.iter().copied()))),
             ];
             (String::new(), cells)
@@ -83,25 +88,35 @@ fn sites_tables(rows: &[DetectionRow], page: &mut Page) {
         "place",
         "cells",
         "distinct sites found",
+        "masked",
         "smallest found, median [min, max] (m/s)",
     ]
     .map(String::from)
     .to_vec();
-    page.p("Over the sites of each placement (a site where no planted speed was found, or no patch qualified, is not in the median):");
+    page.p("Over the sites of each placement. A site masked by the twin's own event there, or where no patch qualified, is judged at no speed. The case medians below count a site where no planted speed was found as above every speed found; a case whose median is such a site is counted as mostly unfound, and the spread is then unbounded:");
     page.table("detection_sites", &headers, &rows_out);
     let across = case_medians(&groups);
     let rows_out: Vec<(String, Vec<Cell>)> = across
         .iter()
         .map(|(place, cells, v)| {
-            let (lo, hi) = v
-                .iter()
-                .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+            let finite = v.iter().filter(|x| x.is_finite());
+            let (lo, hi) = finite.fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+            let unfound = v.iter().filter(|x| x.is_infinite()).count();
             let cells = vec![
                 Cell::Text(escape(place)),
                 Cell::Num(cells.to_string()),
                 Cell::Num(v.len().to_string()),
-                Cell::Num(format!("{lo:.3} - {hi:.3}")),
-                Cell::Num(format!("{:.2}", hi / lo)),
+                Cell::Num(unfound.to_string()),
+                Cell::Num(if lo <= hi {
+                    format!("{lo:.3} - {hi:.3}")
+                } else {
+                    "-".into()
+                }),
+                Cell::Num(if lo <= hi && unfound == 0 {
+                    format!("{:.2}", hi / lo)
+                } else {
+                    "unbounded".into()
+                }),
             ];
             (String::new(), cells)
         })
@@ -110,6 +125,7 @@ fn sites_tables(rows: &[DetectionRow], page: &mut Page) {
         "place",
         "cells",
         "cases",
+        "cases mostly unfound",
         "case medians (m/s)",
         "largest / smallest",
     ]
@@ -118,11 +134,14 @@ fn sites_tables(rows: &[DetectionRow], page: &mut Page) {
     page.table("detection_across", &headers, &rows_out);
 }
 
-/// Per placement and size, each case's median over its sites found.
+/// Per placement and size, each case's median over its judged sites, a
+/// site where no speed was found counting as infinite.
 fn case_medians(groups: &[SiteGroup]) -> Vec<(String, usize, Vec<f64>)> {
     let mut across: Vec<(String, usize, Vec<f64>)> = vec![];
     for g in groups {
-        let Some((median, _, _)) = spread(g.found.iter().copied()) else {
+        let mut judged = g.found.clone();
+        judged.extend(std::iter::repeat_n(f64::INFINITY, g.unfound));
+        let Some(median) = median_with_infinities(&judged) else {
             continue;
         };
         match across
@@ -142,7 +161,10 @@ struct SiteGroup {
     place: String,
     cells: usize,
     found: Vec<f64>,
+    /// Judged sites where no planted speed was found ...
     unfound: usize,
+    /// ... and sites the twin's own event masked.
+    masked: usize,
 }
 
 /// Sites that resolved to the same patch (the one block that qualified
@@ -153,7 +175,7 @@ fn site_groups(rows: &[DetectionRow]) -> Vec<SiteGroup> {
         let same = |o: &DetectionRow| {
             o.case == r.case && o.place == r.place && o.cells == r.cells && o.region == r.region
         };
-        if r.region.is_some() && rows[..k].iter().any(same) {
+        if !r.placed || (r.region.is_some() && rows[..k].iter().any(same)) {
             continue;
         }
         let at = groups
@@ -168,13 +190,15 @@ fn site_groups(rows: &[DetectionRow]) -> Vec<SiteGroup> {
                     cells: r.cells,
                     found: vec![],
                     unfound: 0,
+                    masked: 0,
                 });
                 groups.last_mut().expect("just pushed")
             }
         };
-        match r.dv_found {
-            Some(v) => g.found.push(v),
-            None => g.unfound += 1,
+        match (r.masked, r.dv_found) {
+            (true, _) => g.masked += 1,
+            (false, Some(v)) => g.found.push(v),
+            (false, None) => g.unfound += 1,
         }
     }
     groups
@@ -190,10 +214,10 @@ fn row(m: &Matrix, r: &DetectionRow) -> (String, Vec<Cell>) {
         .find(|row| row.case() == r.case)
         .and_then(|row| row.link.as_deref());
     let case = link(href, &r.case);
-    let place = if r.placed {
-        escape(&r.place)
-    } else {
-        format!("{} (no patch qualified)", escape(&r.place))
+    let place = match (r.placed, r.masked) {
+        (false, _) => format!("{} (no patch qualified)", escape(&r.place)),
+        (true, true) => format!("{} (masked: the twin's own event there)", escape(&r.place)),
+        (true, false) => escape(&r.place),
     };
     let class = if r.dv_found.is_none() { "blew_up" } else { "" };
     (
@@ -229,6 +253,7 @@ mod tests {
             cause: None,
             runs: 7,
             placed: true,
+            masked: false,
             region: None,
             step: None,
             particles: None,
@@ -239,7 +264,7 @@ mod tests {
 
     #[test]
     fn sites_of_a_placement_give_each_case_a_median_and_the_cases_a_spread() {
-        let rows = [
+        let mut rows = vec![
             row("a", "bulk", Some(0.02)),
             row("a", "bulk", Some(0.04)),
             row("a", "bulk", Some(0.03)),
@@ -248,24 +273,31 @@ mod tests {
             row("b", "bulk", None),
             row("b", "bulk", Some(0.07)),
             row("b", "bulk", Some(0.07)),
+            row("b", "bulk", None),
+            row("b", "bulk", None),
         ];
-        // The last two resolved to the same patch: it counts once.
-        let mut rows = rows;
+        // Two resolved to the same patch: it counts once.
         rows[6].region = Some([0.1, 0.0, 0.12, 0.02]);
         rows[7].region = Some([0.1, 0.0, 0.12, 0.02]);
+        // One masked by the twin's own event, one where no patch qualified.
+        rows[8].masked = true;
+        rows[9].placed = false;
         let groups = site_groups(&rows);
         assert_eq!(groups.len(), 3);
         assert_eq!((groups[0].found.len(), groups[0].unfound), (3, 0));
-        assert_eq!((groups[2].found.len(), groups[2].unfound), (2, 1));
+        let b = &groups[2];
+        assert_eq!((b.found.len(), b.unfound, b.masked), (2, 1, 1));
         let across = case_medians(&groups);
-        // The surface placement found nothing: no median, no entry.
-        assert_eq!(across.len(), 1);
         let (place, cells, medians) = &across[0];
         assert_eq!((place.as_str(), *cells), ("bulk", 2));
+        // b: 0.05, 0.07 and a miss, which counts above both: median 0.07.
         assert_eq!(medians.len(), 2);
         assert!(
-            (medians[0] - 0.03).abs() < 1e-12 && (medians[1] - 0.06).abs() < 1e-12,
+            (medians[0] - 0.03).abs() < 1e-12 && (medians[1] - 0.07).abs() < 1e-12,
             "{medians:?}"
         );
+        // The surface found nothing at its one site: mostly unfound.
+        assert_eq!(across[1].0, "surface");
+        assert_eq!(across[1].2, vec![f64::INFINITY]);
     }
 }
