@@ -2,7 +2,7 @@
 
 mod report;
 
-use study::replay::{bench, calibrate, explain, reproduce};
+use study::replay::{bench, calibrate, explain, inf_sup, reproduce};
 use study::run::{case, matrix, slurm};
 use study::study_file;
 
@@ -40,6 +40,10 @@ enum Command {
     /// each case (the study's [calibration] table), bisect the smallest
     /// found, and write OUT/detection.{parquet,csv,json}.
     Calibrate(CalibrateArgs),
+    /// The discrete inf-sup test of the pressure projection's pair on the
+    /// study's box (whole box, free slip and no slip, and its bodies at
+    /// t = 0) at each --cell; writes OUT/inf_sup.{parquet,csv,json}.
+    InfSup(InfSupArgs),
     /// Run a study on a SLURM cluster: an array job (one task per shard,
     /// requeue-safe) and a dependent job that finishes the matrix and its
     /// report; writes OUT/slurm/*.sbatch and submits them.
@@ -241,6 +245,22 @@ struct BenchArgs {
     set: Vec<String>,
 }
 
+#[derive(Args)]
+struct InfSupArgs {
+    /// Study file (TOML): its first case's box and bodies.
+    study: PathBuf,
+    /// Cell sizes (m); each must divide the box.
+    #[arg(long = "cell", required = true)]
+    cells: Vec<f64>,
+    /// Lanczos steps at most (1 to 5000).
+    #[arg(long, default_value_t = 400)]
+    max_steps: usize,
+    #[arg(long, default_value = "reports/inf_sup")]
+    out: PathBuf,
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
 /// A method choice by its study-file name (the serde spelling is the only one).
 fn parse_choice<T: serde::de::DeserializeOwned>(s: &str) -> Result<T, String> {
     serde_json::from_value(serde_json::Value::String(s.into())).map_err(|e| {
@@ -267,6 +287,7 @@ fn main() -> ExitCode {
         Command::List(a) => list_command(a),
         Command::Bench(a) => bench_command(a),
         Command::Calibrate(a) => calibrate_command(a),
+        Command::InfSup(a) => inf_sup_command(a),
         Command::Slurm(a) => slurm_command(a),
     }
 }
@@ -452,6 +473,50 @@ fn calibrate_command(args: CalibrateArgs) -> ExitCode {
         }
         Err(e) => {
             eprintln!("kick calibrate: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn inf_sup_command(args: InfSupArgs) -> ExitCode {
+    let study = match study_file::load(&args.study, &args.set) {
+        Ok(s) => s,
+        Err(e) => return bad_input(&e.to_string()),
+    };
+    if let Some(h) = args.cells.iter().find(|h| !(h.is_finite() && **h > 0.0)) {
+        return bad_input(&format!("--cell {h} is out of range (allowed > 0 m)"));
+    }
+    if !(1..=5000).contains(&args.max_steps) {
+        return bad_input(&format!(
+            "--max-steps {} is out of range (allowed 1 to 5000)",
+            args.max_steps
+        ));
+    }
+    let Some(case) = study.cases.first() else {
+        return bad_input(&format!("{}: no case", args.study.display()));
+    };
+    match inf_sup::run(&case.solver.scene, &args.cells, args.max_steps, &args.out) {
+        Ok(rows) => {
+            println!("mask, h (m): pressures, kernel probes deflated, beta, lambda_min (residual), checkerboard quotient, Lanczos steps");
+            for r in rows {
+                println!(
+                    "{}, {}: {}, {}, {:.4e}, {:.4e} ({:.1e}), {:.3e}, {}",
+                    r.mask,
+                    r.h,
+                    r.pressures,
+                    r.kernel,
+                    r.beta,
+                    r.lambda_min,
+                    r.residual,
+                    r.checkerboard_quotient,
+                    r.lanczos_steps
+                );
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) if e.starts_with("--cell") => bad_input(&format!("{}: {e}", args.study.display())),
+        Err(e) => {
+            eprintln!("kick inf-sup: {e}");
             ExitCode::FAILURE
         }
     }

@@ -5,4 +5,5 @@
 pub mod bench;
 pub mod calibrate;
 pub mod explain;
+pub mod inf_sup;
 pub mod reproduce;

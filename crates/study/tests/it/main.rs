@@ -6,6 +6,7 @@
 mod calibrate;
 mod cli;
 mod common;
+mod inf_sup;
 mod module_graph;
 mod report_browser;
 mod run_mixture;

@@ -25,6 +25,7 @@
 //! is in the checkpoint).
 
 mod advect;
+pub mod inf_sup;
 mod operator;
 mod pcg;
 mod surface;
