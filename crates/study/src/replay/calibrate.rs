@@ -450,12 +450,13 @@ fn planted_run(
         })
         .collect();
     let reach = case.monitor.merge_cells;
+    let merge = (reach, case.monitor.merge_seconds);
     let window = (twin.t_plant, twin.t_plant + spec.window);
     let patches = (0..speeds.len())
         .map(|k| match planted.iter().find(|(e, ..)| *e == k) {
             _ if speeds[k].is_none() => (Verdict::Missed, None),
             None => (Verdict::NotPlaced, None),
-            Some(&(_, cells, placed)) if twin_kicked_near(twin, cells, reach, window) => {
+            Some(&(_, cells, placed)) if twin_kicked_near(twin, cells, merge, window) => {
                 (Verdict::Masked, placed)
             }
             Some(&(_, cells, placed)) => {
@@ -498,12 +499,20 @@ fn twin_has(
 }
 
 /// The twin logged an event (any kind and cause: `find` credits no planted
-/// event of a kind the twin has there) near these cells, open at some time
-/// in the window.
-fn twin_kicked_near(twin: &Twin, cells: CellRange, reach: usize, window: (f64, f64)) -> bool {
-    twin.events
-        .iter()
-        .any(|e| e.cells.near(&cells, reach) && e.last_t >= window.0 && e.t <= window.1 + 1e-12)
+/// event of a kind the twin has there) that a cluster at these cells would
+/// join: its extent within `reach` of them, open in the window or within
+/// `merge_seconds` before it (the monitor's merge rule).
+fn twin_kicked_near(
+    twin: &Twin,
+    cells: CellRange,
+    (reach, merge_seconds): (usize, f64),
+    window: (f64, f64),
+) -> bool {
+    twin.events.iter().any(|e| {
+        e.extent.near(&cells, reach)
+            && e.last_t + merge_seconds >= window.0
+            && e.t <= window.1 + 1e-12
+    })
 }
 
 /// The first kick near the patch in the window that the twin lacks.
