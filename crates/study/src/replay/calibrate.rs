@@ -635,6 +635,45 @@ mod tests {
     }
 
     #[test]
+    fn a_patch_a_twin_event_would_absorb_is_masked() {
+        // The twin's event opened at cells 20-21 and grew to 10-21; it
+        // last moved 0.01 s before the window.
+        let mut e = crate::output::summary::sample_event();
+        (e.t, e.last_t) = (1.9, 1.99);
+        e.cells = CellRange {
+            i_min: 20,
+            j_min: 0,
+            i_max: 21,
+            j_max: 1,
+        };
+        e.extent = CellRange {
+            i_min: 10,
+            j_min: 0,
+            i_max: 21,
+            j_max: 1,
+        };
+        let twin = Twin {
+            checkpoint: vec![],
+            t_plant: 2.0,
+            events: vec![e],
+        };
+        let patch = |i: usize| CellRange {
+            i_min: i,
+            j_min: 0,
+            i_max: i + 1,
+            j_max: 1,
+        };
+        let window = (2.0, 2.1);
+        // Beside the extent (not the opening cells), within its merge time.
+        assert!(twin_kicked_near(&twin, patch(6), (3, 0.02), window));
+        // Beyond the merge distance, or after the merge time ran out.
+        assert!(!twin_kicked_near(&twin, patch(4), (3, 0.02), window));
+        assert!(!twin_kicked_near(&twin, patch(6), (3, 0.005), window));
+        // An event that opens after the window masks nothing.
+        assert!(!twin_kicked_near(&twin, patch(6), (3, 0.02), (1.0, 1.1)));
+    }
+
+    #[test]
     fn the_bracket_closes_to_its_ratio_around_the_threshold() {
         for threshold in [0.006, 0.02, 0.05, 0.3] {
             let (b, runs) = bisect(threshold);

@@ -38,7 +38,11 @@ fn the_collocated_pairs_inf_sup_constant_falls_with_h() {
         assert!((1.7..2.3).contains(&ratio), "{mask}: {ratio} {rows:?}");
     }
     let held = rows.iter().find(|r| r.mask == "box, no slip").unwrap();
-    assert_eq!((held.kernel, held.checkerboard_quotient), (2, 0.0), "{held:?}");
+    assert_eq!(
+        (held.kernel, held.checkerboard_quotient),
+        (2, 0.0),
+        "{held:?}"
+    );
     // A cell that does not divide the box.
     let o = kick(&[
         "inf-sup",
