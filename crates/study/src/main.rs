@@ -7,6 +7,7 @@ use study::run::{case, matrix, slurm};
 use study::study_file;
 
 use clap::{Args, Parser, Subcommand};
+use solver::stages::projection::inf_sup::PairKind;
 use solver::{ShapeKind, TransferKind};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -245,6 +246,12 @@ struct BenchArgs {
     set: Vec<String>,
 }
 
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum InfSupPair {
+    Collocated,
+    Mac,
+}
+
 #[derive(Args)]
 struct InfSupArgs {
     /// Study file (TOML): its first case's box and bodies.
@@ -252,6 +259,9 @@ struct InfSupArgs {
     /// Cell sizes (m); each must divide the box.
     #[arg(long = "cell", required = true)]
     cells: Vec<f64>,
+    /// Pairs to test: collocated (the projection's, Q1-P0) and mac (staggered).
+    #[arg(long = "pair", value_enum, default_values_t = [InfSupPair::Collocated, InfSupPair::Mac])]
+    pairs: Vec<InfSupPair>,
     /// Lanczos steps at most (1 to 5000).
     #[arg(long, default_value_t = 400)]
     max_steps: usize,
@@ -495,12 +505,27 @@ fn inf_sup_command(args: InfSupArgs) -> ExitCode {
     let Some(case) = study.cases.first() else {
         return bad_input(&format!("{}: no case", args.study.display()));
     };
-    match inf_sup::run(&case.solver.scene, &args.cells, args.max_steps, &args.out) {
+    let pairs: Vec<PairKind> = args
+        .pairs
+        .iter()
+        .map(|p| match p {
+            InfSupPair::Collocated => PairKind::Collocated,
+            InfSupPair::Mac => PairKind::Mac,
+        })
+        .collect();
+    match inf_sup::run(
+        &case.solver.scene,
+        &pairs,
+        &args.cells,
+        args.max_steps,
+        &args.out,
+    ) {
         Ok(rows) => {
-            println!("mask, h (m): pressures, kernel probes deflated, beta, lambda_min (residual), checkerboard quotient, Lanczos steps");
+            println!("pair, mask, h (m): pressures, kernel probes deflated, beta, lambda_min (residual), checkerboard quotient, Lanczos steps");
             for r in rows {
                 println!(
-                    "{}, {}: {}, {}, {:.4e}, {:.4e} ({:.1e}), {:.3e}, {}",
+                    "{}, {}, {}: {}, {}, {:.4e}, {:.4e} ({:.1e}), {:.3e}, {}",
+                    r.pair,
                     r.mask,
                     r.h,
                     r.pressures,

@@ -1,5 +1,6 @@
-//! `kick inf-sup`: the discrete inf-sup test of the projection's pair
-//! (`solver::stages::projection::inf_sup`) on a study's box at several cell
+//! `kick inf-sup`: the discrete inf-sup test of a velocity-pressure pair
+//! (`solver::stages::projection::inf_sup`: the projection's collocated
+//! pair, and a staggered one for comparison) on a study's box at several cell
 //! sizes, for the whole box (free slip and no slip) and for the scene's
 //! bodies at t = 0 (a dam break's column: a free surface). A stable pair
 //! keeps beta bounded away from 0 with no trend in h; the table says
@@ -9,7 +10,7 @@ use crate::output::files::write_atomic;
 use crate::output::tables;
 use polars::prelude::*;
 use serde::{Deserialize, Serialize};
-use solver::stages::projection::inf_sup::{self, Mask};
+use solver::stages::projection::inf_sup::{self, Mask, PairKind};
 use solver::Scene;
 use std::path::Path;
 
@@ -70,10 +71,11 @@ fn masks(scene: &Scene, h: f64) -> Result<Vec<(&'static str, Mask)>, String> {
     ])
 }
 
-/// Runs the test for every mask and cell size; writes
+/// Runs the test for every pair, mask and cell size; writes
 /// OUT/inf_sup.{parquet,csv,json}.
 pub fn run(
     scene: &Scene,
+    pairs: &[PairKind],
     cells: &[f64],
     max_steps: usize,
     out: &Path,
@@ -81,35 +83,42 @@ pub fn run(
     let mut rows = vec![];
     for &h in cells {
         for (name, mask) in masks(scene, h)? {
-            let started = std::time::Instant::now();
-            let r = inf_sup::collocated(&mask, max_steps)
-                .map_err(|e| format!("{name}, h = {h}: {e}"))?;
-            let quotient = |k: &str| {
-                r.probes
-                    .iter()
-                    .find(|p| p.name == k)
-                    .map_or(f64::NAN, |p| p.quotient)
-            };
-            rows.push(InfSupRow {
-                pair: "collocated (Q1-P0)".into(),
-                mask: name.into(),
-                h,
-                pressures: r.pressures,
-                velocities: r.velocities,
-                constant_quotient: quotient("constant"),
-                checkerboard_quotient: quotient("checkerboard"),
-                kernel: r.deflated,
-                lambda_min: r.lambda_min,
-                beta: r.beta,
-                residual: r.residual,
-                lambda_max: r.lambda_max,
-                lanczos_steps: r.lanczos_steps,
-                wall_s: started.elapsed().as_secs_f64(),
-            });
+            for &kind in pairs {
+                rows.push(row(kind, name, &mask, max_steps)?);
+            }
         }
     }
     write(&rows, out).map_err(|e| format!("{}: {e}", out.display()))?;
     Ok(rows)
+}
+
+/// One pair on one mask.
+fn row(kind: PairKind, name: &str, mask: &Mask, max_steps: usize) -> Result<InfSupRow, String> {
+    let h = mask.h;
+    let started = std::time::Instant::now();
+    let r = inf_sup::test(mask, kind, max_steps).map_err(|e| format!("{name}, h = {h}: {e}"))?;
+    let quotient = |k: &str| {
+        r.probes
+            .iter()
+            .find(|p| p.name == k)
+            .map_or(f64::NAN, |p| p.quotient)
+    };
+    Ok(InfSupRow {
+        pair: kind.name().into(),
+        mask: name.into(),
+        h,
+        pressures: r.pressures,
+        velocities: r.velocities,
+        constant_quotient: quotient("constant"),
+        checkerboard_quotient: quotient("checkerboard"),
+        kernel: r.deflated,
+        lambda_min: r.lambda_min,
+        beta: r.beta,
+        residual: r.residual,
+        lambda_max: r.lambda_max,
+        lanczos_steps: r.lanczos_steps,
+        wall_s: started.elapsed().as_secs_f64(),
+    })
 }
 
 fn write(rows: &[InfSupRow], out: &Path) -> std::io::Result<()> {

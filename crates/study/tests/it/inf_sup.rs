@@ -1,7 +1,7 @@
 //! `kick inf-sup` end to end: the collocated pair's inf-sup constant on
 //! the shipped dam break's box falls in proportion to h (the pair is not
-//! stable), the no-slip box cannot see the checkerboard, and bad input
-//! exits 2.
+//! stable) where the staggered pair's holds, the no-slip box cannot see the
+//! collocated checkerboard, and bad input exits 2.
 
 use crate::common::{self, kick, stderr};
 use study::replay::inf_sup::InfSupRow;
@@ -26,18 +26,25 @@ fn the_collocated_pairs_inf_sup_constant_falls_with_h() {
     }
     let rows: Vec<InfSupRow> =
         serde_json::from_slice(&std::fs::read(out.join("inf_sup.json")).unwrap()).unwrap();
-    assert_eq!(rows.len(), 6);
-    let beta = |mask: &str, h: f64| {
+    // Two pairs, three masks, two sizes.
+    assert_eq!(rows.len(), 12);
+    let beta = |pair: &str, mask: &str, h: f64| {
         rows.iter()
-            .find(|r| r.mask == mask && r.h == h)
+            .find(|r| r.pair.starts_with(pair) && r.mask == mask && r.h == h)
             .map(|r| r.beta)
             .unwrap()
     };
     for mask in ["box, free slip", "box, no slip", "bodies at t = 0"] {
-        let ratio = beta(mask, 0.05) / beta(mask, 0.025);
+        let ratio = beta("collocated", mask, 0.05) / beta("collocated", mask, 0.025);
         assert!((1.7..2.3).contains(&ratio), "{mask}: {ratio} {rows:?}");
+        // The staggered pair keeps its constant.
+        let ratio = beta("staggered", mask, 0.05) / beta("staggered", mask, 0.025);
+        assert!((0.9..1.1).contains(&ratio), "{mask}: {ratio} {rows:?}");
     }
-    let held = rows.iter().find(|r| r.mask == "box, no slip").unwrap();
+    let held = rows
+        .iter()
+        .find(|r| r.pair.starts_with("collocated") && r.mask == "box, no slip")
+        .unwrap();
     assert_eq!(
         (held.kernel, held.checkerboard_quotient),
         (2, 0.0),

@@ -58,6 +58,25 @@ impl Mask {
     }
 }
 
+/// Which velocity-pressure pair is tested.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PairKind {
+    /// The projection's pair: bilinear nodal velocities, cell pressures (Q1-P0).
+    Collocated,
+    /// A staggered (MAC) grid: each velocity component on the faces normal
+    /// to it, cell pressures.
+    Mac,
+}
+
+impl PairKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            PairKind::Collocated => "collocated (Q1-P0)",
+            PairKind::Mac => "staggered (MAC)",
+        }
+    }
+}
+
 /// How close a probe comes to the kernel: its Rayleigh quotient
 /// q^T S q / q^T q (0: B^T q = 0).
 #[derive(Clone, Debug, PartialEq)]
@@ -251,6 +270,138 @@ impl Pair {
     }
 }
 
+impl Pair {
+    /// The staggered pair: u on the vertical faces, v on the horizontal
+    /// ones, of every fluid cell; a wall pins the normal component. A is
+    /// the five-point Laplacian of each component (sum over neighbouring
+    /// faces of (u_a - u_b)^2: the bilinear Laplacian's scaling), across a
+    /// fluid cell or between two faces of fluid cells; a no-slip wall h / 2
+    /// away adds 2 u^2.
+    fn mac(mask: &Mask) -> Result<Pair, String> {
+        let [nx, ny] = mask.cells;
+        if mask.fluid.len() != nx * ny {
+            return Err(format!("mask: {} cells for {nx} x {ny}", mask.fluid.len()));
+        }
+        let fluid = |i: usize, j: usize| i < nx && j < ny && mask.fluid[i + j * nx];
+        // Face (i, j) of component d: u faces i in 0..=nx, j < ny; v faces
+        // i < nx, j in 0..=ny. Present beside a fluid cell.
+        let span = [[nx + 1, ny], [nx, ny + 1]];
+        let index = |d: usize, i: usize, j: usize| {
+            if d == 0 {
+                i + j * (nx + 1)
+            } else {
+                (nx + 1) * ny + i + j * nx
+            }
+        };
+        let mut dof = vec![NONE; (nx + 1) * ny + nx * (ny + 1)];
+        let mut velocities = 0;
+        let mut cells = vec![];
+        for j in 0..ny {
+            for i in 0..nx {
+                if !fluid(i, j) {
+                    continue;
+                }
+                cells.push((i, j));
+                // The cell's faces: west, east (u), south, north (v).
+                for (d, fi, fj) in [(0, i, j), (0, i + 1, j), (1, i, j), (1, i, j + 1)] {
+                    let wall = if d == 0 {
+                        fi == 0 || fi == nx
+                    } else {
+                        fj == 0 || fj == ny
+                    };
+                    let k = index(d, fi, fj);
+                    if !wall && dof[k] == NONE {
+                        dof[k] = velocities;
+                        velocities += 1;
+                    }
+                }
+            }
+        }
+        if cells.is_empty() {
+            return Err("mask: no fluid cell".into());
+        }
+        let present = |d: usize, i: usize, j: usize| {
+            let [si, sj] = span[d];
+            i < si && j < sj && {
+                let (a, b) = if d == 0 {
+                    ((i.wrapping_sub(1), j), (i, j))
+                } else {
+                    ((i, j.wrapping_sub(1)), (i, j))
+                };
+                fluid(a.0, a.1) || fluid(b.0, b.1)
+            }
+        };
+        let mut a_rows = vec![vec![]; velocities];
+        // (u_a - u_b)^2 with a pinned face (a wall's normal) held at 0.
+        let mut couple = |ka: usize, kb: usize, w: f64| {
+            for (k, other) in [(ka, kb), (kb, ka)] {
+                if k != NONE {
+                    a_rows[k].push((k, w));
+                    if other != NONE {
+                        a_rows[k].push((other, -w));
+                    }
+                }
+            }
+        };
+        for d in 0..2 {
+            let [si, sj] = span[d];
+            for j in 0..sj {
+                for i in 0..si {
+                    if !present(d, i, j) {
+                        continue;
+                    }
+                    let k = dof[index(d, i, j)];
+                    // Along the component: across the cell beyond this face.
+                    let (ai, aj) = if d == 0 { (i + 1, j) } else { (i, j + 1) };
+                    if fluid(i, j) && present(d, ai, aj) {
+                        couple(k, dof[index(d, ai, aj)], 1.0);
+                    }
+                    // Across it: to the next face of the same component.
+                    let (ci, cj, last) = if d == 0 {
+                        (i, j + 1, j + 1 == sj)
+                    } else {
+                        (i + 1, j, i + 1 == si)
+                    };
+                    if last {
+                        // A wall h / 2 beyond: free slip leaves it alone.
+                        if mask.no_slip {
+                            couple(k, NONE, 2.0);
+                        }
+                    } else if present(d, ci, cj) {
+                        couple(k, dof[index(d, ci, cj)], 1.0);
+                    }
+                    let first = if d == 0 { j == 0 } else { i == 0 };
+                    if first && mask.no_slip {
+                        couple(k, NONE, 2.0);
+                    }
+                }
+            }
+        }
+        let mut b_rows = Vec::with_capacity(cells.len());
+        for &(i, j) in &cells {
+            let mut row = vec![];
+            for (d, fi, fj, sign) in [
+                (0, i, j, -1.0),
+                (0, i + 1, j, 1.0),
+                (1, i, j, -1.0),
+                (1, i, j + 1, 1.0),
+            ] {
+                let k = dof[index(d, fi, fj)];
+                if k != NONE {
+                    row.push((k, sign * mask.h));
+                }
+            }
+            b_rows.push(row);
+        }
+        Ok(Pair {
+            b: Csr::from_rows(b_rows),
+            a: Csr::from_rows(a_rows),
+            cells,
+            h: mask.h,
+        })
+    }
+}
+
 /// The Schur operator S = M_p^-1 B A^-1 B^T with its scratch.
 struct Schur<'a> {
     pair: &'a Pair,
@@ -358,7 +509,15 @@ fn probes(pair: &Pair) -> Vec<(&'static str, Vec<f64>)> {
 /// Runs the test on a mask for the collocated pair, with at most
 /// `max_steps` Lanczos steps.
 pub fn collocated(mask: &Mask, max_steps: usize) -> Result<InfSup, String> {
-    let pair = Pair::collocated(mask)?;
+    test(mask, PairKind::Collocated, max_steps)
+}
+
+/// Runs the test on a mask for a pair, with at most `max_steps` Lanczos steps.
+pub fn test(mask: &Mask, kind: PairKind, max_steps: usize) -> Result<InfSup, String> {
+    let pair = match kind {
+        PairKind::Collocated => Pair::collocated(mask)?,
+        PairKind::Mac => Pair::mac(mask)?,
+    };
     let mut schur = Schur::new(&pair)?;
     let n = pair.cells.len();
     let mut y = vec![0.0; n];
@@ -508,12 +667,24 @@ mod tests {
             Mask::full([6, 5], 0.1),
             Mask::of_rects([8, 6], 0.1, &[[0.0, 0.0, 0.4, 0.45]]),
         ];
-        for mask in masks {
-            let pair = Pair::collocated(&mask).unwrap();
+        let mut no_slip = masks[1].clone();
+        no_slip.no_slip = true;
+        let cases = [
+            (PairKind::Collocated, &masks[0]),
+            (PairKind::Collocated, &masks[1]),
+            (PairKind::Mac, &masks[0]),
+            (PairKind::Mac, &masks[1]),
+            (PairKind::Mac, &no_slip),
+        ];
+        for (kind, mask) in cases {
+            let pair = match kind {
+                PairKind::Collocated => Pair::collocated(mask).unwrap(),
+                PairKind::Mac => Pair::mac(mask).unwrap(),
+            };
             let s = dense_schur(&pair);
             let mut eig: Vec<f64> = SymmetricEigen::new(s).eigenvalues.iter().copied().collect();
             eig.sort_by(f64::total_cmp);
-            let got = collocated(&mask, 200).unwrap();
+            let got = test(mask, kind, 200).unwrap();
             let zeros = eig.iter().filter(|&&e| e < KERNEL).count();
             assert_eq!(got.deflated, zeros, "{got:?} {eig:?}");
             let expected = eig[zeros];
@@ -549,6 +720,36 @@ mod tests {
         for r in [&held, &coarse, &fine] {
             assert!(r.lambda_max <= 2.0 + 1e-9 && r.lambda_min > 0.0, "{r:?}");
         }
+    }
+
+    #[test]
+    fn the_staggered_pair_keeps_its_constant_as_h_falls() {
+        let coarse = test(&Mask::full([16, 12], 0.05), PairKind::Mac, 400).unwrap();
+        let fine = test(&Mask::full([32, 24], 0.025), PairKind::Mac, 400).unwrap();
+        for r in [&coarse, &fine] {
+            // Only the constant is in the closed box's kernel.
+            assert_eq!(r.deflated, 1, "{r:?}");
+            assert!(r.probes[1].quotient > 0.5, "{r:?}");
+            assert!(r.beta > 0.2, "{r:?}");
+        }
+        let ratio = fine.beta / coarse.beta;
+        assert!((0.9..1.1).contains(&ratio), "{coarse:?} {fine:?}");
+        // No slip: bounded too, well above the collocated pair's.
+        let held = |cells, h| {
+            let mut m = Mask::full(cells, h);
+            m.no_slip = true;
+            test(&m, PairKind::Mac, 400).unwrap().beta
+        };
+        let (c, f) = (held([16, 12], 0.05), held([32, 24], 0.025));
+        assert!(f > 0.3 && (0.9..1.1).contains(&(f / c)), "{c} {f}");
+        // The collocated pair on the same boxes halves.
+        let q1 = |cells, h| {
+            test(&Mask::full(cells, h), PairKind::Collocated, 400)
+                .unwrap()
+                .beta
+        };
+        let halved = q1([32, 24], 0.025) / q1([16, 12], 0.05);
+        assert!((0.45..0.55).contains(&halved), "{halved}");
     }
 
     #[test]
