@@ -270,132 +270,170 @@ impl Pair {
     }
 }
 
+/// The faces of a staggered grid over a mask: component d's face (i, j)
+/// is a u face (i in 0..=nx, j < ny) or a v face (i < nx, j in 0..=ny).
+struct Faces<'m> {
+    mask: &'m Mask,
+    /// Each face's unknown (NONE: pinned by a wall, or beside no fluid cell).
+    dof: Vec<usize>,
+    velocities: usize,
+}
+
+impl<'m> Faces<'m> {
+    fn new(mask: &'m Mask) -> Faces<'m> {
+        let [nx, ny] = mask.cells;
+        let mut faces = Faces {
+            mask,
+            dof: vec![NONE; (nx + 1) * ny + nx * (ny + 1)],
+            velocities: 0,
+        };
+        for (i, j) in faces.fluid_cells() {
+            // The cell's faces: west, east (u), south, north (v).
+            for (d, fi, fj) in [(0, i, j), (0, i + 1, j), (1, i, j), (1, i, j + 1)] {
+                let wall = if d == 0 {
+                    fi == 0 || fi == nx
+                } else {
+                    fj == 0 || fj == ny
+                };
+                let k = faces.index(d, fi, fj);
+                if !wall && faces.dof[k] == NONE {
+                    faces.dof[k] = faces.velocities;
+                    faces.velocities += 1;
+                }
+            }
+        }
+        faces
+    }
+
+    fn fluid(&self, i: usize, j: usize) -> bool {
+        let [nx, ny] = self.mask.cells;
+        i < nx && j < ny && self.mask.fluid[i + j * nx]
+    }
+
+    fn fluid_cells(&self) -> Vec<(usize, usize)> {
+        let [nx, ny] = self.mask.cells;
+        (0..ny)
+            .flat_map(|j| (0..nx).map(move |i| (i, j)))
+            .filter(|&(i, j)| self.fluid(i, j))
+            .collect()
+    }
+
+    /// How many faces of component d there are along x and y.
+    fn span(&self, d: usize) -> [usize; 2] {
+        let [nx, ny] = self.mask.cells;
+        if d == 0 {
+            [nx + 1, ny]
+        } else {
+            [nx, ny + 1]
+        }
+    }
+
+    fn index(&self, d: usize, i: usize, j: usize) -> usize {
+        let [nx, ny] = self.mask.cells;
+        if d == 0 {
+            i + j * (nx + 1)
+        } else {
+            (nx + 1) * ny + i + j * nx
+        }
+    }
+
+    /// The face exists and borders a fluid cell.
+    fn present(&self, d: usize, i: usize, j: usize) -> bool {
+        let [si, sj] = self.span(d);
+        let before = if d == 0 {
+            (i.wrapping_sub(1), j)
+        } else {
+            (i, j.wrapping_sub(1))
+        };
+        i < si && j < sj && (self.fluid(before.0, before.1) || self.fluid(i, j))
+    }
+
+    /// The five-point Laplacian of each component: sum over neighbouring
+    /// faces of (u_a - u_b)^2 (the bilinear Laplacian's scaling), a pinned
+    /// face held at 0, across a fluid cell or between two faces of fluid
+    /// cells; a no-slip wall h / 2 away adds 2 u^2.
+    fn stiffness(&self) -> Csr {
+        let mut rows = vec![vec![]; self.velocities];
+        let mut couple = |ka: usize, kb: usize, w: f64| {
+            for (k, other) in [(ka, kb), (kb, ka)] {
+                if k != NONE {
+                    rows[k].push((k, w));
+                    if other != NONE {
+                        rows[k].push((other, -w));
+                    }
+                }
+            }
+        };
+        let no_slip = self.mask.no_slip;
+        for d in 0..2 {
+            let [si, sj] = self.span(d);
+            for (i, j) in (0..sj).flat_map(|j| (0..si).map(move |i| (i, j))) {
+                if !self.present(d, i, j) {
+                    continue;
+                }
+                let k = self.dof[self.index(d, i, j)];
+                // Along the component: across the cell beyond this face.
+                let (ai, aj) = if d == 0 { (i + 1, j) } else { (i, j + 1) };
+                if self.fluid(i, j) && self.present(d, ai, aj) {
+                    couple(k, self.dof[self.index(d, ai, aj)], 1.0);
+                }
+                // Across it: the next face of the component, or a wall.
+                let (ci, cj) = if d == 0 { (i, j + 1) } else { (i + 1, j) };
+                let (first, last) = if d == 0 {
+                    (j == 0, j + 1 == sj)
+                } else {
+                    (i == 0, i + 1 == si)
+                };
+                if !last && self.present(d, ci, cj) {
+                    couple(k, self.dof[self.index(d, ci, cj)], 1.0);
+                }
+                for _ in 0..(usize::from(first) + usize::from(last)) * usize::from(no_slip) {
+                    couple(k, NONE, 2.0);
+                }
+            }
+        }
+        Csr::from_rows(rows)
+    }
+
+    /// B: the flux out of each fluid cell.
+    fn divergence(&self, cells: &[(usize, usize)]) -> Csr {
+        let h = self.mask.h;
+        let rows = cells
+            .iter()
+            .map(|&(i, j)| {
+                [
+                    (0, i, j, -h),
+                    (0, i + 1, j, h),
+                    (1, i, j, -h),
+                    (1, i, j + 1, h),
+                ]
+                .into_iter()
+                .map(|(d, fi, fj, c)| (self.dof[self.index(d, fi, fj)], c))
+                .filter(|&(k, _)| k != NONE)
+                .collect()
+            })
+            .collect();
+        Csr::from_rows(rows)
+    }
+}
+
 impl Pair {
     /// The staggered pair: u on the vertical faces, v on the horizontal
-    /// ones, of every fluid cell; a wall pins the normal component. A is
-    /// the five-point Laplacian of each component (sum over neighbouring
-    /// faces of (u_a - u_b)^2: the bilinear Laplacian's scaling), across a
-    /// fluid cell or between two faces of fluid cells; a no-slip wall h / 2
-    /// away adds 2 u^2.
+    /// ones, of every fluid cell; a wall pins the normal component
+    /// (`Faces::stiffness` for A).
     fn mac(mask: &Mask) -> Result<Pair, String> {
         let [nx, ny] = mask.cells;
         if mask.fluid.len() != nx * ny {
             return Err(format!("mask: {} cells for {nx} x {ny}", mask.fluid.len()));
         }
-        let fluid = |i: usize, j: usize| i < nx && j < ny && mask.fluid[i + j * nx];
-        // Face (i, j) of component d: u faces i in 0..=nx, j < ny; v faces
-        // i < nx, j in 0..=ny. Present beside a fluid cell.
-        let span = [[nx + 1, ny], [nx, ny + 1]];
-        let index = |d: usize, i: usize, j: usize| {
-            if d == 0 {
-                i + j * (nx + 1)
-            } else {
-                (nx + 1) * ny + i + j * nx
-            }
-        };
-        let mut dof = vec![NONE; (nx + 1) * ny + nx * (ny + 1)];
-        let mut velocities = 0;
-        let mut cells = vec![];
-        for j in 0..ny {
-            for i in 0..nx {
-                if !fluid(i, j) {
-                    continue;
-                }
-                cells.push((i, j));
-                // The cell's faces: west, east (u), south, north (v).
-                for (d, fi, fj) in [(0, i, j), (0, i + 1, j), (1, i, j), (1, i, j + 1)] {
-                    let wall = if d == 0 {
-                        fi == 0 || fi == nx
-                    } else {
-                        fj == 0 || fj == ny
-                    };
-                    let k = index(d, fi, fj);
-                    if !wall && dof[k] == NONE {
-                        dof[k] = velocities;
-                        velocities += 1;
-                    }
-                }
-            }
-        }
+        let faces = Faces::new(mask);
+        let cells = faces.fluid_cells();
         if cells.is_empty() {
             return Err("mask: no fluid cell".into());
         }
-        let present = |d: usize, i: usize, j: usize| {
-            let [si, sj] = span[d];
-            i < si && j < sj && {
-                let (a, b) = if d == 0 {
-                    ((i.wrapping_sub(1), j), (i, j))
-                } else {
-                    ((i, j.wrapping_sub(1)), (i, j))
-                };
-                fluid(a.0, a.1) || fluid(b.0, b.1)
-            }
-        };
-        let mut a_rows = vec![vec![]; velocities];
-        // (u_a - u_b)^2 with a pinned face (a wall's normal) held at 0.
-        let mut couple = |ka: usize, kb: usize, w: f64| {
-            for (k, other) in [(ka, kb), (kb, ka)] {
-                if k != NONE {
-                    a_rows[k].push((k, w));
-                    if other != NONE {
-                        a_rows[k].push((other, -w));
-                    }
-                }
-            }
-        };
-        for d in 0..2 {
-            let [si, sj] = span[d];
-            for j in 0..sj {
-                for i in 0..si {
-                    if !present(d, i, j) {
-                        continue;
-                    }
-                    let k = dof[index(d, i, j)];
-                    // Along the component: across the cell beyond this face.
-                    let (ai, aj) = if d == 0 { (i + 1, j) } else { (i, j + 1) };
-                    if fluid(i, j) && present(d, ai, aj) {
-                        couple(k, dof[index(d, ai, aj)], 1.0);
-                    }
-                    // Across it: to the next face of the same component.
-                    let (ci, cj, last) = if d == 0 {
-                        (i, j + 1, j + 1 == sj)
-                    } else {
-                        (i + 1, j, i + 1 == si)
-                    };
-                    if last {
-                        // A wall h / 2 beyond: free slip leaves it alone.
-                        if mask.no_slip {
-                            couple(k, NONE, 2.0);
-                        }
-                    } else if present(d, ci, cj) {
-                        couple(k, dof[index(d, ci, cj)], 1.0);
-                    }
-                    let first = if d == 0 { j == 0 } else { i == 0 };
-                    if first && mask.no_slip {
-                        couple(k, NONE, 2.0);
-                    }
-                }
-            }
-        }
-        let mut b_rows = Vec::with_capacity(cells.len());
-        for &(i, j) in &cells {
-            let mut row = vec![];
-            for (d, fi, fj, sign) in [
-                (0, i, j, -1.0),
-                (0, i + 1, j, 1.0),
-                (1, i, j, -1.0),
-                (1, i, j + 1, 1.0),
-            ] {
-                let k = dof[index(d, fi, fj)];
-                if k != NONE {
-                    row.push((k, sign * mask.h));
-                }
-            }
-            b_rows.push(row);
-        }
         Ok(Pair {
-            b: Csr::from_rows(b_rows),
-            a: Csr::from_rows(a_rows),
+            b: faces.divergence(&cells),
+            a: faces.stiffness(),
             cells,
             h: mask.h,
         })
