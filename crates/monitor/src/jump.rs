@@ -57,6 +57,16 @@ pub struct JumpRule {
     pub calm_change: f64,
 }
 
+/// Where a particle stands against the rule in the step last observed:
+/// its change's departure from the local flow's, the threshold that
+/// departure must reach, and whether the local flow was calm.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Margin {
+    pub departure: Vec2,
+    pub threshold: f64,
+    pub calm: bool,
+}
+
 /// Cells of the ring a verdict needs (else the cell is left unjudged: spray).
 pub const MIN_RING_CELLS: usize = 6;
 
@@ -131,6 +141,31 @@ impl Jumps {
             }
         }
         &self.found
+    }
+
+    /// Particle `p`'s margin in the step `observe` last judged (None: its
+    /// cell's ring is spray, or `observe` has not run on this state).
+    pub fn margin(
+        &mut self,
+        geom: &Geometry,
+        v: &StateView,
+        rule: &JumpRule,
+        p: usize,
+    ) -> Option<Margin> {
+        let c = geom.cell_index(v.x[p]);
+        if c >= self.judged.len() || self.mass.len() != self.judged.len() {
+            return None;
+        }
+        if !self.judged[c] {
+            self.judged[c] = true;
+            self.local[c] = self.local_flow(geom, c, rule.ring);
+        }
+        let l = self.local[c];
+        l.spread.is_finite().then(|| Margin {
+            departure: v.v[p] - v.v_prev[p] - l.change,
+            threshold: rule.speed.max(rule.z * l.spread),
+            calm: l.window_change < rule.calm_change,
+        })
     }
 
     /// Keeps the velocities every half calm window (the three newest).

@@ -12,7 +12,7 @@ use crate::events::Event;
 use crate::front::{self, Front};
 use crate::geometry::Geometry;
 use crate::hydrostatic::Hydrostatic;
-use crate::jump::{JumpRule, Jumps};
+use crate::jump::{JumpRule, Jumps, Margin};
 use crate::particle_history::ParticleHistory;
 use crate::remedy_booking::RemedyBooking;
 use crate::step_history::StepHistory;
@@ -246,6 +246,17 @@ impl Monitor {
         let opened = self.events.len() - opened_before;
         self.report = self.step_report(v, g, &scan, &energy, &grid, max_jump, opened, blow_out);
         &self.report
+    }
+
+    /// The velocity-jump rule's margins of these particles in the step last
+    /// observed (the calibration reads how far a twin's particles stood
+    /// from the threshold where a patch is planted).
+    pub fn jump_margins(&mut self, v: &StateView, particles: &[usize]) -> Vec<Option<Margin>> {
+        let rule = self.jump_rule();
+        particles
+            .iter()
+            .map(|&p| self.jumps.margin(&self.geom, v, &rule, p))
+            .collect()
     }
 
     /// The velocity-jump rule's thresholds.

@@ -33,6 +33,7 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 pub mod common_state;
+mod prediction;
 
 pub struct CalibrateOptions {
     pub out: PathBuf,
@@ -76,6 +77,11 @@ pub struct DetectionRow {
     /// `monitor.min_cluster_particles` is no velocity-jump event).
     #[serde(default)]
     pub particles: Option<usize>,
+    /// The smallest speed the jump rule should find there, from the twin's
+    /// own step after the plant (`prediction`; None: fewer calm particles
+    /// than `monitor.min_cluster_particles` in a judged ring).
+    #[serde(default)]
+    pub predicted_dv: Option<f64>,
     /// Kicks (events not `impact`) the twin logged over its whole run ...
     pub twin_kicks: usize,
     /// ... and the planted runs away from every patch, that the twin does
@@ -241,6 +247,9 @@ struct Bracket {
     region: Option<[f64; 4]>,
     step: Option<u64>,
     particles: Option<usize>,
+    /// The plant's unit direction, and the speed `prediction` expects.
+    direction: Option<[f64; 2]>,
+    predicted: Option<f64>,
 }
 
 /// One case and patch size: its placements' rows (one per placement when
@@ -267,6 +276,7 @@ fn calibrate_case(
             let mut brackets = fresh();
             let speeds = vec![Some(dv); spec.patch.len()];
             let alarms = plant_and_record(case, &twin, spec, size, &speeds, &mut brackets)?;
+            prediction::fill(case, &twin, &mut brackets)?;
             rows.extend(rows_of(case, spec, size, &brackets, &twin, (1, alarms)));
         }
         return Ok(rows);
@@ -280,6 +290,7 @@ fn calibrate_case(
             return Err("more than 64 planted runs: the bracket does not close".into());
         }
     }
+    prediction::fill(case, &twin, &mut brackets)?;
     Ok(rows_of(case, spec, size, &brackets, &twin, (runs, alarms)))
 }
 
@@ -314,14 +325,18 @@ enum Verdict {
     },
 }
 
-/// Where a patch went: its region, step and particle count, when it was placed.
-type Placed = Option<([f64; 4], u64, usize)>;
+/// Where a patch went: its region, step, particle count and dv, when it was placed.
+type Placed = Option<([f64; 4], u64, usize, [f64; 2])>;
 
 fn record(b: &mut Bracket, dv: f64, (verdict, placed): (Verdict, Placed)) {
-    if let Some((region, step, particles)) = placed {
+    if let Some((region, step, particles, dv)) = placed {
         b.region = Some(region);
         b.step = Some(step);
         b.particles = Some(particles);
+        let norm = dv[0].hypot(dv[1]);
+        if norm > 0.0 {
+            b.direction = Some([dv[0] / norm, dv[1] / norm]);
+        }
     }
     match verdict {
         Verdict::NotPlaced => b.placed = false,
@@ -380,6 +395,7 @@ fn rows_of(
             region: b.region,
             step: b.step,
             particles: b.particles,
+            predicted_dv: b.predicted,
             twin_kicks: twin.kicks(),
             false_alarms,
         })
@@ -445,7 +461,7 @@ fn planted_run(
         .planted()
         .iter()
         .map(|p: &Planted| {
-            let placed = Some((p.region, p.step, p.particles));
+            let placed = Some((p.region, p.step, p.particles, p.dv));
             (entries[p.entry], cells_of(&geom, p.region), placed)
         })
         .collect();
@@ -600,6 +616,7 @@ fn write_detection(d: &Detection, out: &Path) -> std::io::Result<()> {
                 .map(|x| x.particles.map(|n| n as u64))
                 .collect::<Vec<_>>(),
         ),
+        col_f("predicted_dv", |x| x.predicted_dv),
         col_u("twin_kicks", |x| x.twin_kicks),
         col_u("false_alarms", |x| x.false_alarms),
     ];

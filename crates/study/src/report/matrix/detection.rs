@@ -257,6 +257,7 @@ mod tests {
             region: None,
             step: None,
             particles: None,
+            predicted_dv: None,
             twin_kicks: 0,
             false_alarms: 0,
         }
