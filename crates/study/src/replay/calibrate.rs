@@ -33,6 +33,7 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 pub mod common_state;
+mod placement;
 mod prediction;
 
 pub struct CalibrateOptions {
@@ -69,6 +70,12 @@ pub struct DetectionRow {
     /// speed (it is neither found nor missed).
     #[serde(default)]
     pub masked: bool,
+    /// The index (in `[[calibration.patch]]` order) of an earlier placement
+    /// whose patch this one resolved to, or lay within `merge_cells` of, at
+    /// the plant: not planted (two patches there would add their speeds and
+    /// share every event), `placed` false.
+    #[serde(default)]
+    pub shares: Option<usize>,
     /// The patch as placed ([x0, y0, x1, y1], m; the same at every speed:
     /// the placement reads the state at the plant) and the step it went in.
     pub region: Option<[f64; 4]>,
@@ -244,6 +251,9 @@ struct Bracket {
     cause: Option<Cause>,
     placed: bool,
     masked: bool,
+    /// The earlier placement whose patch this one resolves to (or lies
+    /// beside): it is not planted, since both would act as one.
+    shares: Option<usize>,
     region: Option<[f64; 4]>,
     step: Option<u64>,
     particles: Option<usize>,
@@ -270,11 +280,21 @@ fn calibrate_case(
             spec.patch.len()
         ]
     };
+    let shared = placement::shared(case, &twin, spec, size)?;
+    let fresh = || {
+        let mut b = fresh();
+        for (b, &s) in b.iter_mut().zip(&shared) {
+            b.shares = s;
+            b.placed = s.is_none();
+        }
+        b
+    };
     let Some(range) = spec.bisect else {
         let mut rows = vec![];
         for &dv in &spec.dv {
             let mut brackets = fresh();
-            let speeds = vec![Some(dv); spec.patch.len()];
+            let speeds: Vec<Option<f64>> =
+                shared.iter().map(|s| s.is_none().then_some(dv)).collect();
             let alarms = plant_and_record(case, &twin, spec, size, &speeds, &mut brackets)?;
             prediction::fill(case, &twin, &mut brackets)?;
             rows.extend(rows_of(case, spec, size, &brackets, &twin, (1, alarms)));
@@ -392,6 +412,7 @@ fn rows_of(
             runs,
             placed: b.placed,
             masked: b.masked,
+            shares: b.shares,
             region: b.region,
             step: b.step,
             particles: b.particles,
@@ -417,6 +438,29 @@ struct Judged {
     false_alarms: usize,
 }
 
+/// Placement k's patch, planted at `speed` in the step after `t`.
+fn perturb_of(
+    spec: &CalibrationSpec,
+    k: usize,
+    t: f64,
+    size: usize,
+    speed: Option<f64>,
+) -> Perturb {
+    Perturb {
+        step: None,
+        t: Some(t),
+        region: None,
+        place: Some(spec.patch[k].place),
+        cells: size,
+        near: Some(spec.patch[k].near),
+        dv: None,
+        speed,
+        direction: Some(spec.direction),
+        j_scale: None,
+        dx: None,
+    }
+}
+
 /// Restarts the twin at the plant with a patch per placement that has a
 /// speed, runs the window and judges it.
 fn planted_run(
@@ -430,19 +474,7 @@ fn planted_run(
     let entries: Vec<usize> = (0..speeds.len()).filter(|&k| speeds[k].is_some()).collect();
     cfg.perturb = entries
         .iter()
-        .map(|&k| Perturb {
-            step: None,
-            t: Some(twin.t_plant),
-            region: None,
-            place: Some(spec.patch[k].place),
-            cells: size,
-            near: Some(spec.patch[k].near),
-            dv: None,
-            speed: speeds[k],
-            direction: Some(spec.direction),
-            j_scale: None,
-            dx: None,
-        })
+        .map(|&k| perturb_of(spec, k, twin.t_plant, size, speeds[k]))
         .collect();
     cfg.scene.t_end = twin.t_plant + spec.window;
     // The checkpoint replaces the state: no relaxation to equilibrium first.
@@ -604,6 +636,12 @@ fn write_detection(d: &Detection, out: &Path) -> std::io::Result<()> {
         Column::new(
             "masked".into(),
             r.iter().map(|x| x.masked).collect::<Vec<_>>(),
+        ),
+        Column::new(
+            "shares".into(),
+            r.iter()
+                .map(|x| x.shares.map(|k| k as u64))
+                .collect::<Vec<_>>(),
         ),
         col_f("x0", |x| x.region.map(|r| r[0])),
         col_f("y0", |x| x.region.map(|r| r[1])),

@@ -215,6 +215,11 @@ fn row(m: &Matrix, r: &DetectionRow) -> (String, Vec<Cell>) {
         .and_then(|row| row.link.as_deref());
     let case = link(href, &r.case);
     let place = match (r.placed, r.masked) {
+        (false, _) if r.shares.is_some() => format!(
+            "{} (shares placement {}'s patch)",
+            escape(&r.place),
+            r.shares.unwrap_or_default() + 1
+        ),
         (false, _) => format!("{} (no patch qualified)", escape(&r.place)),
         (true, true) => format!("{} (masked: the twin's own event there)", escape(&r.place)),
         (true, false) => escape(&r.place),
@@ -254,6 +259,7 @@ mod tests {
             runs: 7,
             placed: true,
             masked: false,
+            shares: None,
             region: None,
             step: None,
             particles: None,
