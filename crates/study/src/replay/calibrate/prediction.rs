@@ -6,8 +6,10 @@
 //! threshold in a calm local flow; the patch is found when
 //! `monitor.min_cluster_particles` of them are. So the prediction is that
 //! many particles' smallest such dv (docs/findings/detector_calibration.md).
-//! It leaves out the energy test, the gain condition and the merging with
-//! open events: a finding well below or above it names one of those.
+//! A jump must also add kinetic energy: a push against a particle's motion
+//! counts only once it is more than twice the particle's speed along it.
+//! The prediction leaves out the energy test and the merging with open
+//! events: a finding well below or above it names one of those.
 
 use super::{Bracket, Twin};
 use crate::run::case::watches;
@@ -44,7 +46,16 @@ pub(super) fn fill(case: &Case, twin: &Twin, brackets: &mut [Bracket]) -> Result
             .filter(|&p| solver::perturb::covers(region, v.x[p]))
             .collect();
         let margins = watches[0].monitor.jump_margins(&v, &inside);
-        b.predicted = smallest_found(&margins, Vec2::new(d[0], d[1]), least);
+        let d = Vec2::new(d[0], d[1]);
+        let needs: Vec<Option<f64>> = inside
+            .iter()
+            .zip(&margins)
+            .map(|(&p, m)| {
+                m.filter(|m| m.calm)
+                    .map(|m| needed(&m, d).max(gaining(v.v[p], v.v_prev[p], d)))
+            })
+            .collect();
+        b.predicted = smallest_found(&needs, least);
     }
     Ok(())
 }
@@ -60,14 +71,22 @@ fn needed(m: &Margin, d: Vec2) -> f64 {
     (m.threshold * m.threshold - across2).max(0.0).sqrt() - along
 }
 
+/// The smallest dv along `d` after which the particle's speed exceeds its
+/// speed at the start of the step: |v + dv d| > |v_prev|.
+fn gaining(v: Vec2, v_prev: Vec2, d: Vec2) -> f64 {
+    let along = v.dot(&d);
+    let c = v.norm_squared() - v_prev.norm_squared();
+    // dv^2 + 2 along dv + c > 0: the larger root, or 0 when it holds at 0.
+    let disc = along * along - c;
+    if c > 0.0 && along >= 0.0 || disc < 0.0 {
+        return 0.0;
+    }
+    (-along + disc.sqrt()).max(0.0)
+}
+
 /// The `least`-th smallest dv over the calm, judged particles (None: fewer).
-fn smallest_found(margins: &[Option<Margin>], d: Vec2, least: usize) -> Option<f64> {
-    let mut needs: Vec<f64> = margins
-        .iter()
-        .flatten()
-        .filter(|m| m.calm)
-        .map(|m| needed(m, d).max(0.0))
-        .collect();
+fn smallest_found(needs: &[Option<f64>], least: usize) -> Option<f64> {
+    let mut needs: Vec<f64> = needs.iter().flatten().map(|n| n.max(0.0)).collect();
     if needs.len() < least {
         return None;
     }
@@ -97,15 +116,25 @@ mod tests {
         assert!((needed(&margin(0.012, 0.0, 0.02).unwrap(), up) - 0.016).abs() < 1e-12);
         // Over the threshold already.
         assert_eq!(needed(&margin(0.0, -0.03, 0.02).unwrap(), up), 0.0);
-        // The 4th smallest of the calm ones; a ring of spray and an
-        // unsettled flow do not count.
-        let mut ms: Vec<Option<Margin>> = [0.0, 0.001, 0.002, 0.003, 0.004]
-            .iter()
-            .map(|&a| margin(0.0, a, 0.02))
-            .collect();
-        assert!((smallest_found(&ms, up, 4).unwrap() - 0.019).abs() < 1e-15);
-        ms[0] = None;
-        ms[1] = ms[1].map(|m| Margin { calm: false, ..m });
-        assert_eq!(smallest_found(&ms, up, 4), None);
+        // The 4th smallest; a ring of spray or an unsettled flow (None)
+        // does not count.
+        let mut needs = vec![
+            Some(0.02),
+            Some(0.019),
+            Some(0.018),
+            Some(0.017),
+            Some(0.016),
+        ];
+        assert!((smallest_found(&needs, 4).unwrap() - 0.019).abs() < 1e-15);
+        needs[0] = None;
+        needs[1] = None;
+        assert_eq!(smallest_found(&needs, 4), None);
+        // Falling at 0.07 m/s (and at the start of the step): an upward
+        // push adds kinetic energy only past 0.14 m/s.
+        let down = Vec2::new(0.0, -0.07);
+        assert!((gaining(down, down, up) - 0.14).abs() < 1e-12);
+        // Rising, or sped up by the step already: any push gains.
+        assert_eq!(gaining(-down, -down * 0.5, up), 0.0);
+        assert_eq!(gaining(Vec2::new(0.1, 0.0), Vec2::new(0.05, 0.0), up), 0.0);
     }
 }
