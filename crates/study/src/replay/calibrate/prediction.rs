@@ -52,7 +52,7 @@ pub(super) fn fill(case: &Case, twin: &Twin, brackets: &mut [Bracket]) -> Result
             .zip(&margins)
             .map(|(&p, m)| {
                 m.filter(|m| m.calm)
-                    .map(|m| needed(&m, d).max(gaining(v.v[p], v.v_prev[p], d)))
+                    .map(|m| gaining_from(needed(&m, d), v.v[p], v.v_prev[p], d))
             })
             .collect();
         b.predicted = smallest_found(&needs, least);
@@ -71,17 +71,18 @@ fn needed(m: &Margin, d: Vec2) -> f64 {
     (m.threshold * m.threshold - across2).max(0.0).sqrt() - along
 }
 
-/// The smallest dv along `d` after which the particle's speed exceeds its
-/// speed at the start of the step: |v + dv d| > |v_prev|.
-fn gaining(v: Vec2, v_prev: Vec2, d: Vec2) -> f64 {
+/// The smallest dv from `from` on along `d` after which the particle's
+/// speed exceeds its speed at the start of the step: |v + dv d| > |v_prev|,
+/// that is dv^2 + 2 (v . d) dv + |v|^2 - |v_prev|^2 > 0.
+fn gaining_from(from: f64, v: Vec2, v_prev: Vec2, d: Vec2) -> f64 {
     let along = v.dot(&d);
     let c = v.norm_squared() - v_prev.norm_squared();
-    // dv^2 + 2 along dv + c > 0: the larger root, or 0 when it holds at 0.
-    let disc = along * along - c;
-    if c > 0.0 && along >= 0.0 || disc < 0.0 {
-        return 0.0;
+    let from = from.max(0.0);
+    if from * from + 2.0 * along * from + c > 0.0 {
+        return from;
     }
-    (-along + disc.sqrt()).max(0.0)
+    // It fails at `from`: it holds past the larger root.
+    -along + (along * along - c).max(0.0).sqrt()
 }
 
 /// The `least`-th smallest dv over the calm, judged particles (None: fewer).
@@ -132,9 +133,17 @@ mod tests {
         // Falling at 0.07 m/s (and at the start of the step): an upward
         // push adds kinetic energy only past 0.14 m/s.
         let down = Vec2::new(0.0, -0.07);
-        assert!((gaining(down, down, up) - 0.14).abs() < 1e-12);
-        // Rising, or sped up by the step already: any push gains.
-        assert_eq!(gaining(-down, -down * 0.5, up), 0.0);
-        assert_eq!(gaining(Vec2::new(0.1, 0.0), Vec2::new(0.05, 0.0), up), 0.0);
+        assert!((gaining_from(0.02, down, down, up) - 0.14).abs() < 1e-12);
+        // Rising, or sped up by the step already: the threshold's dv gains.
+        assert_eq!(gaining_from(0.02, -down, -down * 0.5, up), 0.02);
+        assert_eq!(
+            gaining_from(0.02, Vec2::new(0.1, 0.0), Vec2::new(0.05, 0.0), up),
+            0.02
+        );
+        // Falling faster than at the start of the step: a small push still
+        // leaves it faster (dv < 0.02 here), a middling one does not.
+        let (v, v_prev) = (Vec2::new(0.0, -0.07), Vec2::new(0.0, -0.05));
+        assert_eq!(gaining_from(0.01, v, v_prev, up), 0.01);
+        assert!((gaining_from(0.05, v, v_prev, up) - 0.12).abs() < 1e-12);
     }
 }
