@@ -144,7 +144,8 @@ impl Jumps {
     }
 
     /// Particle `p`'s margin in the step `observe` last judged (None: its
-    /// cell's ring is spray, or `observe` has not run on this state).
+    /// cell's ring is spray, or `observe` has never run). Call it on the
+    /// state `observe` last saw: the cell sums are that step's.
     pub fn margin(
         &mut self,
         geom: &Geometry,

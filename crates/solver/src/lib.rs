@@ -598,12 +598,13 @@ impl Solver {
     /// name, since the particles hold their material by index.
     pub fn set_materials(&mut self, materials: Vec<Material>) -> Result<(), ConfigError> {
         let now = &self.cfg.scene.materials;
-        if materials.len() != now.len() || materials.iter().zip(now).any(|(a, b)| a.name != b.name)
-        {
+        // The particles' masses were set from rho0: it cannot change either.
+        let other = |a: &Material, b: &Material| a.name != b.name || a.rho0 != b.rho0;
+        if materials.len() != now.len() || materials.iter().zip(now).any(|(a, b)| other(a, b)) {
             return Err(ConfigError {
                 key: "materials".into(),
-                message: "cannot change mid-run but for their constants (the particles hold \
-                          them by index)"
+                message: "cannot change mid-run but for their constants other than rho0 (the \
+                          particles hold them by index, with masses from rho0)"
                     .into(),
             });
         }

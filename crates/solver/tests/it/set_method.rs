@@ -141,13 +141,18 @@ fn switching_the_materials_constants_is_restart_safe_and_changes_the_step() {
     assert_eq!(restarted.state_hash(), switched.state_hash());
     assert_ne!(switched.state_hash(), reference.state_hash());
 
-    // Another material, or a constant out of range: refused, nothing changed.
+    // Another material, another density or a constant out of range:
+    // refused, nothing changed.
     let mut renamed = straight.config().scene.materials.clone();
     renamed[0].name = "oil".into();
     assert_eq!(
         straight.set_materials(renamed).unwrap_err().key,
         "materials"
     );
+    // A density: the particles' masses came from it.
+    let mut denser = straight.config().scene.materials.clone();
+    denser[0].rho0 *= 1.01;
+    assert_eq!(straight.set_materials(denser).unwrap_err().key, "materials");
     let mut infinite = straight.config().scene.materials.clone();
     infinite[0].k = f64::INFINITY;
     assert!(straight.set_materials(infinite).is_err());

@@ -42,7 +42,35 @@ pub fn check(study: &Study, spec: &CalibrationSpec) -> Result<(), (String, Strin
             names.join(", ")
         ));
     };
+    if study.cases.iter().any(|c| c.name == COMMON_DIR) {
+        return bad(format!(
+            "a case named \"{COMMON_DIR}\" would share the common state's folder"
+        ));
+    }
     for case in &study.cases {
+        // The names and densities: the particles hold materials by index,
+        // with masses from rho0.
+        let names = |c: &Case| -> Vec<(String, u64)> {
+            let m = &c.solver.scene.materials;
+            m.iter()
+                .map(|m| (m.name.clone(), m.rho0.to_bits()))
+                .collect()
+        };
+        let mut switched = reference.solver.clone();
+        switched.method = case.solver.method.clone();
+        switched.scene.materials = case.solver.scene.materials.clone();
+        if names(case) != names(reference) {
+            return bad(format!(
+                "case {} has other materials than case {name}: only their constants other than rho0 may differ",
+                case.name
+            ));
+        }
+        if let Err(e) = switched.validate() {
+            return bad(format!(
+                "case {}'s method and materials cannot follow case {name}'s state: {e}",
+                case.name
+            ));
+        }
         let mut same = case.solver.clone();
         same.method = reference.solver.method.clone();
         same.scene.materials = reference.solver.scene.materials.clone();
@@ -158,10 +186,14 @@ fn twin(
             switched_run(reference, checkpoint, case, dir, spec)
         })
     }));
-    let run = match outcome {
+    let mut run = match outcome {
         Ok(r) => r?,
         Err(panic) => Simulated::failed(format!("panic: {}", panic_message(panic))),
     };
+    // The restored monitor holds the common state's events: those that
+    // ended before the switch are not this case's.
+    let t_switch = spec.plant_t - spec.switch_lead;
+    run.events.retain(|e| e.last_t >= t_switch);
     summary(case, run, started.elapsed().as_secs_f64()).write(dir)
 }
 
@@ -190,10 +222,18 @@ fn switched_run(
         Ok(m) => m,
         Err(e) => return Ok(Simulated::failed(format!("setup: {e}"))),
     };
-    // The method first: K = inf is valid only under the pressure-implicit one.
+    // The method first (K = inf is valid only under the pressure-implicit
+    // one), or the materials first when the method needs them (`check`
+    // validated the pair).
+    let materials = case.solver.scene.materials.clone();
     let switched = solver
-        .set_method(method)
-        .and_then(|()| solver.set_materials(case.solver.scene.materials.clone()));
+        .set_method(method.clone())
+        .and_then(|()| solver.set_materials(materials.clone()))
+        .or_else(|_| {
+            solver
+                .set_materials(materials)
+                .and_then(|()| solver.set_method(method))
+        });
     if let Err(e) = switched {
         return Ok(Simulated::failed(format!("switch: {e}")));
     }

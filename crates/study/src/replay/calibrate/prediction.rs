@@ -7,9 +7,10 @@
 //! `monitor.min_cluster_particles` of them are. So the prediction is that
 //! many particles' smallest such dv (docs/findings/detector_calibration.md).
 //! A jump must also add kinetic energy: a push against a particle's motion
-//! counts only once it is more than twice the particle's speed along it.
-//! The prediction leaves out the energy test and the merging with open
-//! events: a finding well below or above it names one of those.
+//! counts only once it leaves the particle faster than at the start of its
+//! step. The prediction counts only the patch's own particles (a cluster
+//! may also take in particles already flagged beside it) and leaves out
+//! the energy test: a finding well below or above it names one of those.
 
 use super::{Bracket, Twin};
 use crate::run::case::watches;

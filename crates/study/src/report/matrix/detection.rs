@@ -93,7 +93,7 @@ fn sites_tables(rows: &[DetectionRow], page: &mut Page) {
     ]
     .map(String::from)
     .to_vec();
-    page.p("Over the sites of each placement. A site masked by the twin's own event there, or where no patch qualified, is judged at no speed. The case medians below count a site where no planted speed was found as above every speed found; a case whose median is such a site is counted as mostly unfound, and the spread is then unbounded:");
+    page.p("Over the sites of each placement. A site masked by the twin's own event there, or where no patch qualified, is judged at no speed. The case medians below count a site where no planted speed was found as above every speed found; a case whose median is such a site (half or more of its sites) is counted apart, and the spread is then unbounded:");
     page.table("detection_sites", &headers, &rows_out);
     let across = case_medians(&groups);
     let rows_out: Vec<(String, Vec<Cell>)> = across
@@ -125,7 +125,7 @@ fn sites_tables(rows: &[DetectionRow], page: &mut Page) {
         "place",
         "cells",
         "cases",
-        "cases mostly unfound",
+        "cases with half or more unfound",
         "case medians (m/s)",
         "largest / smallest",
     ]
@@ -216,9 +216,9 @@ fn row(m: &Matrix, r: &DetectionRow) -> (String, Vec<Cell>) {
     let case = link(href, &r.case);
     let place = match (r.placed, r.masked) {
         (false, _) if r.shares.is_some() => format!(
-            "{} (shares placement {}'s patch)",
+            "{} (shares the patch of placement {}, counted from 0)",
             escape(&r.place),
-            r.shares.unwrap_or_default() + 1
+            r.shares.unwrap_or_default()
         ),
         (false, _) => format!("{} (no patch qualified)", escape(&r.place)),
         (true, true) => format!("{} (masked: the twin's own event there)", escape(&r.place)),
