@@ -20,7 +20,7 @@ use crate::output::tables;
 use crate::run::case::{panic_message, progress_style, watches, with_threads};
 use crate::run::matrix::{each_in_parallel, run_matrix, MatrixOptions};
 use crate::run::probes::plant_checkpoint::PLANT_CHECKPOINT;
-use crate::run::{Rows, RunOptions, Runner, Stepper};
+use crate::run::{Rows, RunOptions, Runner, Stepper, Watch};
 use crate::study_file::calibration::{CalibrationSpec, PatchSpec};
 use crate::study_file::{Case, Study};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -239,6 +239,39 @@ impl Twin {
             .filter(|e| e.cause != Cause::Impact)
             .count()
     }
+}
+
+/// A solver of `cfg` and the case's monitors holding `checkpoint`'s state
+/// (the checkpoint replaces the state: no relaxation to equilibrium first).
+fn restored(
+    case: &Case,
+    mut cfg: solver::SolverConfig,
+    checkpoint: &[u8],
+) -> Result<(Solver, Vec<Watch>), String> {
+    cfg.scene.initial = solver::InitialState::ZeroStress;
+    let mut solver = Solver::new(cfg).map_err(|e| format!("setup: {e}"))?;
+    let mut watches = watches(&solver, case);
+    solver
+        .load(checkpoint, &mut watches)
+        .map_err(|e| e.to_string())?;
+    Ok((solver, watches))
+}
+
+/// The twin restored with `perturb` and one step taken from its checkpoint
+/// (None: the twin ended there).
+fn stepped_once(
+    case: &Case,
+    twin: &Twin,
+    perturb: Vec<Perturb>,
+) -> Result<Option<(Solver, Vec<Watch>)>, String> {
+    let mut cfg = case.solver.clone();
+    cfg.perturb = perturb;
+    let (mut solver, watches) = restored(case, cfg, &twin.checkpoint)?;
+    if solver.finished() {
+        return Ok(None);
+    }
+    Stepper::advance(&mut solver)?;
+    Ok(Some((solver, watches)))
 }
 
 /// Where a placement stands: its bracket, and the event that found its
@@ -485,13 +518,7 @@ fn planted_run(
         .map(|&k| perturb_of(spec, k, twin.t_plant, size, speeds[k]))
         .collect();
     cfg.scene.t_end = twin.t_plant + spec.window;
-    // The checkpoint replaces the state: no relaxation to equilibrium first.
-    cfg.scene.initial = solver::InitialState::ZeroStress;
-    let mut solver = Solver::new(cfg).map_err(|e| format!("setup: {e}"))?;
-    let mut watches = watches(&solver, case);
-    solver
-        .load(&twin.checkpoint, &mut watches)
-        .map_err(|e| e.to_string())?;
+    let (solver, watches) = restored(case, cfg, &twin.checkpoint)?;
     let opts = RunOptions::new(None, Rows::spread_in_time(10, twin.t_plant + spec.window));
     let mut runner = Runner::new(solver, watches, opts);
     let simulated = runner.run().map_err(|e| e.to_string())?;

@@ -40,13 +40,7 @@ pub struct CaseOptions {
 /// Runs a case into `dir` and returns its summary (also written as summary.json).
 /// Panics inside the solver become status "failed"; nothing else is lost.
 pub fn run_case(case: &Case, dir: &Path, opts: &CaseOptions) -> std::io::Result<Summary> {
-    std::fs::create_dir_all(dir)?;
-    write_atomic(
-        &dir.join("case.toml"),
-        toml::to_string(&case.table)
-            .map_err(|e| std::io::Error::other(e.to_string()))?
-            .as_bytes(),
-    )?;
+    write_case_table(case, dir)?;
     let started = Instant::now();
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         with_threads(opts.threads, || simulate(case, dir, opts))
@@ -61,6 +55,17 @@ pub fn run_case(case: &Case, dir: &Path, opts: &CaseOptions) -> std::io::Result<
     let summary = summary(case, run, wall_s);
     summary.write(dir)?;
     Ok(summary)
+}
+
+/// Creates the case's folder and writes its resolved table as case.toml.
+pub(crate) fn write_case_table(case: &Case, dir: &Path) -> std::io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    write_atomic(
+        &dir.join("case.toml"),
+        toml::to_string(&case.table)
+            .map_err(|e| std::io::Error::other(e.to_string()))?
+            .as_bytes(),
+    )
 }
 
 pub(crate) fn summary(case: &Case, run: Simulated, wall_s: f64) -> Summary {

@@ -9,13 +9,14 @@
 //! seconds of each method's own dynamics.
 
 use super::CalibrateOptions;
-use crate::output::files::write_atomic;
 use crate::output::summary::Summary;
 use crate::output::tables::{self, SummaryRow};
-use crate::run::case::{panic_message, run_case, summary, watches, with_threads, CaseOptions};
+use crate::run::case::{
+    panic_message, run_case, summary, with_threads, write_case_table, CaseOptions,
+};
 use crate::run::matrix::each_in_parallel;
 use crate::run::probes::plant_checkpoint::{PlantCheckpoint, PLANT_CHECKPOINT};
-use crate::run::{Rows, RunOptions, Runner, Simulated, Stepper};
+use crate::run::{Rows, RunOptions, Runner, Simulated};
 use crate::study_file::calibration::CalibrationSpec;
 use crate::study_file::{Case, Study};
 use std::path::Path;
@@ -173,13 +174,7 @@ fn twin(
     spec: &CalibrationSpec,
     threads: usize,
 ) -> std::io::Result<()> {
-    std::fs::create_dir_all(dir)?;
-    write_atomic(
-        &dir.join("case.toml"),
-        toml::to_string(&case.table)
-            .map_err(|e| std::io::Error::other(e.to_string()))?
-            .as_bytes(),
-    )?;
+    write_case_table(case, dir)?;
     let started = Instant::now();
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         with_threads(Some(threads), || {
@@ -208,16 +203,10 @@ fn switched_run(
 ) -> std::io::Result<Simulated> {
     let mut cfg = reference.solver.clone();
     cfg.scene.t_end = case.solver.scene.t_end;
-    // The checkpoint replaces the state: no relaxation to equilibrium first.
-    cfg.scene.initial = solver::InitialState::ZeroStress;
-    let mut solver = match solver::Solver::new(cfg) {
-        Ok(s) => s,
-        Err(e) => return Ok(Simulated::failed(format!("setup: {e}"))),
+    let (mut solver, watches) = match super::restored(case, cfg, checkpoint) {
+        Ok(restored) => restored,
+        Err(e) => return Ok(Simulated::failed(format!("common state: {e}"))),
     };
-    let mut watches = watches(&solver, case);
-    if let Err(e) = solver.load(checkpoint, &mut watches) {
-        return Ok(Simulated::failed(format!("common state: {e}")));
-    }
     let method = match fixed_step_method(case) {
         Ok(m) => m,
         Err(e) => return Ok(Simulated::failed(format!("setup: {e}"))),

@@ -7,13 +7,10 @@
 //! step from the twin's checkpoint with every patch at a negligible speed:
 //! the same resolution the planted runs make.
 
-use super::{cells_of, perturb_of, Twin};
-use crate::run::case::watches;
-use crate::run::Stepper;
+use super::{cells_of, perturb_of, stepped_once, Twin};
 use crate::study_file::calibration::CalibrationSpec;
 use crate::study_file::Case;
 use monitor::{CellRange, Geometry};
-use solver::Solver;
 
 /// A speed no detector sees (m/s): the placement, not the plant, is wanted.
 const NEGLIGIBLE: f64 = 1e-12;
@@ -26,21 +23,12 @@ pub(super) fn shared(
     size: usize,
 ) -> Result<Vec<Option<usize>>, String> {
     let n = spec.patch.len();
-    let mut cfg = case.solver.clone();
-    cfg.perturb = (0..n)
+    let perturb = (0..n)
         .map(|k| perturb_of(spec, k, twin.t_plant, size, Some(NEGLIGIBLE)))
         .collect();
-    // The checkpoint replaces the state: no relaxation to equilibrium first.
-    cfg.scene.initial = solver::InitialState::ZeroStress;
-    let mut solver = Solver::new(cfg).map_err(|e| format!("setup: {e}"))?;
-    let mut watches = watches(&solver, case);
-    solver
-        .load(&twin.checkpoint, &mut watches)
-        .map_err(|e| e.to_string())?;
-    if solver.finished() {
+    let Some((solver, _)) = stepped_once(case, twin, perturb)? else {
         return Ok(vec![None; n]);
-    }
-    Stepper::advance(&mut solver)?;
+    };
     let geom = Geometry::from_scene(&case.solver.scene);
     let mut cells: Vec<Option<CellRange>> = vec![None; n];
     for p in solver.planted() {

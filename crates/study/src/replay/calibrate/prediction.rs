@@ -12,30 +12,19 @@
 //! may also take in particles already flagged beside it) and leaves out
 //! the energy test: a finding well below or above it names one of those.
 
-use super::{Bracket, Twin};
-use crate::run::case::watches;
-use crate::run::Stepper;
+use super::{stepped_once, Bracket, Twin};
 use crate::study_file::Case;
 use monitor::jump::Margin;
-use solver::{Solver, Vec2};
+use solver::Vec2;
 
 /// Sets each placed bracket's `predicted` from one step of the twin.
 pub(super) fn fill(case: &Case, twin: &Twin, brackets: &mut [Bracket]) -> Result<(), String> {
     if brackets.iter().all(|b| b.region.is_none()) {
         return Ok(());
     }
-    let mut cfg = case.solver.clone();
-    cfg.perturb.clear();
-    cfg.scene.initial = solver::InitialState::ZeroStress;
-    let mut solver = Solver::new(cfg).map_err(|e| format!("setup: {e}"))?;
-    let mut watches = watches(&solver, case);
-    solver
-        .load(&twin.checkpoint, &mut watches)
-        .map_err(|e| e.to_string())?;
-    if solver.finished() {
+    let Some((solver, mut watches)) = stepped_once(case, twin, vec![])? else {
         return Ok(());
-    }
-    Stepper::advance(&mut solver)?;
+    };
     let v = solver.view();
     watches[0].observe(&v);
     let least = case.monitor.min_cluster_particles.max(1);
