@@ -74,6 +74,12 @@ pub struct Perturb {
     /// The placed patch nearest this point (metres; default the box's centre).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub near: Option<[f64; 2]>,
+    /// A placed patch holds at least this many particles (default: any
+    /// cell holding one is fluid). A patch of fewer than a detector's
+    /// cluster minimum is below its resolution, so calibrating with one
+    /// measures the packing, not the detector.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_particles: Option<usize>,
     /// The velocity added (m/s) ...
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dv: Option<[f64; 2]>,
@@ -134,6 +140,7 @@ impl Perturb {
             place: None,
             cells: 1,
             near: None,
+            min_particles: None,
             dv: Some(dv),
             speed: None,
             direction: None,
@@ -210,6 +217,13 @@ impl Perturb {
             &key("cells"),
             format!("{} is outside 1 ..= {}", self.cells, largest.min(64)),
         )?;
+        if let Some(m) = self.min_particles {
+            check(
+                (1..=1_000_000).contains(&m),
+                &key("min_particles"),
+                format!("{m} is outside 1 ..= 1000000"),
+            )?;
+        }
         if let Some(dv) = &self.dv {
             check(
                 dv.iter().all(|v| v.is_finite()),
@@ -237,7 +251,10 @@ impl Perturb {
     pub fn resolve(&self, frame: &Frame, ps: &Particles) -> Option<([f64; 4], Vec2)> {
         let region = match (self.region, self.place) {
             (Some(r), _) => r,
-            (None, Some(place)) => place_patch(frame, ps, place, self.cells, self.near)?,
+            (None, Some(place)) => {
+                let least = self.min_particles.unwrap_or(0);
+                place_patch(frame, ps, place, (self.cells, least), self.near)?
+            }
             (None, None) => return None,
         };
         let dv = match (self.dv, self.speed, self.direction) {
@@ -278,14 +295,14 @@ fn direction_in(region: [f64; 4], ps: &Particles, direction: Direction) -> Vec2 
     }
 }
 
-/// The `n` x `n` cell block that qualifies for `place` nearest to `near`
-/// (the box's centre by default; ties to the lowest, then leftmost), as a
-/// region in metres.
+/// The `n` x `n` cell block holding at least `least` particles that
+/// qualifies for `place` nearest to `near` (the box's centre by default;
+/// ties to the lowest, then leftmost), as a region in metres.
 fn place_patch(
     frame: &Frame,
     ps: &Particles,
     place: Placement,
-    n: usize,
+    (n, least): (usize, usize),
     near: Option<[f64; 2]>,
 ) -> Option<[f64; 4]> {
     let [nx, ny] = frame.cells;
@@ -309,6 +326,16 @@ fn place_patch(
     for j0 in 0..ny.saturating_sub(n - 1) {
         for i0 in 0..nx.saturating_sub(n - 1) {
             if !qualifies(place, (i0, j0), n, [nx, ny], &fluid) {
+                continue;
+            }
+            let held: usize = (j0..j0 + n)
+                .map(|j| {
+                    (i0..i0 + n)
+                        .map(|i| count[i + nx * j] as usize)
+                        .sum::<usize>()
+                })
+                .sum();
+            if held < least {
                 continue;
             }
             let c = [
@@ -391,19 +418,47 @@ mod tests {
     #[test]
     fn placed_patches_keep_their_margins() {
         let (scene, ps) = layer(20, 12, 10);
-        let bulk = place_patch(&scene, &ps, Placement::Bulk, 2, None).unwrap();
+        let bulk = place_patch(&scene, &ps, Placement::Bulk, (2, 0), None).unwrap();
         // Rows 0..10 hold fluid: a bulk block ends 3 rows below the top (row 7 at most).
         assert!(
             bulk[3] <= 0.07 + 1e-12 && bulk[1] >= 0.03 - 1e-12,
             "{bulk:?}"
         );
-        let surface = place_patch(&scene, &ps, Placement::Surface, 2, None).unwrap();
+        let surface = place_patch(&scene, &ps, Placement::Surface, (2, 0), None).unwrap();
         assert!((surface[3] - 0.10).abs() < 1e-12, "{surface:?}");
-        let wall = place_patch(&scene, &ps, Placement::Wall, 2, Some([0.0, 0.05])).unwrap();
+        let wall = place_patch(&scene, &ps, Placement::Wall, (2, 0), Some([0.0, 0.05])).unwrap();
         assert!(wall[0].abs() < 1e-12, "{wall:?}");
         // Too shallow a layer has no bulk.
         let (scene, ps) = layer(20, 12, 5);
-        assert_eq!(place_patch(&scene, &ps, Placement::Bulk, 2, None), None);
+        assert_eq!(
+            place_patch(&scene, &ps, Placement::Bulk, (2, 0), None),
+            None
+        );
+    }
+
+    #[test]
+    fn a_placed_patch_holds_its_least_particles() {
+        // One particle per cell; the nearest bulk cell to the centre is (10, 5).
+        let (scene, mut ps) = layer(20, 12, 10);
+        let nearest = place_patch(&scene, &ps, Placement::Bulk, (1, 0), None).unwrap();
+        assert_eq!(
+            place_patch(&scene, &ps, Placement::Bulk, (1, 2), None),
+            None
+        );
+        // A second particle in bulk cell (4, 4) makes it the only one that holds two.
+        ps.push(Vec2::new(0.042, 0.043), Vec2::zeros(), 1.0, 1.0, 0);
+        let held = place_patch(&scene, &ps, Placement::Bulk, (1, 2), None).unwrap();
+        assert!(
+            (held[0] - 0.04).abs() < 1e-12 && (held[1] - 0.04).abs() < 1e-12,
+            "{held:?}"
+        );
+        assert_ne!(held, nearest);
+        // A 2 x 2 block holds four: every block qualifies, the nearest wins.
+        let block = place_patch(&scene, &ps, Placement::Bulk, (2, 4), None);
+        assert_eq!(
+            block,
+            place_patch(&scene, &ps, Placement::Bulk, (2, 0), None)
+        );
     }
 
     #[test]

@@ -205,6 +205,17 @@ struct ExplainArgs {
     /// Members of each counterfactual row (1 to 64).
     #[arg(long, default_value_t = explain::counterfactual::MEMBERS)]
     members: usize,
+    /// When each change is made: at the onset window's start (10 ms before
+    /// the event) or at the quiet window's (before the energy window's
+    /// evidence of an injection).
+    #[arg(long, value_enum, default_value_t = SwitchAt::Onset)]
+    switch_at: SwitchAt,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum SwitchAt {
+    Onset,
+    Quiet,
 }
 
 #[derive(Args)]
@@ -215,6 +226,10 @@ struct ReportArgs {
     /// the Methods table gains each method's yardsticks (repeatable).
     #[arg(long = "yardsticks", value_name = "MATRIX_DIR")]
     yardsticks: Vec<PathBuf>,
+    /// A case of the matrix whose method is the Methods table's baseline
+    /// (default: the most common value of each varying method key).
+    #[arg(long, value_name = "CASE")]
+    baseline: Option<String>,
 }
 
 #[derive(Args)]
@@ -679,6 +694,7 @@ fn explain_command(args: ExplainArgs) -> ExitCode {
         out,
         counterfactual,
         members,
+        switch_at,
     } = args;
     if threads == Some(0) {
         return bad_input("--threads: 0 is out of range (allowed >= 1)");
@@ -693,6 +709,7 @@ fn explain_command(args: ExplainArgs) -> ExitCode {
         out,
         counterfactual,
         members,
+        switch_at_quiet: switch_at == SwitchAt::Quiet,
     };
     match explain::explain(&case_dir, event, &opts) {
         Ok(o) => {
@@ -718,7 +735,11 @@ fn explain_command(args: ExplainArgs) -> ExitCode {
 }
 
 fn report_command(args: ReportArgs) -> ExitCode {
-    let ReportArgs { dir, yardsticks } = args;
+    let ReportArgs {
+        dir,
+        yardsticks,
+        baseline,
+    } = args;
     for d in std::iter::once(&dir).chain(&yardsticks) {
         if !d.is_dir() {
             return bad_input(&format!("{}: no such folder", d.display()));
@@ -733,7 +754,16 @@ fn report_command(args: ReportArgs) -> ExitCode {
             d.display()
         ));
     }
-    match report::report(&dir, &yardsticks) {
+    if let Some(name) = &baseline {
+        let names = report::data::Matrix::case_names(&dir);
+        if !names.is_ok_and(|n| n.contains(name)) {
+            return bad_input(&format!(
+                "--baseline {name}: no such case in {} (allowed: a case of its summary.parquet)",
+                dir.display()
+            ));
+        }
+    }
+    match report::report(&dir, &yardsticks, baseline.as_deref()) {
         Ok(index) => {
             println!("report: {}", index.display());
             ExitCode::SUCCESS

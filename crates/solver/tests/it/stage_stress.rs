@@ -429,6 +429,7 @@ fn a_timed_placed_push_is_the_push_its_record_names() {
         place: Some(Placement::Bulk),
         cells: 2,
         near: Some([0.1, 0.1]),
+        min_particles: None,
         dv: None,
         speed: Some(0.05),
         direction: Some(Direction::Up),

@@ -481,12 +481,15 @@ struct Judged {
 
 /// Placement k's patch, planted at `speed` in the step after `t`.
 fn perturb_of(
-    spec: &CalibrationSpec,
+    (case, spec): (&Case, &CalibrationSpec),
     k: usize,
     t: f64,
     size: usize,
     speed: Option<f64>,
 ) -> Perturb {
+    let least = spec
+        .min_particles
+        .unwrap_or(case.monitor.min_cluster_particles);
     Perturb {
         step: None,
         t: Some(t),
@@ -494,6 +497,7 @@ fn perturb_of(
         place: Some(spec.patch[k].place),
         cells: size,
         near: Some(spec.patch[k].near),
+        min_particles: Some(least.max(1)),
         dv: None,
         speed,
         direction: Some(spec.direction),
@@ -515,7 +519,7 @@ fn planted_run(
     let entries: Vec<usize> = (0..speeds.len()).filter(|&k| speeds[k].is_some()).collect();
     cfg.perturb = entries
         .iter()
-        .map(|&k| perturb_of(spec, k, twin.t_plant, size, speeds[k]))
+        .map(|&k| perturb_of((case, spec), k, twin.t_plant, size, speeds[k]))
         .collect();
     cfg.scene.t_end = twin.t_plant + spec.window;
     let (solver, watches) = restored(case, cfg, &twin.checkpoint)?;

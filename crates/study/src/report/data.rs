@@ -252,6 +252,9 @@ pub struct Matrix {
     /// Cases of other matrices that the report reads for reference (the
     /// yardsticks' folders, `kick report --yardsticks`); not this matrix's.
     pub reference_rows: Vec<Row>,
+    /// The case whose method is the Methods table's baseline (`kick report
+    /// --baseline`; None: the most common value of each method key).
+    pub baseline_case: Option<String>,
 }
 
 /// A study parameter's dotted key (`materials.water.K`, `method.j_bar.blend`,
@@ -326,6 +329,12 @@ impl std::fmt::Display for ParamKey {
 impl Matrix {
     /// Every case of the matrix folder `dir` (found through
     /// summary.parquet's `case_dir`), sorted by the parameters that vary.
+    /// The case names of the matrix in `dir` (summary.parquet's `case`).
+    pub fn case_names(dir: &Path) -> Res<Vec<String>> {
+        let df = read_parquet(&dir.join("summary.parquet"))?;
+        text_column(&df, "case").ok_or_else(|| "summary.parquet lacks case".into())
+    }
+
     pub fn read(dir: &Path) -> Res<Self> {
         let df = read_parquet(&dir.join("summary.parquet"))?;
         let dirs = text_column(&df, "case_dir").ok_or("summary.parquet lacks case_dir")?;
@@ -361,6 +370,7 @@ impl Matrix {
             axes,
             rows,
             reference_rows: vec![],
+            baseline_case: None,
         })
     }
 

@@ -21,10 +21,11 @@ use std::path::{Path, PathBuf};
 
 /// Writes the report of `dir` (a case or a matrix) and returns the page's
 /// path. A matrix's Methods table also reads the viscous-decay, slosh and surge-front
-/// matrix folders `yardsticks` (`yardsticks`).
-pub fn report(dir: &Path, yardsticks: &[PathBuf]) -> Res<PathBuf> {
+/// matrix folders `yardsticks` (`yardsticks`), and takes the method of
+/// the case `baseline` as its baseline (None: the most common one).
+pub fn report(dir: &Path, yardsticks: &[PathBuf], baseline: Option<&str>) -> Res<PathBuf> {
     if dir.join("summary.parquet").exists() {
-        matrix_report(dir, yardsticks)
+        matrix_report(dir, yardsticks, baseline)
     } else if dir.join("summary.json").exists() {
         case_report(dir)
     } else {

@@ -47,6 +47,13 @@ pub struct CalibrationSpec {
     pub common_state: Option<String>,
     #[serde(default = "CalibrationSpec::default_switch_lead")]
     pub switch_lead: f64,
+    /// Every patch holds at least this many particles (None: the case's
+    /// `monitor.min_cluster_particles`, the detector's resolution; 1: any
+    /// block of fluid cells). A patch of fewer is no velocity-jump event
+    /// under any method, and which cells hold fewer depends on each
+    /// method's packing, so planting there measures the packing.
+    #[serde(default)]
+    pub min_particles: Option<usize>,
 }
 
 type KeyError = (String, String);
@@ -119,6 +126,12 @@ impl CalibrationSpec {
                     "{} is out of range (allowed 0 < switch_lead < plant_t = {} s)",
                     self.switch_lead, self.plant_t
                 ),
+            );
+        }
+        if let Some(m) = self.min_particles.filter(|m| !(1..=1_000_000).contains(m)) {
+            return bad(
+                "min_particles",
+                format!("{m} is out of range (allowed 1 ..= 1000000)"),
             );
         }
         if self.sizes.is_empty() || self.sizes.iter().any(|&s| !(1..=64).contains(&s)) {
@@ -195,6 +208,10 @@ mod tests {
             "calibration.window"
         );
         assert_eq!(spec("dv = [-1.0]").unwrap_err().0, "calibration.dv");
+        assert_eq!(
+            spec("dv = [0.1]\nmin_particles = 0").unwrap_err().0,
+            "calibration.min_particles"
+        );
         assert_eq!(spec("dv = [0.1]\nhunch = 1").unwrap_err().0, "calibration");
     }
 

@@ -538,6 +538,19 @@ fn report_yardsticks_must_be_matrix_folders() {
 }
 
 #[test]
+fn report_baseline_must_be_a_case_of_the_matrix() {
+    let dir = scratch("baseline");
+    let d = dir.to_str().unwrap();
+    let o = kick(&["report", d, "--baseline", "no_such_case"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--baseline no_such_case"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
 fn bench_prints_one_json_line() {
     let o = kick(&[
         "bench",
@@ -1218,6 +1231,35 @@ fn explain_splits_an_injected_kick_and_replays_single_changes() {
         .unwrap();
     assert!(at_dt["refused"].is_null(), "{at_dt}");
     assert_eq!(steps(at_dt), steps(control), "{at_dt}");
+    // Switched at the quiet window's start, the control is the same replay
+    // and the half step covers that window too, so it takes more steps.
+    let quiet_out = out.join("switch_at_quiet");
+    let o = kick(&[
+        "explain",
+        dir.to_str().unwrap(),
+        "--event",
+        &id,
+        "--counterfactual",
+        "--members",
+        "1",
+        "--switch-at",
+        "quiet",
+        "--out",
+        quiet_out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let quiet: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(quiet_out.join("explain.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        quiet["window"]["switch_from"],
+        json["window"]["explain_from"]
+    );
+    assert_eq!(json["window"]["switch_from"], json["window"]["onset_from"]);
+    let quiet_rows = quiet["counterfactual"].as_array().unwrap();
+    let row = |name: &str| quiet_rows.iter().find(|r| r["change"] == name).unwrap();
+    assert_eq!(steps(row("unchanged")), steps(control));
+    assert!(steps(row("half dt")) > steps(half), "{}", row("half dt"));
     for f in [
         "explain_steps.csv",
         "explain_steps.parquet",

@@ -24,7 +24,7 @@ pub(super) fn shared(
 ) -> Result<Vec<Option<usize>>, String> {
     let n = spec.patch.len();
     let perturb = (0..n)
-        .map(|k| perturb_of(spec, k, twin.t_plant, size, Some(NEGLIGIBLE)))
+        .map(|k| perturb_of((case, spec), k, twin.t_plant, size, Some(NEGLIGIBLE)))
         .collect();
     let Some((solver, _)) = stepped_once(case, twin, perturb)? else {
         return Ok(vec![None; n]);

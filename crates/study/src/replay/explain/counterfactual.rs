@@ -4,8 +4,9 @@
 //! (round-off's size unless the case sets one); member k has the same seed
 //! for the control and for every change, so each change is compared with
 //! the control on the same noise. Each change is made at the onset window's
-//! start, and the replays go on `AFTER_SECONDS` past the event's last step,
-//! so that a change that only delays the event is seen to.
+//! start (or the quiet window's, `--switch-at quiet`), and the replays go on
+//! `AFTER_SECONDS` past the event's last step, so that a change that only
+//! delays the event is seen to.
 
 use super::{Loaded, Window};
 use crate::output::summary::{method_id, Status};
@@ -47,7 +48,7 @@ pub struct Member {
     /// None when there was none by the window's end.
     pub next_kick_after: Option<f64>,
     /// Largest rise (J/m) of the total the injection test watches above its
-    /// running minimum, from the onset window's start to the window's end.
+    /// running minimum, from the switch to the window's end.
     pub injected: f64,
     pub steps: u64,
     /// `completed` or `blew up: REASON`.
@@ -572,7 +573,7 @@ fn switch_to(loaded: &Loaded, change: &Change) -> Result<(Option<Method>, StepRu
 }
 
 /// Replays the event's window from its checkpoint, the particles moved by
-/// the member's jitter, with `change` made at onset.
+/// the member's jitter, with `change` made at `window.switch_from`.
 fn replay_with_change(
     loaded: &Loaded,
     window: Window,
@@ -588,7 +589,7 @@ fn replay_with_change(
     let mut watches = watches(&solver, case);
     let mut stepper = Switching {
         solver,
-        at: window.onset_from,
+        at: window.switch_from,
         until: window_end(window),
         method,
         step_rule,
@@ -615,7 +616,7 @@ fn replay_with_change(
     opts.collapse_from = Some(stepper.solver.next_dt());
     let mut runner = Runner::new(stepper, watches, opts);
     runner.attach(WindowInjection {
-        from: window.onset_from,
+        from: window.switch_from,
         until: window_end(window),
         logged: &loaded.logged,
         measured: &mut measured,

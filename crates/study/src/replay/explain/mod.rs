@@ -37,6 +37,9 @@ pub struct ExplainOptions {
     pub counterfactual: bool,
     /// Members of each counterfactual row.
     pub members: usize,
+    /// Make each change at the quiet window's start, not the onset
+    /// window's: the energy window's evidence then postdates the change.
+    pub switch_at_quiet: bool,
 }
 
 /// Bad input (exit 2): missing or corrupted files, unknown event, mixtures.
@@ -91,6 +94,9 @@ struct Record {
 pub struct Window {
     pub explain_from: f64,
     pub onset_from: f64,
+    /// When the counterfactuals make their change: `onset_from`, or
+    /// `explain_from` with `--switch-at quiet`.
+    pub switch_from: f64,
     pub first_step: u64,
     pub last_step: u64,
     pub last_t: f64,
@@ -390,9 +396,15 @@ pub fn explain(case_dir: &Path, id: u32, opts: &ExplainOptions) -> Result<Outcom
         .unwrap_or_else(|| case_dir.join("explain").join(format!("event_{id}")));
     let logged = &loaded.logged;
     let mcfg = &loaded.case.monitor;
+    let (explain_from, onset_from) = (logged.t - mcfg.quiet_seconds, logged.t - ONSET_SECONDS);
     let window = Window {
-        explain_from: logged.t - mcfg.quiet_seconds,
-        onset_from: logged.t - ONSET_SECONDS,
+        explain_from,
+        onset_from,
+        switch_from: if opts.switch_at_quiet {
+            explain_from
+        } else {
+            onset_from
+        },
         first_step: logged.first_step,
         last_step: logged.last_step,
         last_t: logged.last_t,

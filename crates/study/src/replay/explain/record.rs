@@ -156,6 +156,7 @@ mod tests {
             window: Window {
                 explain_from: 0.4,
                 onset_from: 0.49,
+                switch_from: 0.49,
                 first_step: 11,
                 last_step: 12,
                 last_t: 0.51,

@@ -14,13 +14,21 @@ use std::path::Path;
 use study::output::summary::Status;
 use study::replay::explain::counterfactual::{RARE_SHARE, REPRODUCED_SHARE};
 
-/// For each varying `method.*` axis: its index and most common value.
+/// For each varying `method.*` axis: its index and the baseline's value,
+/// the named case's (`Matrix::baseline_case`) or else the most common.
 fn baseline(m: &Matrix) -> Vec<(usize, String)> {
+    let named = m
+        .baseline_case
+        .as_ref()
+        .and_then(|name| m.rows.iter().find(|r| r.case() == name));
     m.axes
         .iter()
         .enumerate()
         .filter(|(_, k)| matches!(k, ParamKey::Method(_)))
         .map(|(i, _)| {
+            if let Some(r) = named {
+                return (i, r.params[i].clone());
+            }
             let mut counts: BTreeMap<&String, usize> = BTreeMap::new();
             for r in &m.rows {
                 *counts.entry(&r.params[i]).or_default() += 1;
@@ -208,7 +216,11 @@ pub fn methods_table(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
         return Ok(());
     }
     page.h2("Methods: which change removes the kick");
-    page.p("One row per method, named by what it changes from the most common value of each varying method key. Over all its runs (every case and ensemble member): the share with at least one kick, with a kick of each cause, with a kick that has the hallmark (the anomaly proper), with a time-step (cfl) event, and that blew up; the time survived (a completed run counts its t_end) as median [min, max]. Over its completed runs only, each the mean over the last simulated second as median [min, max]: the late hydrostatic departure, its floor (the same score of the exact rest field of a flat layer of the same mass on the same particles: what the reference's sampling of a disordered arrangement costs even the exact pressure) and its excess over that floor, sqrt(departure^2 - floor^2), and the checkerboard index. The median particle-steps per second, and the wall seconds summed over the runs.");
+    let from = match &m.baseline_case {
+        Some(name) => format!("from the method of case {name} (`kick report --baseline`)"),
+        None => "from the most common value of each varying method key".into(),
+    };
+    page.p(&format!("One row per method, named by what it changes {from}. Over all its runs (every case and ensemble member): the share with at least one kick, with a kick of each cause, with a kick that has the hallmark (the anomaly proper), with a time-step (cfl) event, and that blew up; the time survived (a completed run counts its t_end) as median [min, max]. Over its completed runs only, each the mean over the last simulated second as median [min, max]: the late hydrostatic departure, its floor (the same score of the exact rest field of a flat layer of the same mass on the same particles: what the reference's sampling of a disordered arrangement costs even the exact pressure) and its excess over that floor, sqrt(departure^2 - floor^2), and the checkerboard index. The median particle-steps per second, and the wall seconds summed over the runs."));
     let sticks = Yardsticks::of_matrix(m);
     let mut headers: Vec<String> = HEADERS.map(String::from).to_vec();
     if !sticks.is_empty() {
@@ -362,6 +374,7 @@ mod tests {
         let rows = vec![dam_break("apic"), dam_break("apic"), dam_break("pic")];
         let mut m = Matrix {
             reference_rows: reference,
+            baseline_case: None,
             axes: vec![ParamKey::Method("transfer".into())],
             rows,
         };
@@ -466,6 +479,7 @@ mod tests {
         rows.push(at("apic", "3", vec![]));
         let m = Matrix {
             reference_rows: vec![],
+            baseline_case: None,
             axes: vec![
                 ParamKey::Method("transfer".into()),
                 ParamKey::Material {
@@ -489,10 +503,39 @@ mod tests {
         );
     }
 
+    /// `--baseline` names the case whose method the others are labelled
+    /// and paired against, whatever is most common.
+    #[test]
+    fn a_named_baseline_replaces_the_most_common_method() {
+        let mut m = Matrix {
+            reference_rows: vec![],
+            baseline_case: None,
+            axes: vec![ParamKey::Method("transfer".into())],
+            rows: vec![
+                run("apic", Some((0.2, 0.3)), vec![]),
+                run("apic", Some((0.2, 0.3)), vec![]),
+                run("pic", Some((0.2, 0.3)), vec![]),
+            ],
+        };
+        let names = |m: &Matrix| -> Vec<String> {
+            method_groups(m, &baseline(m))
+                .into_iter()
+                .map(|(l, _)| l)
+                .collect()
+        };
+        assert_eq!(names(&m), ["baseline", "transfer = pic"]);
+        m.baseline_case = Some("pic".into());
+        assert_eq!(names(&m), ["baseline", "transfer = apic"]);
+        let mut page = Page::default();
+        methods_table(&m, Path::new("."), &mut page).unwrap();
+        assert!(page.finish("t").contains("from the method of case pic"));
+    }
+
     #[test]
     fn a_method_row_counts_kicks_over_all_runs_and_late_figures_over_completed_runs() {
         let m = Matrix {
             reference_rows: vec![],
+            baseline_case: None,
             axes: vec![ParamKey::Method("transfer".into())],
             rows: vec![
                 run("pic", Some((0.05, 0.01)), vec![event(Cause::Impact)]),

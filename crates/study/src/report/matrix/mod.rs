@@ -109,9 +109,15 @@ pub const MATRIX_SECTIONS: &[Section] = &[
 ];
 
 /// The matrix page (and every case's page); returns its path.
-pub fn matrix_report(dir: &Path, yardsticks: &[PathBuf]) -> Res<PathBuf> {
+pub fn matrix_report(dir: &Path, yardsticks: &[PathBuf], baseline: Option<&str>) -> Res<PathBuf> {
     let out = dir.join("report");
     let mut m = Matrix::read(dir)?;
+    if let Some(name) = baseline {
+        if !m.rows.iter().any(|r| r.case() == name) {
+            return Err(format!("--baseline {name}: no such case in the matrix"));
+        }
+        m.baseline_case = Some(name.to_string());
+    }
     for other in yardsticks {
         m.reference_rows.extend(Matrix::read(other)?.rows);
     }
