@@ -240,11 +240,21 @@ impl Solver {
     /// (as `apply_perturbations` chose it: by its position after G2P).
     fn impulse_on(&self, p: usize) -> Vec2 {
         let x = self.particles.x[p];
-        self.planted
+        let id = self.particles.id[p];
+        let impulses: Vec2 = self
+            .planted
             .iter()
-            .filter(|pl| pl.step == self.step && crate::perturb::covers(pl.region, x))
+            .filter(|pl| pl.step == self.step && pl.duration == 0.0)
+            .filter(|pl| crate::perturb::covers(pl.region, x))
             .map(|pl| Vec2::from(pl.dv))
-            .sum()
+            .sum();
+        let sustained: Vec2 = self
+            .sustained
+            .iter()
+            .filter(|s| s.last_step == self.step && s.holds(id))
+            .map(|s| s.last_dv)
+            .sum();
+        impulses + sustained
     }
 
     fn explain_nodes<const W: usize>(&self, particles: &[usize]) -> Vec<Explained> {

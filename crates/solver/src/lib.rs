@@ -45,7 +45,7 @@ pub use deletion::{CullReason, Culled, Losses};
 pub use energy::Energy;
 pub use multiphase::mixture::Mixture;
 pub use particles::{Mat2, Vec2};
-pub use perturb::{Direction, Perturb, Placement, Planted};
+pub use perturb::{Direction, Perturb, Placement, Planted, Sustained};
 pub use remedies::EnergyChange;
 pub use timing::StageTimes;
 pub use view::{GridView, ProjectionView, StateView};
@@ -141,6 +141,8 @@ pub struct Solver {
     impulse_kinetic: f64,
     /// Every `[[perturb]]` impulse applied, as resolved.
     planted: Vec<Planted>,
+    /// The plants with a duration still pushing (or that pushed last step).
+    sustained: Vec<Sustained>,
     times: StageTimes,
     grid_mass_p2g: f64,
     n_outside: usize,
@@ -230,6 +232,7 @@ impl Solver {
             ke_grid_updated: 0.0,
             impulse_kinetic: 0.0,
             planted: Vec::with_capacity(perturbations),
+            sustained: Vec::with_capacity(perturbations),
             grid_mass_p2g: 0.0,
             n_outside: 0,
             n_nonfinite: 0,
@@ -810,9 +813,12 @@ impl Solver {
     }
 
     /// Adds the perturbations due in the step being taken (after G2P),
-    /// each resolved against the particles now and recorded in `planted`.
+    /// each resolved against the particles now and recorded in `planted`,
+    /// then the share of this step of every plant with a duration.
     fn apply_perturbations(&mut self) {
         let step = self.step + 1;
+        let now = self.time;
+        self.sustained.retain(|s| s.until > now);
         for (entry, pert) in self.cfg.perturb.iter().enumerate() {
             if !pert.due(step, self.time, self.dt) {
                 continue;
@@ -827,6 +833,29 @@ impl Solver {
             let Some((region, dv)) = pert.resolve(&frame, &self.particles) else {
                 continue;
             };
+            if let Some(duration) = pert.duration {
+                let from = pert.t.unwrap_or(self.time);
+                let s = Sustained::start(
+                    entry,
+                    (region, dv),
+                    (from, from + duration),
+                    &self.particles,
+                );
+                let count = s.ids.len();
+                self.sustained.push(s);
+                self.planted.push(Planted {
+                    entry,
+                    step,
+                    t: self.time,
+                    region,
+                    dv: [dv.x, dv.y],
+                    particles: count,
+                    j_scale: 1.0,
+                    dx: [0.0; 2],
+                    duration,
+                });
+                continue;
+            }
             // An impulse: it drives the particle, so it is part of its force-driven acceleration.
             let da = dv / self.dt;
             let j_scale = pert.j_scale.unwrap_or(1.0);
@@ -855,7 +884,33 @@ impl Solver {
                 particles: count,
                 j_scale,
                 dx: [dx.x, dx.y],
+                duration: 0.0,
             });
+        }
+        self.push_sustained(step);
+    }
+
+    /// Each plant with a duration pushes its particles by its share of this
+    /// step: a force, part of their force-driven acceleration.
+    fn push_sustained(&mut self, step: u64) {
+        let (time, dt) = (self.time, self.dt);
+        let ps = &mut self.particles;
+        for s in self.sustained.iter_mut() {
+            let dv = s.share(time, dt) * s.dv;
+            if dv == Vec2::zeros() {
+                continue;
+            }
+            for p in 0..ps.len() {
+                if s.holds(ps.id[p]) {
+                    let v = ps.v[p];
+                    self.impulse_kinetic +=
+                        0.5 * ps.mass[p] * ((v + dv).norm_squared() - v.norm_squared());
+                    ps.v[p] = v + dv;
+                    ps.accel[p] += dv / dt;
+                }
+            }
+            s.last_step = step;
+            s.last_dv = dv;
         }
     }
 

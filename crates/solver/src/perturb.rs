@@ -88,6 +88,10 @@ pub struct Perturb {
     pub speed: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub direction: Option<Direction>,
+    /// The velocity spread evenly over this long (s), as a constant force
+    /// on the particles the patch covered at its start (None: one impulse).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub duration: Option<f64>,
     /// A planted stress outlier: the particles' J (and F, isotropically)
     /// scaled by this factor, so their pressure departs from their
     /// neighbours' at the next stress update. Like `dx`, its energy is not
@@ -117,6 +121,61 @@ pub struct Planted {
     pub j_scale: f64,
     #[serde(default)]
     pub dx: [f64; 2],
+    /// How long its velocity was spread over (s; 0: one impulse).
+    #[serde(default)]
+    pub duration: f64,
+}
+
+/// A plant spread over a duration: the particles its patch covered at its
+/// start, by id, pushed by an equal share of `dv` per unit time.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sustained {
+    pub entry: usize,
+    pub from: f64,
+    pub until: f64,
+    /// The whole velocity it adds (m/s).
+    pub dv: Vec2,
+    /// Its particles' ids, ascending.
+    pub ids: Vec<u32>,
+    /// The step it last pushed, and by how much.
+    pub last_step: u64,
+    pub last_dv: Vec2,
+}
+
+impl Sustained {
+    /// The plant of entry `entry` over `region`, adding `dv` from `from` to
+    /// `until`. Its ids are its one allocation, made once at its start.
+    pub fn start(
+        entry: usize,
+        (region, dv): ([f64; 4], Vec2),
+        (from, until): (f64, f64),
+        ps: &Particles,
+    ) -> Self {
+        let mut ids: Vec<u32> = (0..ps.len())
+            .filter(|&p| covers(region, ps.x[p]))
+            .map(|p| ps.id[p])
+            .collect();
+        ids.sort_unstable();
+        Sustained {
+            entry,
+            from,
+            until,
+            dv,
+            ids,
+            last_step: 0,
+            last_dv: Vec2::zeros(),
+        }
+    }
+
+    /// The share of `dv` due in the step from `time` to `time + dt`.
+    pub fn share(&self, time: f64, dt: f64) -> f64 {
+        let overlap = (time + dt).min(self.until) - time.max(self.from);
+        (overlap / (self.until - self.from)).clamp(0.0, 1.0)
+    }
+
+    pub fn holds(&self, id: u32) -> bool {
+        self.ids.binary_search(&id).is_ok()
+    }
 }
 
 impl Planted {
@@ -144,6 +203,7 @@ impl Perturb {
             dv: Some(dv),
             speed: None,
             direction: None,
+            duration: None,
             j_scale: None,
             dx: None,
         }
@@ -217,6 +277,18 @@ impl Perturb {
             &key("cells"),
             format!("{} is outside 1 ..= {}", self.cells, largest.min(64)),
         )?;
+        if let Some(d) = self.duration {
+            check(
+                d.is_finite() && d > 0.0 && d <= 10.0,
+                &key("duration"),
+                format!("{d} is outside 0 < duration <= 10 s"),
+            )?;
+            check(
+                velocity && self.j_scale.is_none() && self.dx.is_none(),
+                &key("duration"),
+                "spreads a velocity (dv or speed) only, without j_scale or dx",
+            )?;
+        }
         if let Some(m) = self.min_particles {
             check(
                 (1..=1_000_000).contains(&m),
@@ -459,6 +531,39 @@ mod tests {
             block,
             place_patch(&scene, &ps, Placement::Bulk, (2, 0), None)
         );
+    }
+
+    #[test]
+    fn a_duration_spreads_a_velocity_only() {
+        let base = Perturb::at_step(1, [0.0, 0.0, 0.1, 0.1], [0.05, 0.0]);
+        let key = |p: Perturb| p.validate(0, [10, 10]).err().map(|e| e.key);
+        let timed = |d: f64| Perturb {
+            duration: Some(d),
+            ..base.clone()
+        };
+        assert_eq!(key(timed(0.01)), None);
+        assert_eq!(key(timed(0.0)).as_deref(), Some("perturb[0].duration"));
+        let scaled = Perturb {
+            j_scale: Some(1.1),
+            ..timed(0.01)
+        };
+        assert_eq!(key(scaled).as_deref(), Some("perturb[0].duration"));
+        // The share of a step: the overlap of the step with the duration.
+        let s = Sustained {
+            entry: 0,
+            from: 1.0,
+            until: 1.5,
+            dv: Vec2::new(1.0, 0.0),
+            ids: vec![3, 7],
+            last_step: 0,
+            last_dv: Vec2::zeros(),
+        };
+        let near = |a: f64, b: f64| (a - b).abs() < 1e-12;
+        assert!(near(s.share(0.9, 0.2), 0.2));
+        assert!(near(s.share(1.2, 0.1), 0.2));
+        assert!(near(s.share(1.45, 0.1), 0.1));
+        assert_eq!(s.share(1.5, 0.1), 0.0);
+        assert!(s.holds(7) && !s.holds(5));
     }
 
     #[test]

@@ -327,7 +327,56 @@ pub fn save(s: &Solver) -> Vec<u8> {
     // The pressure-implicit step's cell pressure: the next solve's starting guess.
     w.u64(s.projection.pressure.len() as u64);
     w.f64s(&s.projection.pressure);
+    save_sustained(&mut w, &s.sustained);
     w.seal()
+}
+
+/// Plants with a duration still pushing, after everything else (none:
+/// nothing written, so a checkpoint without one is as before).
+fn save_sustained(w: &mut Writer, sustained: &[crate::Sustained]) {
+    if sustained.is_empty() {
+        return;
+    }
+    w.u64(sustained.len() as u64);
+    for s in sustained {
+        w.u64(s.entry as u64);
+        w.f64s(&[s.from, s.until, s.dv.x, s.dv.y]);
+        w.u64(s.last_step);
+        w.f64s(&[s.last_dv.x, s.last_dv.y]);
+        w.u64(s.ids.len() as u64);
+        w.u32s(&s.ids);
+    }
+}
+
+fn load_sustained(r: &mut Reader, out: &mut Vec<crate::Sustained>) -> Result<(), CheckpointError> {
+    out.clear();
+    if r.is_empty() {
+        return Ok(());
+    }
+    for _ in 0..r.u64()? {
+        let entry = r.u64()? as usize;
+        let mut f = [0.0; 4];
+        r.f64s(&mut f)?;
+        let last_step = r.u64()?;
+        let mut last = [0.0; 2];
+        r.f64s(&mut last)?;
+        let n = r.u64()? as usize;
+        if n > r.0.len() / 8 {
+            return Err(CheckpointError::Truncated);
+        }
+        let mut ids = vec![0u32; n];
+        r.u32s(&mut ids)?;
+        out.push(crate::Sustained {
+            entry,
+            from: f[0],
+            until: f[1],
+            dv: Vec2::new(f[2], f[3]),
+            ids,
+            last_step,
+            last_dv: Vec2::new(last[0], last[1]),
+        });
+    }
+    Ok(())
 }
 
 /// What `save` writes before the dynamic fields.
@@ -460,5 +509,6 @@ pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
         });
     }
     r.f64s(&mut s.projection.pressure)?;
+    load_sustained(&mut r, &mut s.sustained)?;
     r.finish()
 }

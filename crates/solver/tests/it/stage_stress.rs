@@ -433,6 +433,7 @@ fn a_timed_placed_push_is_the_push_its_record_names() {
         dv: None,
         speed: Some(0.05),
         direction: Some(Direction::Up),
+        duration: None,
         j_scale: None,
         dx: None,
     };
@@ -510,4 +511,68 @@ fn a_step_floor_raises_the_cfl_step_and_leaves_a_larger_one() {
         });
         assert_eq!(kept.next_dt(), cfl_step, "{dt:?}");
     }
+}
+
+/// A plant with a duration pushes the particles its patch covered at its
+/// start by its whole dv, as a force: on a free body (no walls, no
+/// gravity) the momentum gained is the impulse's to round-off, over the
+/// steps the duration spans; and a restart from a checkpoint taken while
+/// it pushes continues to the same bits.
+#[test]
+fn a_plant_with_a_duration_adds_its_whole_impulse_and_restarts_bit_identically() {
+    let scene = common::box_scene([0.4, 0.3], [0.1, 0.1, 0.3, 0.2], Material::tait(1e5), 0.0);
+    let method = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
+    let plant = |duration: Option<f64>| Perturb {
+        t: Some(0.002),
+        step: None,
+        duration,
+        ..Perturb::at_step(1, [0.18, 0.14, 0.2, 0.16], [0.05, 0.0])
+    };
+    let solver = |perturb: Vec<Perturb>| {
+        Solver::new(SolverConfig {
+            scene: scene.clone(),
+            method: method.clone(),
+            perturb,
+        })
+        .unwrap()
+    };
+    let run_to = |s: &mut Solver, t: f64| {
+        while s.time() < t {
+            s.step().unwrap();
+        }
+    };
+    let momentum = |s: &Solver| -> Vec2 {
+        let v = s.view();
+        (0..v.v.len()).map(|p| v.mass[p] * v.v[p]).sum()
+    };
+    let mut clean = solver(vec![]);
+    let mut impulse = solver(vec![plant(None)]);
+    let mut spread = solver(vec![plant(Some(0.005))]);
+    for s in [&mut clean, &mut impulse, &mut spread] {
+        run_to(s, 0.01);
+    }
+    let record = spread.planted()[0];
+    assert_eq!(
+        (record.duration, record.particles),
+        (0.005, 16),
+        "{record:?}"
+    );
+    assert_eq!(spread.planted().len(), 1, "one record for the whole push");
+    let m_patch: f64 = 16.0 * spread.view().mass[0];
+    let gained = |s: &Solver| momentum(s) - momentum(&clean);
+    for s in [&impulse, &spread] {
+        let g = gained(s);
+        assert!((g.x - m_patch * 0.05).abs() < 1e-9 * m_patch, "{g:?}");
+        assert!(g.y.abs() < 1e-9 * m_patch, "{g:?}");
+    }
+    assert_ne!(impulse.state_hash(), spread.state_hash());
+    // Checkpointed mid-push, restored into a fresh solver, run on.
+    let mut first = solver(vec![plant(Some(0.005))]);
+    run_to(&mut first, 0.004);
+    let bytes = first.checkpoint();
+    let mut resumed = solver(vec![plant(Some(0.005))]);
+    resumed.restore(&bytes).unwrap();
+    run_to(&mut resumed, 0.01);
+    assert_eq!(resumed.state_hash(), spread.state_hash());
+    assert_eq!(resumed.step_count(), spread.step_count());
 }

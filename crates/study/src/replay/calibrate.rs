@@ -329,7 +329,7 @@ fn calibrate_case(
             let speeds: Vec<Option<f64>> =
                 shared.iter().map(|s| s.is_none().then_some(dv)).collect();
             let alarms = plant_and_record(case, &twin, spec, size, &speeds, &mut brackets)?;
-            predict(case, &twin, &mut brackets);
+            predict(case, &twin, spec, &mut brackets);
             rows.extend(rows_of(case, spec, size, &brackets, &twin, (1, alarms)));
         }
         return Ok(rows);
@@ -343,13 +343,17 @@ fn calibrate_case(
             return Err("more than 64 planted runs: the bracket does not close".into());
         }
     }
-    predict(case, &twin, &mut brackets);
+    predict(case, &twin, spec, &mut brackets);
     Ok(rows_of(case, spec, size, &brackets, &twin, (runs, alarms)))
 }
 
 /// The brackets' predicted speeds; a failure leaves them unset (the
-/// bisection's results stand).
-fn predict(case: &Case, twin: &Twin, brackets: &mut [Bracket]) {
+/// bisection's results stand). A push spread over a duration has none: the
+/// prediction reads one step.
+fn predict(case: &Case, twin: &Twin, spec: &CalibrationSpec, brackets: &mut [Bracket]) {
+    if spec.duration.is_some() {
+        return;
+    }
     if let Err(e) = prediction::fill(case, twin, brackets) {
         eprintln!("kick calibrate: {}: no prediction: {e}", case.name);
     }
@@ -501,6 +505,7 @@ fn perturb_of(
         dv: None,
         speed,
         direction: Some(spec.direction),
+        duration: spec.duration,
         j_scale: None,
         dx: None,
     }

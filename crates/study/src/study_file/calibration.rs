@@ -54,6 +54,10 @@ pub struct CalibrationSpec {
     /// method's packing, so planting there measures the packing.
     #[serde(default)]
     pub min_particles: Option<usize>,
+    /// Each patch's speed spread evenly over this long (s), a constant
+    /// force from the plant (None: one impulse in the plant's step).
+    #[serde(default)]
+    pub duration: Option<f64>,
 }
 
 type KeyError = (String, String);
@@ -125,6 +129,18 @@ impl CalibrationSpec {
                 format!(
                     "{} is out of range (allowed 0 < switch_lead < plant_t = {} s)",
                     self.switch_lead, self.plant_t
+                ),
+            );
+        }
+        if let Some(d) = self
+            .duration
+            .filter(|&d| !(d.is_finite() && d > 0.0 && d < self.window))
+        {
+            return bad(
+                "duration",
+                format!(
+                    "{d} is out of range (allowed 0 < duration < window = {} s)",
+                    self.window
                 ),
             );
         }
@@ -211,6 +227,11 @@ mod tests {
         assert_eq!(
             spec("dv = [0.1]\nmin_particles = 0").unwrap_err().0,
             "calibration.min_particles"
+        );
+        assert!(spec("dv = [0.1]\nduration = 0.03").is_ok());
+        assert_eq!(
+            spec("dv = [0.1]\nduration = 0.1").unwrap_err().0,
+            "calibration.duration"
         );
         assert_eq!(spec("dv = [0.1]\nhunch = 1").unwrap_err().0, "calibration");
     }
