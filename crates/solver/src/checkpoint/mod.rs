@@ -331,12 +331,17 @@ pub fn save(s: &Solver) -> Vec<u8> {
     w.seal()
 }
 
-/// Plants with a duration still pushing, after everything else (none:
-/// nothing written, so a checkpoint without one is as before).
+/// Marks the optional section of plants with a duration ("SUSTAIN1").
+const SUSTAINED_TAG: u64 = u64::from_le_bytes(*b"SUSTAIN1");
+
+/// Plants with a duration still pushing, after everything else, behind
+/// their tag (none: nothing written, so a checkpoint without one is as
+/// before and any other trailing bytes stay an error).
 fn save_sustained(w: &mut Writer, sustained: &[crate::Sustained]) {
     if sustained.is_empty() {
         return;
     }
+    w.u64(SUSTAINED_TAG);
     w.u64(sustained.len() as u64);
     for s in sustained {
         w.u64(s.entry as u64);
@@ -350,9 +355,13 @@ fn save_sustained(w: &mut Writer, sustained: &[crate::Sustained]) {
 
 fn load_sustained(r: &mut Reader, out: &mut Vec<crate::Sustained>) -> Result<(), CheckpointError> {
     out.clear();
-    if r.is_empty() {
+    let tagged =
+        r.0.get(..8)
+            .is_some_and(|b| b == SUSTAINED_TAG.to_le_bytes());
+    if !tagged {
         return Ok(());
     }
+    r.u64()?;
     for _ in 0..r.u64()? {
         let entry = r.u64()? as usize;
         let mut f = [0.0; 4];
