@@ -221,6 +221,13 @@ impl Perturb {
     /// Checks entry `i`: one of each pair given, values in range.
     pub fn validate(&self, i: usize, cells: [usize; 2]) -> Result<(), ConfigError> {
         let key = |k: &str| format!("perturb[{i}].{k}");
+        self.validate_choices(&key)?;
+        self.validate_when_where(&key, cells)?;
+        self.validate_amounts(&key)
+    }
+
+    /// One of each pair (when, where, how much), and something planted.
+    fn validate_choices(&self, key: &dyn Fn(&str) -> String) -> Result<(), ConfigError> {
         let one = |a: bool, b: bool, keys: &str| {
             let got = if a { "both" } else { "neither" };
             check(
@@ -235,29 +242,25 @@ impl Perturb {
             self.place.is_some(),
             "region | place",
         )?;
-        let velocity = self.dv.is_some() || self.speed.is_some();
         if self.dv.is_some() && self.speed.is_some() {
             one(true, true, "dv | speed")?;
         }
         check(
-            velocity || self.j_scale.is_some() || self.dx.is_some(),
+            self.dv.is_some()
+                || self.speed.is_some()
+                || self.j_scale.is_some()
+                || self.dx.is_some(),
             &key("dv | speed | j_scale | dx"),
             "at least one is required (got none)",
-        )?;
-        if let Some(s) = self.j_scale {
-            check(
-                s.is_finite() && (0.5..=2.0).contains(&s),
-                &key("j_scale"),
-                format!("{s} is outside 0.5 ..= 2"),
-            )?;
-        }
-        if let Some(dx) = &self.dx {
-            check(
-                dx.iter().all(|v| v.is_finite()),
-                &key("dx"),
-                "must be finite",
-            )?;
-        }
+        )
+    }
+
+    /// The time, the region and the placed patch's size and count.
+    fn validate_when_where(
+        &self,
+        key: &dyn Fn(&str) -> String,
+        cells: [usize; 2],
+    ) -> Result<(), ConfigError> {
         if let Some(s) = self.step {
             check(s >= 1, &key("step"), "must be >= 1")?;
         }
@@ -277,23 +280,43 @@ impl Perturb {
             &key("cells"),
             format!("{} is outside 1 ..= {}", self.cells, largest.min(64)),
         )?;
+        if let Some(m) = self.min_particles {
+            check(
+                (1..=1_000_000).contains(&m),
+                &key("min_particles"),
+                format!("{m} is outside 1 ..= 1000000"),
+            )?;
+        }
+        Ok(())
+    }
+
+    /// What is planted: the velocity, its duration, J's factor, the move.
+    fn validate_amounts(&self, key: &dyn Fn(&str) -> String) -> Result<(), ConfigError> {
+        if let Some(s) = self.j_scale {
+            check(
+                s.is_finite() && (0.5..=2.0).contains(&s),
+                &key("j_scale"),
+                format!("{s} is outside 0.5 ..= 2"),
+            )?;
+        }
+        if let Some(dx) = &self.dx {
+            check(
+                dx.iter().all(|v| v.is_finite()),
+                &key("dx"),
+                "must be finite",
+            )?;
+        }
         if let Some(d) = self.duration {
             check(
                 d.is_finite() && d > 0.0 && d <= 10.0,
                 &key("duration"),
                 format!("{d} is outside 0 < duration <= 10 s"),
             )?;
+            let velocity = self.dv.is_some() || self.speed.is_some();
             check(
                 velocity && self.j_scale.is_none() && self.dx.is_none(),
                 &key("duration"),
                 "spreads a velocity (dv or speed) only, without j_scale or dx",
-            )?;
-        }
-        if let Some(m) = self.min_particles {
-            check(
-                (1..=1_000_000).contains(&m),
-                &key("min_particles"),
-                format!("{m} is outside 1 ..= 1000000"),
             )?;
         }
         if let Some(dv) = &self.dv {

@@ -106,6 +106,13 @@ impl CalibrationSpec {
     }
 
     fn validate(&self) -> Result<(), KeyError> {
+        self.validate_times()?;
+        self.validate_patches()?;
+        self.validate_speeds()
+    }
+
+    /// The plant time, the window, the switch's lead and the push's duration.
+    fn validate_times(&self) -> Result<(), KeyError> {
         let bad = |k: &str, m: String| Err((format!("calibration.{k}"), m));
         if !(self.plant_t.is_finite() && self.plant_t > 0.0) {
             return bad(
@@ -144,6 +151,12 @@ impl CalibrationSpec {
                 ),
             );
         }
+        Ok(())
+    }
+
+    /// The patches: their sizes, placements and least particle count.
+    fn validate_patches(&self) -> Result<(), KeyError> {
+        let bad = |k: &str, m: String| Err((format!("calibration.{k}"), m));
         if let Some(m) = self.min_particles.filter(|m| !(1..=1_000_000).contains(m)) {
             return bad(
                 "min_particles",
@@ -165,6 +178,12 @@ impl CalibrationSpec {
                 "at least one [[calibration.patch]] is required".into(),
             );
         }
+        Ok(())
+    }
+
+    /// A bracket to bisect, or the speeds to plant.
+    fn validate_speeds(&self) -> Result<(), KeyError> {
+        let bad = |k: &str, m: String| Err((format!("calibration.{k}"), m));
         match (self.bisect, self.dv.is_empty()) {
             (Some(_), false) | (None, true) => bad(
                 "bisect | dv",
