@@ -2,12 +2,16 @@
 """Per K and EOS table of a bug-report matrix output (summary.json only):
 cause and median time of the first kick, the hallmark, survival median
 [min, max] per dt mode, and the evidence of the first kicks (energy rise over
-its floor, Courant number before onset). Usage: scripts/first_kicks.py OUT"""
+its floor, Courant number before onset). Usage: scripts/first_kicks.py OUT
+[OUT ...] (several matrix folders are read as one, e.g. the halves of the
+matrix run with --only)."""
 import json, statistics, sys
 from collections import defaultdict
 from pathlib import Path
 
-KICK = ("injection", "inversion")
+# The kick causes: the calibrated detector adds `jump` (a velocity jump
+# against a calm local flow) to the former detector's two.
+KICK = ("injection", "inversion", "jump")
 
 def first_kick(s):
     kicks = [e for e in s["events"] if e["cause"] in KICK]
@@ -27,8 +31,8 @@ def survival(s):
 def spread(v):
     return f"{statistics.median(v):.2f} [{min(v):.2f}, {max(v):.2f}]"
 
-def main(out):
-    rows = [json.load(open(f)) for f in sorted(Path(out).glob("*/summary.json"))]
+def main(outs):
+    rows = [json.load(open(f)) for out in outs for f in sorted(Path(out).glob("*/summary.json"))]
     groups = defaultdict(lambda: defaultdict(list))
     for s in rows:
         p = s["params"]
@@ -91,4 +95,4 @@ def main(out):
     print(f"run time: {sum(walls):.0f} s in all, longest {max(walls):.0f} s; steps {sum(s['steps'] for s in rows)}")
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else "reports/bug_report")
+    main(sys.argv[1:] or ["reports/bug_report"])
