@@ -32,7 +32,22 @@ def spread(v):
     return f"{statistics.median(v):.2f} [{min(v):.2f}, {max(v):.2f}]"
 
 def main(outs):
-    rows = [json.load(open(f)) for out in outs for f in sorted(Path(out).glob("*/summary.json"))]
+    missing = [out for out in outs if not Path(out).is_dir()]
+    if missing:
+        print(f"first_kicks.py: no such folder: {', '.join(missing)}", file=sys.stderr)
+        sys.exit(2)
+    rows, seen = [], set()
+    for out in outs:
+        for f in sorted(Path(out).glob("*/summary.json")):
+            s = json.load(open(f))
+            if s["case"] in seen:
+                print(f"first_kicks.py: {s['case']} read again from {out}; the first kept", file=sys.stderr)
+                continue
+            seen.add(s["case"])
+            rows.append(s)
+    if not rows:
+        print("first_kicks.py: no summary.json in the folders given", file=sys.stderr)
+        sys.exit(2)
     groups = defaultdict(lambda: defaultdict(list))
     for s in rows:
         p = s["params"]

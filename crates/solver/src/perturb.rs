@@ -74,8 +74,8 @@ pub struct Perturb {
     /// The placed patch nearest this point (metres; default the box's centre).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub near: Option<[f64; 2]>,
-    /// A placed patch holds at least this many particles (default: any
-    /// cell holding one is fluid). A patch of fewer than a detector's
+    /// A placed patch holds at least this many particles (with `place`
+    /// only; default: any cell holding one is fluid). A patch of fewer than a detector's
     /// cluster minimum is below its resolution, so calibrating with one
     /// measures the packing, not the detector.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -88,8 +88,9 @@ pub struct Perturb {
     pub speed: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub direction: Option<Direction>,
-    /// The velocity spread evenly over this long (s), as a constant force
-    /// on the particles the patch covered at its start (None: one impulse).
+    /// The velocity spread evenly over this long (s), a constant
+    /// acceleration of the particles the patch covered at its start (None:
+    /// one impulse).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub duration: Option<f64>,
     /// A planted stress outlier: the particles' J (and F, isotropically)
@@ -282,9 +283,14 @@ impl Perturb {
         )?;
         if let Some(m) = self.min_particles {
             check(
-                (1..=1_000_000).contains(&m),
+                (1..=1_000_000_000).contains(&m),
                 &key("min_particles"),
-                format!("{m} is outside 1 ..= 1000000"),
+                format!("{m} is outside 1 ..= 1000000000"),
+            )?;
+            check(
+                self.place.is_some(),
+                &key("min_particles"),
+                "needs place (a region is planted as given)",
             )?;
         }
         Ok(())
@@ -571,6 +577,12 @@ mod tests {
             ..timed(0.01)
         };
         assert_eq!(key(scaled).as_deref(), Some("perturb[0].duration"));
+        // A least particle count sorts placed patches; a region is as given.
+        let counted = Perturb {
+            min_particles: Some(4),
+            ..base.clone()
+        };
+        assert_eq!(key(counted).as_deref(), Some("perturb[0].min_particles"));
         // The share of a step: the overlap of the step with the duration.
         let s = Sustained {
             entry: 0,

@@ -208,7 +208,7 @@ struct ExplainArgs {
     /// When each change is made: at the onset window's start (10 ms before
     /// the event) or at the quiet window's (before the energy window's
     /// evidence of an injection).
-    #[arg(long, value_enum, default_value_t = SwitchAt::Onset)]
+    #[arg(long, value_enum, default_value_t = SwitchAt::Onset, requires = "counterfactual")]
     switch_at: SwitchAt,
 }
 
@@ -755,12 +755,18 @@ fn report_command(args: ReportArgs) -> ExitCode {
         ));
     }
     if let Some(name) = &baseline {
-        let names = report::data::Matrix::case_names(&dir);
-        if !names.is_ok_and(|n| n.contains(name)) {
-            return bad_input(&format!(
+        match report::data::Matrix::case_names(&dir) {
+            Ok(names) if names.contains(name) => {}
+            Ok(_) => return bad_input(&format!(
                 "--baseline {name}: no such case in {} (allowed: a case of its summary.parquet)",
                 dir.display()
-            ));
+            )),
+            Err(e) => {
+                return bad_input(&format!(
+                    "--baseline {name}: {} is not a readable matrix folder: {e}",
+                    dir.display()
+                ))
+            }
         }
     }
     match report::report(&dir, &yardsticks, baseline.as_deref()) {

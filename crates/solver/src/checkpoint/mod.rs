@@ -362,7 +362,7 @@ fn load_sustained(r: &mut Reader, out: &mut Vec<crate::Sustained>) -> Result<(),
         return Ok(());
     }
     r.u64()?;
-    for _ in 0..r.u64()? {
+    for k in 0..r.u64()? {
         let entry = r.u64()? as usize;
         let mut f = [0.0; 4];
         r.f64s(&mut f)?;
@@ -375,6 +375,14 @@ fn load_sustained(r: &mut Reader, out: &mut Vec<crate::Sustained>) -> Result<(),
         }
         let mut ids = vec![0u32; n];
         r.u32s(&mut ids)?;
+        let span_ok = f[..2].iter().all(|t| t.is_finite()) && f[0] < f[1];
+        let ids_ok = ids.windows(2).all(|w| w[0] < w[1]);
+        if !(span_ok && ids_ok) {
+            return Err(CheckpointError::UnknownCode {
+                what: "sustained plant (span or particle order)",
+                code: k,
+            });
+        }
         out.push(crate::Sustained {
             entry,
             from: f[0],

@@ -327,14 +327,14 @@ impl std::fmt::Display for ParamKey {
 }
 
 impl Matrix {
-    /// Every case of the matrix folder `dir` (found through
-    /// summary.parquet's `case_dir`), sorted by the parameters that vary.
     /// The case names of the matrix in `dir` (summary.parquet's `case`).
     pub fn case_names(dir: &Path) -> Res<Vec<String>> {
         let df = read_parquet(&dir.join("summary.parquet"))?;
         text_column(&df, "case").ok_or_else(|| "summary.parquet lacks case".into())
     }
 
+    /// Every case of the matrix folder `dir` (found through
+    /// summary.parquet's `case_dir`), sorted by the parameters that vary.
     pub fn read(dir: &Path) -> Res<Self> {
         let df = read_parquet(&dir.join("summary.parquet"))?;
         let dirs = text_column(&df, "case_dir").ok_or("summary.parquet lacks case_dir")?;

@@ -55,7 +55,7 @@ pub struct CalibrationSpec {
     #[serde(default)]
     pub min_particles: Option<usize>,
     /// Each patch's speed spread evenly over this long (s), a constant
-    /// force from the plant (None: one impulse in the plant's step).
+    /// acceleration from the plant (None: one impulse in the plant's step).
     #[serde(default)]
     pub duration: Option<f64>,
 }
@@ -157,10 +157,13 @@ impl CalibrationSpec {
     /// The patches: their sizes, placements and least particle count.
     fn validate_patches(&self) -> Result<(), KeyError> {
         let bad = |k: &str, m: String| Err((format!("calibration.{k}"), m));
-        if let Some(m) = self.min_particles.filter(|m| !(1..=1_000_000).contains(m)) {
+        if let Some(m) = self
+            .min_particles
+            .filter(|m| !(1..=1_000_000_000).contains(m))
+        {
             return bad(
                 "min_particles",
-                format!("{m} is out of range (allowed 1 ..= 1000000)"),
+                format!("{m} is out of range (allowed 1 ..= 1000000000)"),
             );
         }
         if self.sizes.is_empty() || self.sizes.iter().any(|&s| !(1..=64).contains(&s)) {

@@ -548,6 +548,11 @@ fn report_baseline_must_be_a_case_of_the_matrix() {
         "{}",
         stderr(&o)
     );
+    assert!(
+        stderr(&o).contains("not a readable matrix folder"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]
@@ -852,6 +857,12 @@ ensemble = 2
     assert!(o.status.success(), "{}", stderr(&o));
     let page = std::fs::read_to_string(out.join("report").join("index.html")).unwrap();
     assert!(page.contains("<h2>Ensembles</h2>"), "an ensemble table");
+    // A baseline must be a case of this matrix.
+    let o = kick(&["report", out.to_str().unwrap(), "--baseline", "ens_e7"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no such case"), "{}", stderr(&o));
+    let o = kick(&["report", out.to_str().unwrap(), "--baseline", "ens_e1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
     for (m, s) in ["ens_e0", "ens_e1"].iter().zip(&members) {
         let e = s
             .events

@@ -161,7 +161,7 @@ pub fn verdict(control: &Tally, change: &Tally) -> &'static str {
     }
 }
 
-/// What a counterfactual changes, from the onset window's start.
+/// What a counterfactual changes, from `Window::switch_from`.
 enum Change {
     /// Study-file overrides of `[method]` (none: the control).
     Overrides(Vec<String>),
@@ -260,8 +260,8 @@ enum StepRule {
     FixAtCurrent,
 }
 
-/// A solver that changes its method once, at the onset window's start,
-/// and ends at the window's end.
+/// A solver that changes its method once, at `Window::switch_from` (the
+/// onset or the quiet window's start), and ends at the window's end.
 struct Switching {
     solver: Solver,
     at: f64,

@@ -5,8 +5,8 @@
 //! (`monitor::mechanisms`, docs/physics.md section 4c) over the onset
 //! window (`ONSET_SECONDS` before the event's first step to its last).
 //! With `--counterfactual` it restarts from the same checkpoint as an
-//! ensemble per single change, applied from the onset window's start
-//! (`counterfactual`).
+//! ensemble per single change, applied from the onset window's start, or
+//! the quiet window's with `--switch-at quiet` (`counterfactual`).
 
 pub mod precursors;
 pub mod record;
@@ -400,11 +400,13 @@ pub fn explain(case_dir: &Path, id: u32, opts: &ExplainOptions) -> Result<Outcom
     let window = Window {
         explain_from,
         onset_from,
+        // The replays cannot switch before their checkpoint.
         switch_from: if opts.switch_at_quiet {
-            explain_from
+            explain_from.min(onset_from)
         } else {
             onset_from
-        },
+        }
+        .max(loaded.checkpoint_t),
         first_step: logged.first_step,
         last_step: logged.last_step,
         last_t: logged.last_t,

@@ -26,8 +26,16 @@ pub fn detection_table(m: &Matrix, out: &Path, page: &mut Page) -> Res {
         ),
         None => format!("planted at {:?} m/s", s.dv),
     };
+    let push = match s.duration {
+        Some(t) => format!("each speed spread over {t} s as a constant acceleration"),
+        None => "each speed added at once".into(),
+    };
+    let least = match s.min_particles {
+        Some(m) => format!("at least {m} particles"),
+        None => "at least each case's monitor.min_cluster_particles".into(),
+    };
     page.p(&escape(&format!(
-        "Patches planted at t = {} s ({:?}) and judged over {} s; {how}. \
+        "Patches planted at t = {} s ({:?}, {push}; patches of {least}) and judged over {} s; {how}. \
          Twins {:.0} s and planted runs {:.0} s of wall time.",
         s.plant_t, s.direction, s.window, d.twins_wall_s, d.planted_wall_s
     )));
