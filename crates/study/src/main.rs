@@ -755,18 +755,19 @@ fn report_command(args: ReportArgs) -> ExitCode {
         ));
     }
     if let Some(name) = &baseline {
-        match report::data::Matrix::case_names(&dir) {
-            Ok(names) if names.contains(name) => {}
-            Ok(_) => return bad_input(&format!(
-                "--baseline {name}: no such case in {} (allowed: a case of its summary.parquet)",
+        let problem = match report::data::Matrix::case_names(&dir) {
+            Ok(names) if names.contains(name) => None,
+            Ok(_) => Some(format!(
+                "no such case in {} (allowed: a case of its summary.parquet)",
                 dir.display()
             )),
-            Err(e) => {
-                return bad_input(&format!(
-                    "--baseline {name}: {} is not a readable matrix folder: {e}",
-                    dir.display()
-                ))
-            }
+            Err(e) => Some(format!(
+                "{} is not a readable matrix folder: {e}",
+                dir.display()
+            )),
+        };
+        if let Some(p) = problem {
+            return bad_input(&format!("--baseline {name}: {p}"));
         }
     }
     match report::report(&dir, &yardsticks, baseline.as_deref()) {

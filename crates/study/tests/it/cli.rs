@@ -1262,9 +1262,12 @@ fn explain_splits_an_injected_kick_and_replays_single_changes() {
     let quiet: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(quiet_out.join("explain.json")).unwrap())
             .unwrap();
+    // Never before the replay's checkpoint (here t = 0, before the quiet
+    // window's start).
+    let checkpoint_t = json["checkpoint_t"].as_f64().unwrap();
     assert_eq!(
-        quiet["window"]["switch_from"],
-        json["window"]["explain_from"]
+        quiet["window"]["switch_from"].as_f64().unwrap(),
+        explain_from.max(checkpoint_t)
     );
     assert_eq!(json["window"]["switch_from"], json["window"]["onset_from"]);
     let quiet_rows = quiet["counterfactual"].as_array().unwrap();
