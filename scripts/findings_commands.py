@@ -62,7 +62,8 @@ def main(paths):
     paths = paths or sorted(str(p) for p in (ROOT / "docs" / "findings").glob("*.md"))
     missing = []
     for p in paths:
-        text = (ROOT / p if not Path(p).is_absolute() else Path(p)).read_text()
+        p = Path(p).resolve()
+        text = p.read_text()
         for n, cmd in commands(text):
             for cited in CITED.findall(WRITTEN.sub("", cmd)):
                 cited = cited.rstrip(".")
@@ -70,7 +71,7 @@ def main(paths):
                 if re.search(r"(?<![a-z])[A-Z][A-Z_0-9]{2,}(?![a-z])", cited):
                     continue
                 if cited not in files:
-                    missing.append(f"{Path(p).relative_to(ROOT)}:{n}: {cited}  ({cmd.strip()[:80]})")
+                    missing.append(f"{p.relative_to(ROOT)}:{n}: {cited}  ({cmd.strip()[:80]})")
     for m in missing:
         print(m)
     print(f"findings_commands: {len(missing)} cited file(s) missing from the repository")
