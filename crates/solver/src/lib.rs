@@ -833,48 +833,32 @@ impl Solver {
             let Some((region, dv)) = pert.resolve(&frame, &self.particles) else {
                 continue;
             };
-            if let Some(duration) = pert.duration {
-                let from = pert.t.unwrap_or(self.time);
-                let s = Sustained::start(
-                    entry,
-                    (region, dv),
-                    (from, from + duration),
-                    &self.particles,
-                );
-                let count = s.ids.len();
-                self.sustained.push(s);
-                self.planted.push(Planted {
-                    entry,
-                    step,
-                    t: self.time,
-                    region,
-                    dv: [dv.x, dv.y],
-                    particles: count,
-                    j_scale: 1.0,
-                    dx: [0.0; 2],
-                    duration,
-                });
-                continue;
-            }
-            // An impulse: it drives the particle, so it is part of its force-driven acceleration.
-            let da = dv / self.dt;
-            let j_scale = pert.j_scale.unwrap_or(1.0);
-            let dx = Vec2::from(pert.dx.unwrap_or([0.0; 2]));
-            let ps = &mut self.particles;
-            let mut count = 0;
-            for p in 0..ps.len() {
-                if perturb::covers(region, ps.x[p]) {
-                    let v = ps.v[p];
-                    self.impulse_kinetic +=
-                        0.5 * ps.mass[p] * ((v + dv).norm_squared() - v.norm_squared());
-                    ps.v[p] = v + dv;
-                    ps.accel[p] += da;
-                    // The stress follows from J at the next stress update.
-                    ps.scale_j(p, j_scale);
-                    ps.x[p] += dx;
-                    count += 1;
+            let (count, j_scale, dx, duration) = match pert.duration {
+                Some(duration) => {
+                    let from = pert.t.unwrap_or(self.time);
+                    let span = (from, from + duration);
+                    let s = Sustained::start(entry, (region, dv), span, &self.particles);
+                    let count = s.ids.len();
+                    self.sustained.push(s);
+                    (count, 1.0, Vec2::zeros(), duration)
                 }
-            }
+                None => {
+                    let j_scale = pert.j_scale.unwrap_or(1.0);
+                    let dx = Vec2::from(pert.dx.unwrap_or([0.0; 2]));
+                    let ps = &mut self.particles;
+                    let mut count = 0;
+                    for p in 0..ps.len() {
+                        if perturb::covers(region, ps.x[p]) {
+                            self.impulse_kinetic += push(ps, p, dv, self.dt);
+                            // The stress follows from J at the next stress update.
+                            ps.scale_j(p, j_scale);
+                            ps.x[p] += dx;
+                            count += 1;
+                        }
+                    }
+                    (count, j_scale, dx, 0.0)
+                }
+            };
             self.planted.push(Planted {
                 entry,
                 step,
@@ -884,7 +868,7 @@ impl Solver {
                 particles: count,
                 j_scale,
                 dx: [dx.x, dx.y],
-                duration: 0.0,
+                duration,
             });
         }
         self.push_sustained(step);
@@ -902,11 +886,7 @@ impl Solver {
             }
             for p in 0..ps.len() {
                 if s.holds(ps.id[p]) {
-                    let v = ps.v[p];
-                    self.impulse_kinetic +=
-                        0.5 * ps.mass[p] * ((v + dv).norm_squared() - v.norm_squared());
-                    ps.v[p] = v + dv;
-                    ps.accel[p] += dv / dt;
+                    self.impulse_kinetic += push(ps, p, dv, dt);
                 }
             }
             s.last_step = step;
@@ -984,4 +964,13 @@ impl Solver {
         self.measure();
         Ok(())
     }
+}
+
+/// Adds `dv` to particle `p` as a push over the step `dt` (part of its
+/// force-driven acceleration); the kinetic energy it adds.
+fn push(ps: &mut Particles, p: usize, dv: Vec2, dt: f64) -> f64 {
+    let v = ps.v[p];
+    ps.v[p] = v + dv;
+    ps.accel[p] += dv / dt;
+    0.5 * ps.mass[p] * ((v + dv).norm_squared() - v.norm_squared())
 }
