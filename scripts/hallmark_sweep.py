@@ -67,12 +67,36 @@ def reapply(rows, speed_factor, quiet_seconds, deformed_rate, distortion_ratio):
     return quiet, rate, dist
 
 
+def loosest(rows, cfg):
+    """(quiet share, rate share, distortion share, median quiet spell) at the
+    loosest setting: 3 times the quiet speed, 1/3 of the quiet window and of
+    the deformed rate."""
+    q, r, d = reapply(rows, FACTORS[-1], FACTORS[0] * cfg["quiet_seconds"],
+                      FACTORS[0] * cfg["deformed_rate"], cfg["distortion_ratio"])
+    spells = sorted(x["quiet_for"] for x in rows if abs(x["speed_factor"] - FACTORS[-1]) < 1e-9)
+    return q, r, d, spells[len(spells) // 2] if spells else math.nan
+
+
+def print_loosest(near):
+    """Why a count is 0: how close the kicks came at the loosest setting."""
+    if not near:
+        return
+    quiet = [n for n in near if n[0] >= 0.5]
+    spells = sorted(n[3] for n in near)
+    print()
+    print(f"At the loosest setting (quiet speed x 3, quiet seconds x 1/3, deformed rate x 1/3): "
+          f"{len(quiet)} of {len(near)} kicks had half their particles quiet; of those, "
+          f"{sum(n[1] >= 0.5 for n in quiet)} deformed by rate and {sum(n[2] >= 0.5 for n in quiet)} distorted. "
+          f"Median over kicks of the median particle's quiet spell at 3 x the quiet speed: {spells[len(spells) // 2]:.3g} s.")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("matrices", nargs="+")
     ap.add_argument("--csv", help="write every setting's counts here")
     a = ap.parse_args()
     counts = {}
+    near = []
     kicks = 0
     cases = 0
     for matrix in a.matrices:
@@ -87,6 +111,7 @@ def main():
                 if e["kind"] != "kick" or e["cause"] not in KICKS or e["id"] not in rows:
                     continue
                 kicks += 1
+                near.append(loosest(rows[e["id"]], cfg))
                 own = reapply(rows[e["id"]], 1.0, cfg["quiet_seconds"], cfg["deformed_rate"], cfg["distortion_ratio"])
                 online = e["quiescent_before"] and "strain_rate" in e["deformed_by"]
                 if (own[0] >= 0.5 and own[1] >= 0.5) != online:
@@ -114,6 +139,7 @@ def main():
                      ("deformed_rate", lambda f: (1.0, 1.0, one(f)))):
         cells = [f"{counts[at(f)][0]} ({counts[at(f)][1]})" for f in FACTORS]
         print(f"| {name} | " + " | ".join(cells) + " |")
+    print_loosest(near)
     print()
     print("Anomaly proper by the strain-rate reading (by the distortion reading in brackets). Every setting:")
     print()

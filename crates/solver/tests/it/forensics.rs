@@ -260,3 +260,43 @@ fn under_implicit_pressure_the_parts_add_up_and_the_step_is_the_step() {
         );
     }
 }
+
+/// A plant with a duration is the impulse part of every step it spans:
+/// summed over them, each particle it holds has the plant's dv as its
+/// impulse, every other particle none, and the parts still add up.
+#[test]
+fn a_plant_with_a_duration_is_the_impulse_part_of_the_steps_it_spans() {
+    let scene = common::box_scene([0.4, 0.3], [0.1, 0.1, 0.3, 0.2], Material::tait(1e5), 0.0);
+    let method = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
+    let plant = Perturb {
+        t: Some(0.002),
+        step: None,
+        duration: Some(0.005),
+        ..Perturb::at_step(1, [0.18, 0.14, 0.2, 0.16], [0.05, 0.0])
+    };
+    let mut s = Solver::new(SolverConfig {
+        scene,
+        method,
+        perturb: vec![plant],
+    })
+    .unwrap();
+    let mut impulse: std::collections::BTreeMap<u32, Vec2> = Default::default();
+    let mut pushing_steps = 0;
+    while s.time() < 0.01 {
+        let all: Vec<usize> = (0..s.particle_count()).collect();
+        let step = s.step_explained(&all).unwrap();
+        let mut pushed = false;
+        for e in &step.explained {
+            assert!(e.rest.norm() <= 1e-9 * scale(e), "rest {}", e.rest);
+            *impulse.entry(step.id[e.particle]).or_insert(Vec2::zeros()) += e.impulse;
+            pushed |= e.impulse != Vec2::zeros();
+        }
+        pushing_steps += usize::from(pushed);
+    }
+    let held: Vec<&Vec2> = impulse.values().filter(|i| i.norm() > 0.0).collect();
+    assert_eq!(held.len(), 16, "the patch's 2 x 2 cells");
+    for i in held {
+        assert!((i - Vec2::new(0.05, 0.0)).norm() < 1e-12, "{i}");
+    }
+    assert!(pushing_steps > 1, "spread over {pushing_steps} steps");
+}

@@ -772,6 +772,25 @@ mod tests {
         assert!(!twin_kicked_near(&twin, patch(6), (3, 0.02), (1.0, 1.1)));
     }
 
+    /// A patch holds at least the detector's cluster minimum unless the
+    /// study asks otherwise: the case's `min_cluster_particles` by
+    /// default, `[calibration] min_particles` when set.
+    #[test]
+    fn a_patch_defaults_to_the_detectors_cluster_minimum() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../studies/calibration_rest.toml");
+        let study = crate::study_file::load(&file, &[]).unwrap();
+        let mut spec = study.calibration.clone().unwrap();
+        let case = &study.cases[0];
+        spec.min_particles = None;
+        let least =
+            |spec: &CalibrationSpec| perturb_of((case, spec), 0, 1.0, 1, Some(0.1)).min_particles;
+        assert_eq!(least(&spec), Some(case.monitor.min_cluster_particles));
+        assert_eq!(case.monitor.min_cluster_particles, 4);
+        spec.min_particles = Some(9);
+        assert_eq!(least(&spec), Some(9));
+    }
+
     #[test]
     fn the_bracket_closes_to_its_ratio_around_the_threshold() {
         for threshold in [0.006, 0.02, 0.05, 0.3] {
