@@ -36,6 +36,7 @@ registry::registry! {
     null_space_filter,
     shifting,
     artificial_viscosity,
+    grid_damping,
 }
 
 /// The energy a hook changed in the step it acted on (J per metre of

@@ -10,8 +10,8 @@
 use crate::common;
 
 use solver::remedies::{
-    artificial_viscosity, bulk_damping, cell_dilatation, f_reset, j_bar, min_node_mass,
-    null_space_filter, pic_damping, pressure_smoothing, shifting, volume_relaxation,
+    artificial_viscosity, bulk_damping, cell_dilatation, f_reset, grid_damping, j_bar,
+    min_node_mass, null_space_filter, pic_damping, pressure_smoothing, shifting, volume_relaxation,
     RemedySettings,
 };
 use solver::shapes::Shape;
@@ -352,6 +352,73 @@ fn min_node_mass_reports_the_work_of_the_forces_it_replaces() {
         a.energy().total(),
         1e-6,
     );
+}
+
+#[test]
+fn grid_damping_takes_c_v_from_every_node_and_reports_its_work() {
+    let c = 5.0;
+    let on = with(|r| r.grid_damping = Some(grid_damping::Settings { coefficient: c }));
+    let (mut a, mut b) = pair_noisy(on.clone(), on, base(), 0.05);
+    a.step().unwrap();
+    b.step().unwrap();
+    let e = reported(&a, "grid_damping");
+    assert_eq!((e.kinetic, e.stored, e.gravitational), (0.0, 0.0, 0.0));
+    let (va, vb) = (a.view(), b.view());
+    let (ga, gb) = (va.grid, vb.grid);
+    let origin = Vec2::from(va.scene.origin);
+    let size = Vec2::from(va.scene.size);
+    let dt = va.dt;
+    let (mut recomputed, mut damped) = (0.0, 0);
+    for &n in ga.active {
+        let n = n as usize;
+        if !in_box(&ga, n, origin, size) || ga.mass[n] <= 0.0 {
+            continue;
+        }
+        let da = ga.acceleration[n] - gb.acceleration[n];
+        // v^n, the velocity P2G gave the node, is v^{n+1} - dt a.
+        let v_n = ga.velocity[n] - dt * ga.acceleration[n];
+        // Off the walls (whose nodes keep only the tangential part).
+        let inner = Vec2::repeat(ga.h);
+        if in_box(&ga, n, origin + inner, size - 2.0 * inner) {
+            let want = -c * v_n;
+            assert!(
+                (da - want).norm() <= 1e-9 * want.norm().max(1e-12),
+                "node {n}: {da} vs {want}"
+            );
+            damped += 1;
+        }
+        let half = ga.velocity[n] - 0.5 * dt * ga.acceleration[n];
+        recomputed += dt * ga.mass[n] * da.dot(&half);
+    }
+    assert!(damped > 100, "{damped} nodes damped");
+    assert!(e.work < 0.0, "damping takes energy: {}", e.work);
+    agree("grid_damping", e.work, recomputed, a.energy().total(), 1e-6);
+}
+
+/// A body gliding through an empty box (no gravity, no stress) under
+/// damping c keeps each step's factor 1 - c dt exactly: every particle's
+/// velocity is U prod (1 - c dt_k) to round-off, whatever the transfer.
+#[test]
+fn grid_damping_slows_a_gliding_body_by_one_minus_c_dt_a_step() {
+    let c = 20.0;
+    for transfer in [TransferKind::Flip, TransferKind::Apic, TransferKind::Pic] {
+        let mut method = common::method(ShapeKind::Bspline2, transfer, SchemeKind::Usl);
+        method.remedies.grid_damping = Some(grid_damping::Settings { coefficient: c });
+        let mut scene =
+            common::box_scene([1.0, 1.0], [0.4, 0.4, 0.6, 0.6], Material::tait(1e5), 0.0);
+        scene.bodies[0].velocity = [0.3, -0.1];
+        let mut s = common::solver(scene, method);
+        let mut factor = 1.0;
+        for _ in 0..20 {
+            s.step().unwrap();
+            factor *= 1.0 - c * s.view().dt;
+        }
+        assert!(factor < 0.95, "{transfer:?}: it damped only to {factor}");
+        for v in s.view().v {
+            let want = factor * Vec2::new(0.3, -0.1);
+            assert!((v - want).norm() < 1e-12, "{transfer:?}: {v} vs {want}");
+        }
+    }
 }
 
 /// dt sum_i df_i . v_i^{n+1/2} with df_i = -sum_p d_p grad N_ip, d_p a

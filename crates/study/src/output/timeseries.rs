@@ -295,6 +295,8 @@ pub const COLUMNS: &[Column] = &[
     booked!(9, shifting, injected),
     booked!(10, artificial_viscosity, dissipated),
     booked!(10, artificial_viscosity, injected),
+    booked!(11, grid_damping, dissipated),
+    booked!(11, grid_damping, injected),
     step(
         "packing_error",
         "of the packing",

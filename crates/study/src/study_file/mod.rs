@@ -868,6 +868,8 @@ mod tests {
             ),
             ("{ volume_relaxation = { time = 0.16 } }", "volume_relaxation_time0.16"),
             ("{ min_node_mass = { share = 0.01 } }", "min_node_mass0.01"),
+            ("{ grid_damping = true }", "grid_damping5.0"),
+            ("{ grid_damping = { coefficient = 2 } }", "grid_damping2"),
             ("{ cell_dilatation = true }", "cell_dilatation1.0"),
             ("{ f_reset = true }", "f_reset"),
             ("{ force = \"mls\", f_reset = {} }", "mls-f_reset"),

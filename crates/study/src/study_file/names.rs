@@ -101,13 +101,13 @@ fn remedy_name(d: &Descriptor, v: &Value) -> String {
     let head = |main: Option<&Value>| match d.main {
         Some((setting, default)) => {
             let value = main.cloned().unwrap_or(Value::Float(default));
-            plain_part(d.old_key(setting), &value)
+            plain_part(main_name(d, setting), &value)
         }
         None => plain_part(d.key, &Value::Boolean(true)),
     };
     match v {
         Value::Boolean(false) => match d.main {
-            Some((setting, _)) => plain_part(d.old_key(setting), &Value::Float(0.0)),
+            Some((setting, _)) => plain_part(main_name(d, setting), &Value::Float(0.0)),
             None => plain_part(d.key, &Value::Boolean(false)),
         },
         Value::Table(t) => {
@@ -122,6 +122,15 @@ fn remedy_name(d: &Descriptor, v: &Value) -> String {
             parts.join("-")
         }
         _ => head(None),
+    }
+}
+
+/// The main setting's name in case names: its old flat key, or the
+/// remedy's own key when it never had one (`grid_damping5.0`).
+fn main_name(d: &Descriptor, setting: &str) -> &'static str {
+    match d.old_keys.iter().find(|(s, _)| *s == setting) {
+        Some((_, old)) => old,
+        None => d.key,
     }
 }
 
