@@ -209,7 +209,7 @@ fn damaged_state_is_refused() {
         restore(&reseal(&old)),
         Err(CheckpointError::Format {
             found: "KICKMONA".into(),
-            reads: "KICKMONC".into()
+            reads: "KICKMOND".into()
         })
     );
     old[..8].copy_from_slice(b"NOTKICK!");
