@@ -200,7 +200,10 @@ impl Monitor {
             self.blow_out_event(EventKind::Inversion, Rule::Inversion, v, g, |p| {
                 v.j[p] <= 0.0 || v.deformation[p].determinant() <= 0.0
             });
-            return Some(reason);
+            // Kept inverted particles extend their event while they last.
+            if v.scene.on_inversion != solver::OnLoss::Keep {
+                return Some(reason);
+            }
         }
         if v.n_nonfinite > 0 {
             let reason = format!("non-finite state in {} particles", v.n_nonfinite);

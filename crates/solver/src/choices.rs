@@ -180,6 +180,10 @@ pub enum OnLoss {
     /// The solver deletes it at the end of the step and counts it (Uintah's
     /// behaviour); the run stops once `lost_mass_limit` of the mass is gone.
     Delete,
+    /// `on_inversion` only: the particle stays and its EOS is evaluated at
+    /// its J <= 0 (Uintah's Water model before 2015-08-03, which had no J
+    /// check); the monitor logs an `inversion` event and the run goes on.
+    Keep,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -556,6 +556,11 @@ impl SolverConfig {
         within(s.gravity, 0.0, 1e4, "scene.gravity")?;
         within(s.jitter, 0.0, 1e-3, "scene.jitter")?;
         within(s.lost_mass_limit, 1e-9, 1.0, "scene.lost_mass_limit")?;
+        check(
+            s.on_escape != OnLoss::Keep,
+            "scene.on_escape",
+            "\"keep\" is for on_inversion only (a particle outside the box has no grid); allowed: \"stop\", \"delete\"",
+        )?;
         if let Some(j) = s.max_j {
             within(j, 1.0 + 1e-9, 1e300, "scene.max_j")?;
         }

@@ -19,7 +19,12 @@ fn slam_with(j_update: JUpdate, gamma: f64, on_loss: OnLoss) -> Solver {
     let mut scene = Scene::dam_break(material);
     scene.bodies[0].rect = [0.2, 0.0, 0.4, 0.2];
     scene.bodies[0].velocity = [0.0, -30.0];
-    scene.on_escape = on_loss;
+    // "keep" is for inversions only: an escape then stops the run.
+    scene.on_escape = if on_loss == OnLoss::Keep {
+        OnLoss::Stop
+    } else {
+        on_loss
+    };
     scene.on_inversion = on_loss;
     let method = Method {
         dt_value: Some(3e-3),
@@ -140,4 +145,62 @@ fn under_delete_inverted_and_escaped_particles_are_logged_and_the_run_goes_on() 
         }
         None => assert!(l.mass() <= 0.1 * m.initial_mass(), "{l:?}"),
     }
+}
+
+/// Under `on_inversion = "keep"` (Uintah's Water model before 2015-08-03)
+/// an inverted particle stays with its EOS evaluated at its J (gamma 7: a
+/// finite tension, K (J^-7 - 1)), an `inversion` event is logged, and the
+/// run goes on past the step it inverted at (here to the next, where the
+/// slam's particles leave the box).
+#[test]
+fn under_keep_an_inverted_particle_stays_and_the_run_goes_on() {
+    // A slower slam: particles invert against the floor without leaving the box.
+    let mut cfg = slam_with(JUpdate::Det, 7.0, OnLoss::Keep).config().clone();
+    cfg.scene.bodies[0].velocity = [0.0, -5.0];
+    let mut s = Solver::new(cfg).unwrap();
+    let mut m = common::fresh_monitor(&s);
+    let mut first_inverted = None;
+    let mut steps_after = 0;
+    for _ in 0..50 {
+        s.step().unwrap();
+        let v = s.view();
+        let r = m.observe(&v);
+        if let Some(p) = v.j.iter().position(|j| *j <= 0.0) {
+            let material = &v.materials[0];
+            let want = material.pressure(v.j[p]);
+            assert!(want.is_finite() && want < 0.0, "J {}: p {want}", v.j[p]);
+            assert_eq!(
+                v.pressure[p].to_bits(),
+                want.to_bits(),
+                "the EOS at J {}",
+                v.j[p]
+            );
+            first_inverted.get_or_insert(v.step);
+        }
+        if first_inverted.is_some_and(|f| v.step > f) {
+            steps_after += 1;
+        }
+        if let Some(reason) = &r.blow_out {
+            // What stops it is what the kept particle did, not the inversion.
+            assert!(!reason.contains("inversion"), "{reason}");
+            break;
+        }
+    }
+    assert!(first_inverted.is_some(), "the slam inverts a particle");
+    assert!(steps_after >= 1, "the run went on after the inversion");
+    let e = m
+        .events()
+        .iter()
+        .find(|e| e.kind == EventKind::Inversion)
+        .expect("an inversion event");
+    assert_eq!(e.cause, monitor::Cause::Inversion);
+    assert!(!e.particles.is_empty());
+}
+
+#[test]
+fn keep_is_refused_for_particles_that_leave_the_box() {
+    let mut s = slam(JUpdate::Det, 7.0).config().clone();
+    s.scene.on_escape = OnLoss::Keep;
+    let err = Solver::new(s).err().expect("refused");
+    assert_eq!(err.key, "scene.on_escape");
 }
