@@ -15,8 +15,8 @@ use solver::checkpoint::{decode, encode, unseal, CheckpointError, Reader, Writer
 // codec (solver::checkpoint::encode), where bincode wrote them.
 // C (12): the velocity-jump rule and the energy ledger (booked terms by
 // their net over the window, gravity's stepping term booked).
-// D (13): a twelfth remedy (grid-velocity damping) lengthens the
-// per-remedy booking.
+// D (13): two more remedies (grid-velocity damping, the speed cap)
+// lengthen the per-remedy booking.
 const MAGIC: &[u8; 8] = b"KICKMOND";
 
 fn encode_events(events: &[Event]) -> Vec<u8> {

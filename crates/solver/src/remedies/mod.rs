@@ -37,6 +37,7 @@ registry::registry! {
     shifting,
     artificial_viscosity,
     grid_damping,
+    speed_cap,
 }
 
 /// The energy a hook changed in the step it acted on (J per metre of

@@ -11,8 +11,8 @@ use crate::common;
 
 use solver::remedies::{
     artificial_viscosity, bulk_damping, cell_dilatation, f_reset, grid_damping, j_bar,
-    min_node_mass, null_space_filter, pic_damping, pressure_smoothing, shifting, volume_relaxation,
-    RemedySettings,
+    min_node_mass, null_space_filter, pic_damping, pressure_smoothing, shifting, speed_cap,
+    volume_relaxation, RemedySettings,
 };
 use solver::shapes::Shape;
 use solver::*;
@@ -393,6 +393,38 @@ fn grid_damping_takes_c_v_from_every_node_and_reports_its_work() {
     assert!(damped > 100, "{damped} nodes damped");
     assert!(e.work < 0.0, "damping takes energy: {}", e.work);
     agree("grid_damping", e.work, recomputed, a.energy().total(), 1e-6);
+}
+
+/// The speed cap slows every particle faster than the cap to the cap,
+/// along its own direction, touches no other, and reports the kinetic
+/// energy it took.
+#[test]
+fn speed_cap_slows_the_fast_particles_to_the_cap_and_reports_their_energy() {
+    let cap = 0.08;
+    let on = with(|r| r.speed_cap = Some(speed_cap::Settings { speed: cap }));
+    let (mut a, mut b) = pair_noisy(on.clone(), on, base(), 0.1);
+    a.step().unwrap();
+    b.step().unwrap();
+    let e = reported(&a, "speed_cap");
+    assert_eq!((e.stored, e.gravitational, e.work), (0.0, 0.0, 0.0));
+    let (va, vb) = (a.view(), b.view());
+    let (mut recomputed, mut capped) = (0.0, 0);
+    for p in 0..va.v.len() {
+        let (with, without) = (va.v[p], vb.v[p]);
+        assert_eq!(va.x[p], vb.x[p], "positions are G2P's");
+        if without.norm() > cap {
+            capped += 1;
+            assert!(
+                (with - without * (cap / without.norm())).norm() < 1e-15,
+                "{with} {without}"
+            );
+            recomputed += 0.5 * va.mass[p] * (with.norm_squared() - without.norm_squared());
+        } else {
+            assert_eq!(with, without);
+        }
+    }
+    assert!(capped > 10, "{capped} capped");
+    agree("speed_cap", e.kinetic, recomputed, a.energy().total(), 1e-6);
 }
 
 /// A body gliding through an empty box (no gravity, no stress) under

@@ -297,6 +297,8 @@ pub const COLUMNS: &[Column] = &[
     booked!(10, artificial_viscosity, injected),
     booked!(11, grid_damping, dissipated),
     booked!(11, grid_damping, injected),
+    booked!(12, speed_cap, dissipated),
+    booked!(12, speed_cap, injected),
     step(
         "packing_error",
         "of the packing",
