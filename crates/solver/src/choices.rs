@@ -160,6 +160,27 @@ pub enum QuadratureKind {
     Mixed,
 }
 
+/// What the walls do with the material images beyond them (wide shapes
+/// put weight on the ghost nodes outside the box).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WallGhosts {
+    /// Mirror walls: a ghost node's mass, momentum and force are folded
+    /// (mirrored) onto its partner inside the box.
+    #[default]
+    Fold,
+    /// Uintah's symmetry condition: what the particles put on a ghost node
+    /// is discarded, and the ghost is overwritten with its partner's mirror
+    /// image (MPMBoundCond.cc). Linear shapes never reach a ghost.
+    Overwrite,
+}
+
+impl WallGhosts {
+    pub fn is_fold(&self) -> bool {
+        *self == WallGhosts::Fold
+    }
+}
+
 /// A wall of the box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]

@@ -113,6 +113,10 @@ pub struct Scene {
     /// Walls with zero tangential grid velocity (the others are free-slip
     /// symmetry planes), e.g. `no_slip = ["floor"]`.
     pub no_slip: Vec<Wall>,
+    /// The ghost nodes beyond a wall: folded onto their partners, or
+    /// discarded and overwritten (Uintah).
+    #[serde(skip_serializing_if = "WallGhosts::is_fold")]
+    pub wall_ghosts: WallGhosts,
     #[serde(rename = "body")]
     pub bodies: Vec<Body>,
     /// Filled from the study's `[materials]` tables, in file order.
@@ -139,6 +143,7 @@ impl Default for Scene {
             lost_mass_limit: 0.1,
             max_j: None,
             no_slip: vec![],
+            wall_ghosts: WallGhosts::Fold,
             bodies: vec![],
             materials: vec![],
         }
@@ -740,6 +745,12 @@ impl SolverConfig {
             return Err(needs(
                 "method.quadrature",
                 "integrates its pressure on the cells: use \"particles\"",
+            ));
+        }
+        if s.wall_ghosts != WallGhosts::Fold {
+            return Err(needs(
+                "scene.wall_ghosts",
+                "folds its walls' images (its operator is built on them): use \"fold\"",
             ));
         }
         if m.force != ForceKind::Gradient {

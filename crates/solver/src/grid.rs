@@ -99,6 +99,8 @@ pub struct Grid {
     roles: [Vec<NodeRole>; 2],
     /// No-slip walls, [axis][low side, high side].
     no_slip: [[bool; 2]; 2],
+    /// Wall ghosts discarded and overwritten, not folded (`WallGhosts`).
+    overwrite_ghosts: bool,
     /// Open sides, [axis][low side, high side]: no wall there; the nodes on
     /// and beyond the box edge are plain nodes and particles may leave.
     pub open: [[bool; 2]; 2],
@@ -137,6 +139,7 @@ impl Grid {
             fill_ops: [dims[1], dims[0]].map(|d| Vec::with_capacity(2 * (PAD + 1) * d)),
             roles,
             no_slip: [[false; 2]; 2],
+            overwrite_ghosts: false,
             open,
             weight_images: [vec![Vec2::zeros(); n], vec![Vec2::zeros(); n]],
         }
@@ -152,6 +155,13 @@ impl Grid {
 
     /// Makes the walls marked [axis][low, high] no-slip (zero tangential
     /// velocity as well as normal): their images reverse every component.
+    /// Wall ghosts folded onto their partners, or (Uintah) discarded and
+    /// overwritten with their partners' images; periodic ghosts always wrap.
+    pub fn with_wall_ghosts(mut self, ghosts: crate::choices::WallGhosts) -> Self {
+        self.overwrite_ghosts = ghosts == crate::choices::WallGhosts::Overwrite;
+        self
+    }
+
     pub fn with_no_slip(mut self, no_slip: [[bool; 2]; 2]) -> Self {
         self.no_slip = no_slip;
         self
@@ -376,7 +386,9 @@ impl Grid {
                                 NodeRole::Interior => {}
                                 NodeRole::Wall => self.fold_ops[axis].push(op(n as u32, true)),
                                 NodeRole::Ghost { partner, flip } => {
-                                    self.fold_ops[axis].push(op(other(partner), flip))
+                                    if !(self.overwrite_ghosts && !self.periodic[axis]) {
+                                        self.fold_ops[axis].push(op(other(partner), flip))
+                                    }
                                 }
                             }
                         }

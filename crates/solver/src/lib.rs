@@ -203,7 +203,8 @@ impl Solver {
         let perturbations = cfg.perturb.len();
         let s = &cfg.scene;
         let grid = Grid::new(Vec2::from(s.origin), s.cell, s.cells(), s.periodic)
-            .with_no_slip(s.no_slip_mask());
+            .with_no_slip(s.no_slip_mask())
+            .with_wall_ghosts(s.wall_ghosts);
         let n = particles.len();
         let chunks = par::chunk_count(n);
         let cull_rules = CullRules::of(s, cfg.method.j_update, [[false; 2]; 2]);

@@ -167,3 +167,71 @@ fn a_particle_past_max_j_is_deleted() {
         assert!(s.view().j.iter().all(|j| j.is_finite()));
     }
 }
+
+/// Uintah's symmetry walls (`scene.wall_ghosts = "overwrite"`): what a
+/// uGIMP particle near a wall puts on a ghost node is discarded, so no
+/// in-box node off the walls holds more than its own particles' mass,
+/// where the fold adds the ghosts' share to their partners. Linear shapes
+/// never reach a ghost: their runs are the folded ones bit for bit. (The
+/// column is pushed into the left wall, so that its particles crowd within
+/// a quarter cell of it, where uGIMP reaches the ghost.)
+#[test]
+fn overwritten_wall_ghosts_discard_the_images_and_leave_linear_runs_unchanged() {
+    let run = |shape: ShapeKind, ghosts: WallGhosts| {
+        let mut m = uintah_method();
+        m.shape = shape;
+        let mut s = column(m, [-1.0, 0.0]);
+        let mut cfg = s.config().clone();
+        cfg.scene.wall_ghosts = ghosts;
+        s = Solver::new(cfg).unwrap();
+        for _ in 0..20 {
+            s.step().unwrap();
+        }
+        s
+    };
+    let (fold, overwrite) = (
+        run(ShapeKind::Linear, WallGhosts::Fold),
+        run(ShapeKind::Linear, WallGhosts::Overwrite),
+    );
+    assert_eq!(fold.state_hash(), overwrite.state_hash());
+    // Off the walls, the share the fold added: (largest, nodes that gained).
+    let gained = |s: &Solver| -> (f64, usize) {
+        let v = s.view();
+        let g = v.grid;
+        let (origin, size) = (Vec2::from(v.scene.origin), Vec2::from(v.scene.size));
+        let mut out = (0.0f64, 0);
+        for &n in g.active {
+            let n = n as usize;
+            let x =
+                g.padded_origin + g.h * Vec2::new((n % g.dims[0]) as f64, (n / g.dims[0]) as f64);
+            let inside = (0..2)
+                .all(|k| x[k] > origin[k] + 0.5 * g.h && x[k] < origin[k] + size[k] - 0.5 * g.h);
+            if inside && g.mass[n] != g.mass_raw[n] {
+                out = (
+                    out.0.max((g.mass[n] - g.mass_raw[n]) / g.mass_raw[n]),
+                    out.1 + 1,
+                );
+            }
+        }
+        out
+    };
+    let folded = gained(&run(ShapeKind::Gimp, WallGhosts::Fold));
+    assert!(
+        folded.1 > 5 && folded.0 > 1e-4,
+        "the fold adds the ghosts' share: {folded:?}"
+    );
+    assert_eq!(
+        gained(&run(ShapeKind::Gimp, WallGhosts::Overwrite)),
+        (0.0, 0)
+    );
+}
+
+#[test]
+fn overwritten_wall_ghosts_are_refused_under_the_pressure_implicit_formulation() {
+    let mut cfg = column(uintah_method(), [0.0, 0.0]).config().clone();
+    cfg.scene.wall_ghosts = WallGhosts::Overwrite;
+    cfg.method.formulation = Formulation::PressureImplicit;
+    cfg.method.dt = DtMode::Dynamic;
+    let err = Solver::new(cfg).err().expect("refused");
+    assert_eq!(err.key, "scene.wall_ghosts", "{err}");
+}
