@@ -562,6 +562,12 @@ impl SolverConfig {
         within(s.jitter, 0.0, 1e-3, "scene.jitter")?;
         within(s.lost_mass_limit, 1e-9, 1.0, "scene.lost_mass_limit")?;
         check(
+            s.wall_ghosts == WallGhosts::Fold
+                || self.method.formulation != Formulation::PressureImplicit,
+            "scene.wall_ghosts",
+            "method.formulation = \"pressure_implicit\" folds its walls' images (its operator is built on them): use \"fold\"",
+        )?;
+        check(
             s.on_escape != OnLoss::Keep,
             "scene.on_escape",
             "\"keep\" is for on_inversion only (a particle outside the box has no grid); allowed: \"stop\", \"delete\"",
@@ -745,12 +751,6 @@ impl SolverConfig {
             return Err(needs(
                 "method.quadrature",
                 "integrates its pressure on the cells: use \"particles\"",
-            ));
-        }
-        if s.wall_ghosts != WallGhosts::Fold {
-            return Err(needs(
-                "scene.wall_ghosts",
-                "folds its walls' images (its operator is built on them): use \"fold\"",
             ));
         }
         if m.force != ForceKind::Gradient {

@@ -386,7 +386,8 @@ impl Grid {
                                 NodeRole::Interior => {}
                                 NodeRole::Wall => self.fold_ops[axis].push(op(n as u32, true)),
                                 NodeRole::Ghost { partner, flip } => {
-                                    if !(self.overwrite_ghosts && !self.periodic[axis]) {
+                                    // Periodic ghosts always wrap.
+                                    if !self.overwrite_ghosts || self.periodic[axis] {
                                         self.fold_ops[axis].push(op(other(partner), flip))
                                     }
                                 }
