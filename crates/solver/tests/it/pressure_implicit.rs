@@ -697,3 +697,50 @@ fn what_it_cannot_solve_is_refused_by_key() {
         Some("method.formulation")
     );
 }
+
+/// The mode that grows from round-off in a resting column with linear
+/// shapes and FLIP (docs/findings/pressure_implicit.md, "A resting
+/// column"): within each cell the two columns of particles move vertically
+/// against each other (v_y odd in x about the cell's centre line). Smooth
+/// across cells it is in the null space of linear P2G with 2 x 2
+/// particles per cell (a node takes +a from one cell's left column and -a
+/// from the next cell's right column at the same weight), so the grid
+/// neither sees nor damps it. It grows by about 1.024 a step, from 4e-13
+/// m/s at step 200 to 7e-5 m/s at step 1000; the hourglass control slows
+/// it (1.031 a step without it) and the drift and checkerboard controls
+/// leave it.
+#[test]
+fn the_linear_flip_column_grows_an_intra_cell_vertical_shear() {
+    let mut s = column(
+        incompressible(),
+        implicit(ShapeKind::Linear, TransferKind::Flip),
+    );
+    // Per cell: sum over its particles of sign(x - cell centre) v.
+    let odd_in_x = |s: &Solver| -> (f64, f64, f64) {
+        let v = s.view();
+        let mut cells = std::collections::BTreeMap::<(i64, i64), Vec2>::new();
+        for (x, u) in v.x.iter().zip(v.v) {
+            let (i, j) = ((x.x / H).floor(), (x.y / H).floor());
+            let side = if x.x / H - i > 0.5 { 1.0 } else { -1.0 };
+            *cells.entry((i as i64, j as i64)).or_insert(Vec2::zeros()) += side * u;
+        }
+        let largest = |k: usize| cells.values().map(|a| a[k].abs() / 4.0).fold(0.0, f64::max);
+        let speed = v.v.iter().map(|u| u.norm()).fold(0.0, f64::max);
+        (speed, largest(0), largest(1))
+    };
+    let mut speeds = vec![];
+    for step in 1..=1000 {
+        s.step().unwrap();
+        if step % 200 == 0 {
+            speeds.push(odd_in_x(&s).0);
+        }
+    }
+    let (speed, odd_vx, odd_vy) = odd_in_x(&s);
+    assert!((1e-6..1e-3).contains(&speed), "speed {speed} m/s");
+    assert!(
+        odd_vy > 0.5 * speed && odd_vy > 5.0 * odd_vx,
+        "{speed} {odd_vx} {odd_vy}"
+    );
+    let rate = (speeds[4] / speeds[1]).powf(1.0 / 600.0);
+    assert!((1.015..1.035).contains(&rate), "{rate} a step: {speeds:?}");
+}
