@@ -707,7 +707,7 @@ fn what_it_cannot_solve_is_refused_by_key() {
 /// from the next cell's right column at the same weight), so the grid
 /// neither sees nor damps it. It grows by about 1.024 a step, from 4e-13
 /// m/s at step 200 to 7e-5 m/s at step 1000; the hourglass control slows
-/// it (1.031 a step without it) and the drift and checkerboard controls
+/// it (1.030 a step without it) and the drift and checkerboard controls
 /// leave it.
 #[test]
 fn the_linear_flip_column_grows_an_intra_cell_vertical_shear() {
