@@ -7,11 +7,15 @@
 //! the time step does not see it, as in Uintah.
 //!
 //! Energy: its work, dt sum_i m_i (-c v_i^n) . (v_i^n + v_i^{n+1}) / 2 over
-//! the inside nodes (never positive while c dt < 2).
+//! every active node with its own P2G mass (the ghosts' images included,
+//! as the grid's kinetic energy is measured; a wall node's folded mass
+//! counts its image twice): never positive while c dt < 2. Nodes the
+//! minimum nodal mass guard holds are damped too.
 
 use super::Check;
 use super::{Descriptor, EnergyChange, GridStep, Remedy, Setup};
 use crate::config_error::ConfigError;
+use crate::particles::Vec2;
 use serde::{Deserialize, Serialize};
 
 pub static DESCRIPTOR: Descriptor = Descriptor {
@@ -40,9 +44,11 @@ impl super::Settings for Settings {
     fn validate(&self, _cfg: &Check) -> Result<(), ConfigError> {
         super::positive_up_to(self.coefficient, 1e4, "method.grid_damping.coefficient")
     }
-    fn build(&self, _setup: &Setup) -> Box<dyn Remedy> {
+    fn build(&self, setup: &Setup) -> Box<dyn Remedy> {
+        let g = setup.grid;
         Box::new(GridDamping {
             rate: self.coefficient,
+            damping: vec![Vec2::zeros(); g.dims[0] * g.dims[1]],
         })
     }
 }
@@ -51,6 +57,8 @@ impl super::Settings for Settings {
 struct GridDamping {
     /// c (1/s).
     rate: f64,
+    /// Per padded node: this step's damping acceleration (ghosts filled).
+    damping: Vec<Vec2>,
 }
 
 impl Remedy for GridDamping {
@@ -60,21 +68,27 @@ impl Remedy for GridDamping {
 
     fn after_grid_update(&mut self, g: &mut GridStep) -> EnergyChange {
         let grid = &mut *g.grid;
-        let mut work = 0.0;
+        // A ghost may be filled from a partner outside this step's list.
+        self.damping.fill(Vec2::zeros());
         for k in 0..grid.inside.len() {
             let n = grid.inside[k] as usize;
-            let m = grid.mass[n];
-            if m <= 0.0 {
-                continue;
-            }
-            let a = grid.project_walls(n, -self.rate * grid.vel[n]);
-            let v_new = grid.vel_new[n] + a * g.dt;
-            let half = 0.5 * (grid.vel[n] + v_new);
-            work += g.dt * m * a.dot(&half);
+            let a = if grid.mass[n] > 0.0 {
+                grid.project_walls(n, -self.rate * grid.vel[n])
+            } else {
+                Vec2::zeros()
+            };
+            self.damping[n] = a;
             grid.accel[n] += a;
-            grid.vel_new[n] = v_new;
+            grid.vel_new[n] += a * g.dt;
         }
         grid.fill_vel_new(true);
+        grid.fill(&mut self.damping);
+        let mut work = 0.0;
+        for &n in &grid.active {
+            let n = n as usize;
+            let half = 0.5 * (grid.vel[n] + grid.vel_new[n]);
+            work += g.dt * grid.mass_raw[n] * self.damping[n].dot(&half);
+        }
         EnergyChange {
             work,
             ..EnergyChange::default()
