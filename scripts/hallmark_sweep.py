@@ -73,7 +73,8 @@ def loosest(rows, cfg):
     the deformed rate."""
     q, r, d = reapply(rows, FACTORS[-1], FACTORS[0] * cfg["quiet_seconds"],
                       FACTORS[0] * cfg["deformed_rate"], cfg["distortion_ratio"])
-    spells = sorted(x["quiet_for"] for x in rows if abs(x["speed_factor"] - FACTORS[-1]) < 1e-9)
+    spells = sorted(x["quiet_for"] for x in rows
+                    if abs(x["speed_factor"] - FACTORS[-1]) < 1e-9 and not math.isnan(x["quiet_for"]))
     return q, r, d, spells[len(spells) // 2] if spells else math.nan
 
 
@@ -82,7 +83,7 @@ def print_loosest(near):
     if not near:
         return
     quiet = [n for n in near if n[0] >= 0.5]
-    spells = sorted(n[3] for n in near)
+    spells = sorted(n[3] for n in near if not math.isnan(n[3])) or [math.nan]
     print()
     print(f"At the loosest setting (quiet speed x 3, quiet seconds x 1/3, deformed rate x 1/3): "
           f"{len(quiet)} of {len(near)} kicks had half their particles quiet; of those, "

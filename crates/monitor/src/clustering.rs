@@ -298,7 +298,7 @@ impl Monitor {
         kind: EventKind,
         rule: Rule,
         v: &StateView,
-        g: f64,
+        (g, stops): (f64, bool),
         bad: impl Fn(usize) -> bool,
     ) {
         self.fill_accel(v);
@@ -316,7 +316,11 @@ impl Monitor {
             }
         }
         let Some(cells) = cells else { return };
-        let k = self.attach(kind, Cluster::new(cells, rule.into(), peak), v, g, true);
+        let k = self.attach(kind, Cluster::new(cells, rule.into(), peak), v, g, stops);
+        // An event that does not stop the run obeys `max_events`.
+        if k == usize::MAX {
+            return;
+        }
         let cap = self.cfg.max_event_ids;
         let e = &mut self.events[k];
         e.n_particles = e.n_particles.max(count);

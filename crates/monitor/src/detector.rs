@@ -197,17 +197,18 @@ impl Monitor {
                 "inversion: smallest J {:.3e}, smallest det F {:.3e}",
                 scan.j_min, scan.det_min
             );
-            self.blow_out_event(EventKind::Inversion, Rule::Inversion, v, g, |p| {
+            // Kept inverted particles extend their event while they last.
+            let stops = v.scene.on_inversion != solver::OnLoss::Keep;
+            self.blow_out_event(EventKind::Inversion, Rule::Inversion, v, (g, stops), |p| {
                 v.j[p] <= 0.0 || v.deformation[p].determinant() <= 0.0
             });
-            // Kept inverted particles extend their event while they last.
-            if v.scene.on_inversion != solver::OnLoss::Keep {
+            if stops {
                 return Some(reason);
             }
         }
         if v.n_nonfinite > 0 {
             let reason = format!("non-finite state in {} particles", v.n_nonfinite);
-            self.blow_out_event(EventKind::NonFinite, Rule::NonFinite, v, g, |p| {
+            self.blow_out_event(EventKind::NonFinite, Rule::NonFinite, v, (g, true), |p| {
                 let (x, vel) = (v.x[p], v.v[p]);
                 !(x.x.is_finite() && x.y.is_finite() && vel.x.is_finite() && vel.y.is_finite())
             });
@@ -216,7 +217,7 @@ impl Monitor {
         // A non-finite total with finite particles (e.g. U(J) at J -> 0) is not dropped by a min.
         if !v.energy.total().is_finite() {
             let reason = format!("non-finite total energy {}", v.energy.total());
-            self.blow_out_event(EventKind::NonFinite, Rule::NonFinite, v, g, |p| {
+            self.blow_out_event(EventKind::NonFinite, Rule::NonFinite, v, (g, true), |p| {
                 !v.j[p].is_finite() || v.j[p] <= 0.0
             });
             return Some(reason);
@@ -224,7 +225,7 @@ impl Monitor {
         if v.n_outside > 0 {
             let reason = format!("{} particles left the box", v.n_outside);
             let (lo, hi) = (self.geom.origin, self.geom.origin + self.geom.size);
-            self.blow_out_event(EventKind::BlowOut, Rule::OutsideBox, v, g, |p| {
+            self.blow_out_event(EventKind::BlowOut, Rule::OutsideBox, v, (g, true), |p| {
                 let x = v.x[p];
                 x.x < lo.x || x.y < lo.y || x.x > hi.x || x.y > hi.y
             });
@@ -247,7 +248,7 @@ impl Monitor {
             let reason = format!(
                 "a particle reached {max_speed:.3} m/s, beyond the escape speed {escape:.3} m/s"
             );
-            self.blow_out_event(EventKind::BlowOut, Rule::EscapeSpeed, v, g, |p| {
+            self.blow_out_event(EventKind::BlowOut, Rule::EscapeSpeed, v, (g, true), |p| {
                 v.v[p].norm() > escape
             });
             return Some(reason);

@@ -153,8 +153,6 @@ impl Grid {
         self.open = open;
     }
 
-    /// Makes the walls marked [axis][low, high] no-slip (zero tangential
-    /// velocity as well as normal): their images reverse every component.
     /// Wall ghosts folded onto their partners, or (Uintah) discarded and
     /// overwritten with their partners' images; periodic ghosts always wrap.
     pub fn with_wall_ghosts(mut self, ghosts: crate::choices::WallGhosts) -> Self {
@@ -162,6 +160,8 @@ impl Grid {
         self
     }
 
+    /// Makes the walls marked [axis][low, high] no-slip (zero tangential
+    /// velocity as well as normal): their images reverse every component.
     pub fn with_no_slip(mut self, no_slip: [[bool; 2]; 2]) -> Self {
         self.no_slip = no_slip;
         self

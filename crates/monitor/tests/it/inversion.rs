@@ -154,7 +154,8 @@ fn under_delete_inverted_and_escaped_particles_are_logged_and_the_run_goes_on() 
 /// slam's particles leave the box).
 #[test]
 fn under_keep_an_inverted_particle_stays_and_the_run_goes_on() {
-    // A slower slam: particles invert against the floor without leaving the box.
+    // A slower slam: a particle inverts against the floor at the first
+    // step, before any leaves the box.
     let mut cfg = slam_with(JUpdate::Det, 7.0, OnLoss::Keep).config().clone();
     cfg.scene.bodies[0].velocity = [0.0, -5.0];
     let mut s = Solver::new(cfg).unwrap();
