@@ -11,7 +11,7 @@ export RUSTFLAGS ?= -Ctarget-cpu=x86-64
 endif
 endif
 
-.PHONY: run test build matrix bench fmt clean browser slurm-check
+.PHONY: run test build matrix bench fmt clean browser slurm-check findings-check
 
 # The report's browser test needs Debian's chromium; install it when we can
 # (root with apt). Without it the test fails, unless KICK_SKIP_BROWSER=1.
@@ -35,6 +35,11 @@ test: browser
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
 	$(CARGO) test --workspace
+
+# Reruns a fixed sample of the findings' headline figures at 2 jobs and
+# compares them with docs/findings/data/findings_check.json.
+findings-check: build
+	python3 scripts/findings_check.py --kick $(or $(CARGO_TARGET_DIR),target)/release/kick
 
 matrix: build
 	$(KICK) matrix studies/bug_report.toml --out $(OUT)/bug_report --resume $(MATRIX_ARGS)
