@@ -23,6 +23,7 @@ Standard library only.
 """
 import argparse
 import json
+import math
 import os
 import re
 import shutil
@@ -209,7 +210,8 @@ def differences(want, got, where=""):
         return out
     if isinstance(want, list) and isinstance(got, list) and len(want) == len(got):
         return [d for i, (a, b) in enumerate(zip(want, got)) for d in differences(a, b, f"{where}{i}.")]
-    return [] if want == got else [f"{where.rstrip('.')}: recorded {want!r}, now {got!r}"]
+    same_nan = isinstance(want, float) and isinstance(got, float) and math.isnan(want) and math.isnan(got)
+    return [] if want == got or same_nan else [f"{where.rstrip('.')}: recorded {want!r}, now {got!r}"]
 
 
 def commit():
