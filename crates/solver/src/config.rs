@@ -113,6 +113,12 @@ pub struct Scene {
     /// Walls with zero tangential grid velocity (the others are free-slip
     /// symmetry planes), e.g. `no_slip = ["floor"]`.
     pub no_slip: Vec<Wall>,
+    /// The thickness dz (m) of the one-cell slab a 3D code such as Uintah
+    /// runs this plane-strain scene in: its z axis joins the per-axis step
+    /// (CFL dz / max c) and Uintah's artificial viscosity's length
+    /// (2 h + dz) / 3. None: no z axis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slab: Option<f64>,
     /// The ghost nodes beyond a wall: folded onto their partners, or
     /// discarded and overwritten (Uintah).
     #[serde(skip_serializing_if = "WallGhosts::is_fold")]
@@ -143,6 +149,7 @@ impl Default for Scene {
             lost_mass_limit: 0.1,
             max_j: None,
             no_slip: vec![],
+            slab: None,
             wall_ghosts: WallGhosts::Fold,
             bodies: vec![],
             materials: vec![],
@@ -442,6 +449,7 @@ impl SolverConfig {
             particles,
             ppc: self.scene.ppc,
             rho0: self.first_rho0(),
+            slab: self.scene.slab,
         };
         crate::remedies::Remedies::build(&self.method.remedies, &setup)
     }
@@ -572,6 +580,9 @@ impl SolverConfig {
             "scene.on_escape",
             "\"keep\" is for on_inversion only (a particle outside the box has no grid); allowed: \"stop\", \"delete\"",
         )?;
+        if let Some(dz) = s.slab {
+            within(dz, 1e-6, 10.0, "scene.slab")?;
+        }
         if let Some(j) = s.max_j {
             within(j, 1.0 + 1e-9, 1e300, "scene.max_j")?;
         }

@@ -134,6 +134,8 @@ pub struct Solver {
     signal_speed: f64,
     /// Uintah's per-axis signal speed for the next step (`DtMode::PerAxis`).
     axis_signal_speed: f64,
+    /// max_p c_p for the next step: a slab's z axis (`scene.slab`).
+    z_signal_speed: f64,
     ke_particles_p2g: f64,
     ke_grid_p2g: f64,
     ke_grid_updated: f64,
@@ -227,6 +229,7 @@ impl Solver {
             courant: 0.0,
             signal_speed: 0.0,
             axis_signal_speed: 0.0,
+            z_signal_speed: 0.0,
             ke_particles_p2g: 0.0,
             times: StageTimes::default(),
             ke_grid_p2g: 0.0,
@@ -365,11 +368,14 @@ impl Solver {
                 m.viscosity / m.rho0,
             );
         }
-        let speed = match self.cfg.method.dt {
-            DtMode::PerAxis => self.axis_signal_speed,
-            DtMode::Fixed | DtMode::Dynamic => self.signal_speed,
-        };
-        timestep::cfl_step(self.cfg.method.cfl, self.cfg.scene.cell, speed)
+        let (cfl, h) = (self.cfg.method.cfl, self.cfg.scene.cell);
+        match (self.cfg.method.dt, self.cfg.scene.slab) {
+            // Uintah's step takes the least over the axes, z included.
+            (DtMode::PerAxis, Some(dz)) => timestep::cfl_step(cfl, h, self.axis_signal_speed)
+                .min(timestep::cfl_step(cfl, dz, self.z_signal_speed)),
+            (DtMode::PerAxis, None) => timestep::cfl_step(cfl, h, self.axis_signal_speed),
+            (DtMode::Fixed | DtMode::Dynamic, _) => timestep::cfl_step(cfl, h, self.signal_speed),
+        }
     }
 
     pub fn config(&self) -> &SolverConfig {
@@ -770,17 +776,28 @@ impl Solver {
         self.n_outside = m.n_outside;
         self.n_nonfinite = m.n_nonfinite;
         self.signal_speed = m.signal_speed;
-        self.set_axis_signal_speed(m.axis_signal_speed);
+        self.set_axis_signal_speed(m.axis_signal_speed, m.wave_speed);
     }
 
     /// The per-axis signal speed for the next step: `measured` after a
     /// step, Uintah's initial one before the first.
-    fn set_axis_signal_speed(&mut self, measured: f64) {
-        self.axis_signal_speed = if self.step == 0 {
-            self.initial_axis_signal_speed()
+    fn set_axis_signal_speed(&mut self, measured: f64, wave_speed: f64) {
+        (self.axis_signal_speed, self.z_signal_speed) = if self.step == 0 {
+            (self.initial_axis_signal_speed(), self.initial_wave_speed())
         } else {
-            measured
+            (measured, wave_speed)
         };
+    }
+
+    /// Uintah's first step along z: the largest sqrt(K / rho0).
+    fn initial_wave_speed(&self) -> f64 {
+        let (ps, materials) = (&self.particles, &self.cfg.scene.materials);
+        (0..ps.len())
+            .map(|p| {
+                let m = &materials[ps.material[p] as usize];
+                (m.k / m.rho0).sqrt()
+            })
+            .fold(0.0, f64::max)
     }
 
     /// Uintah's first step: c = sqrt(K / rho0) of each particle's material
@@ -810,7 +827,8 @@ impl Solver {
     /// Recomputes the signal speed after velocities were changed outside a step.
     fn refresh_signal_speed(&mut self) {
         self.signal_speed = timestep::max_signal_speed(&self.particles);
-        self.set_axis_signal_speed(timestep::max_axis_signal_speed(&self.particles));
+        let wave = par::max(self.particles.len(), |p| self.particles.wave_speed[p]);
+        self.set_axis_signal_speed(timestep::max_axis_signal_speed(&self.particles), wave);
     }
 
     /// Adds the perturbations due in the step being taken (after G2P),

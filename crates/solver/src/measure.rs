@@ -18,6 +18,7 @@ pub struct Partial {
     nonfinite: usize,
     signal_speed: f64,
     axis_signal_speed: f64,
+    wave_speed: f64,
 }
 
 pub struct Measured {
@@ -28,6 +29,8 @@ pub struct Measured {
     /// max_p(c_p + the largest |component| of the step-start velocity):
     /// Uintah's per-axis signal speed (`DtMode::PerAxis`).
     pub axis_signal_speed: f64,
+    /// max_p c_p: the signal speed along a slab's z axis (`scene.slab`).
+    pub wave_speed: f64,
 }
 
 /// The box walls a particle may not cross (periodic axes excepted).
@@ -67,6 +70,7 @@ pub fn measure(
         acc.axis_signal_speed = acc
             .axis_signal_speed
             .max(crate::timestep::axis_signal_speed_of(ps, p));
+        acc.wave_speed = acc.wave_speed.max(ps.wave_speed[p]);
     };
     let combine = |total: &mut Partial, part: &Partial| {
         total.kinetic += part.kinetic;
@@ -77,10 +81,12 @@ pub fn measure(
         total.nonfinite += part.nonfinite;
         total.signal_speed = total.signal_speed.max(part.signal_speed);
         total.axis_signal_speed = total.axis_signal_speed.max(part.axis_signal_speed);
+        total.wave_speed = total.wave_speed.max(part.wave_speed);
     };
     let init = Partial {
         signal_speed: f64::NEG_INFINITY,
         axis_signal_speed: f64::NEG_INFINITY,
+        wave_speed: f64::NEG_INFINITY,
         ..Partial::default()
     };
     let total = par::fold(ps.len(), partials, init, item, combine);
@@ -96,5 +102,6 @@ pub fn measure(
         n_nonfinite: total.nonfinite,
         signal_speed: total.signal_speed,
         axis_signal_speed: total.axis_signal_speed,
+        wave_speed: total.wave_speed,
     }
 }

@@ -52,10 +52,12 @@ impl super::Settings for Settings {
             "method.artificial_viscosity.quadratic",
         )
     }
-    fn build(&self, _setup: &Setup) -> Box<dyn Remedy> {
+    fn build(&self, setup: &Setup) -> Box<dyn Remedy> {
+        let h = setup.grid.h;
         Box::new(ArtificialViscosity {
             linear: self.linear,
             quadratic: self.quadratic,
+            length: setup.slab.map(|dz| (2.0 * h + dz) / 3.0),
         })
     }
 }
@@ -64,6 +66,9 @@ impl super::Settings for Settings {
 struct ArtificialViscosity {
     linear: f64,
     quadratic: f64,
+    /// Uintah's mean cell size (dx + dy + dz) / 3 when the scene has a
+    /// slab (`scene.slab`); else the cell h.
+    length: Option<f64>,
 }
 
 /// q for a material at J under the rate of deformation d, cell size h (Pa).
@@ -88,7 +93,7 @@ impl PointRule for ArtificialViscosity {
         h: f64,
         d: &Mat2,
     ) -> Option<(Mat2, f64)> {
-        let q = bulk_q(self.linear, self.quadratic, m, j, h, d);
+        let q = bulk_q(self.linear, self.quadratic, m, j, self.length.unwrap_or(h), d);
         // sigma_q = -q I; its power per volume is -sigma_q : D = q tr(D) <= 0
         // on the motion, so what it dissipates is -q tr(D).
         (q > 0.0).then(|| (-q * Mat2::identity(), -q * d.trace()))
@@ -131,10 +136,36 @@ mod tests {
         let rule = ArtificialViscosity {
             linear: 0.2,
             quadratic: 2.0,
+            length: None,
         };
         let (s, power) = rule.extra_stress(&m, 0.0, j, h, &d).unwrap();
         assert_eq!(s, -q * Mat2::identity());
         assert!((power - s.component_mul(&d).sum()).abs() < 1e-9 * power);
         assert!(power > 0.0);
+    }
+
+    /// With a slab (`scene.slab`) the length is Uintah's (dx + dy + dz) / 3.
+    #[test]
+    fn a_slab_sets_the_length_to_the_mean_of_the_three_axes() {
+        let h = 0.01;
+        let grid = crate::grid::Grid::new(crate::particles::Vec2::zeros(), h, [4, 4], [false; 2]);
+        let mut m = Material::new(1.5e6);
+        m.gamma = 7.0;
+        let d = Mat2::new(-3.0, 0.4, 0.4, 1.0);
+        for (slab, length) in [(None, h), (Some(0.004), (2.0 * h + 0.004) / 3.0)] {
+            let setup = Setup {
+                grid: &grid,
+                particles: 0,
+                ppc: 2,
+                rho0: 1000.0,
+                slab,
+            };
+            let rule = super::super::Settings::build(&Settings::default(), &setup)
+                .point_rule()
+                .unwrap();
+            let (s, _) = rule.extra_stress(&m, 0.0, 0.8, h, &d).unwrap();
+            let q = bulk_q(0.2, 2.0, &m, 0.8, length, &d);
+            assert_eq!(s, -q * Mat2::identity(), "{slab:?}");
+        }
     }
 }

@@ -159,6 +159,8 @@ pub struct Setup<'a> {
     pub ppc: usize,
     /// rho0 of the first material: what a full node is measured by.
     pub rho0: f64,
+    /// `scene.slab`: the z thickness of the slab, if the scene has one.
+    pub slab: Option<f64>,
 }
 
 /// The particle side of a step, as a hook sees it.

@@ -235,3 +235,24 @@ fn overwritten_wall_ghosts_are_refused_under_the_pressure_implicit_formulation()
     let err = Solver::new(cfg).err().expect("refused");
     assert_eq!(err.key, "scene.wall_ghosts", "{err}");
 }
+
+/// A slab thinner than the cell (`scene.slab`) joins Uintah's per-axis
+/// step: from rest the first step is CFL dz / sqrt(K / rho0); a slab as
+/// thick as the cell or more leaves the plane's step as it was.
+#[test]
+fn a_thin_slab_sets_the_per_axis_step_through_its_z_axis() {
+    let with_slab = |slab: Option<f64>| {
+        let mut cfg = column(uintah_method(), [0.0, 0.0]).config().clone();
+        cfg.scene.slab = slab;
+        Solver::new(cfg).unwrap()
+    };
+    let c = (1.5e5f64 / 1000.0).sqrt();
+    let plane = with_slab(None).next_dt();
+    assert_eq!(plane, 0.4 * 0.01 / c);
+    assert_eq!(with_slab(Some(0.004)).next_dt(), 0.4 * 0.004 / c);
+    assert_eq!(with_slab(Some(0.01)).next_dt(), plane);
+    assert_eq!(with_slab(Some(0.05)).next_dt(), plane);
+    let mut bad = column(uintah_method(), [0.0, 0.0]).config().clone();
+    bad.scene.slab = Some(0.0);
+    assert_eq!(Solver::new(bad).err().unwrap().key, "scene.slab");
+}
