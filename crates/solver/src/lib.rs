@@ -789,26 +789,26 @@ impl Solver {
         };
     }
 
-    /// Uintah's first step along z: the largest sqrt(K / rho0).
+    /// Uintah's first-step wave speed of particle `p`: c = sqrt(K / rho0)
+    /// of its material (without the tangent's gamma).
+    fn initial_wave_speed_of(&self, p: usize) -> f64 {
+        let m = &self.cfg.scene.materials[self.particles.material[p] as usize];
+        (m.k / m.rho0).sqrt()
+    }
+
+    /// Uintah's first step along z: the largest initial wave speed.
     fn initial_wave_speed(&self) -> f64 {
-        let (ps, materials) = (&self.particles, &self.cfg.scene.materials);
-        (0..ps.len())
-            .map(|p| {
-                let m = &materials[ps.material[p] as usize];
-                (m.k / m.rho0).sqrt()
-            })
+        (0..self.particles.len())
+            .map(|p| self.initial_wave_speed_of(p))
             .fold(0.0, f64::max)
     }
 
-    /// Uintah's first step: c = sqrt(K / rho0) of each particle's material
-    /// (without the tangent's gamma) plus its largest velocity component.
+    /// Uintah's first step: the initial wave speed plus the particle's
+    /// largest velocity component.
     fn initial_axis_signal_speed(&self) -> f64 {
-        let (ps, materials) = (&self.particles, &self.cfg.scene.materials);
-        (0..ps.len())
-            .map(|p| {
-                let m = &materials[ps.material[p] as usize];
-                (m.k / m.rho0).sqrt() + ps.v[p].x.abs().max(ps.v[p].y.abs())
-            })
+        let v = &self.particles.v;
+        (0..v.len())
+            .map(|p| self.initial_wave_speed_of(p) + v[p].x.abs().max(v[p].y.abs()))
             .fold(0.0, f64::max)
     }
 
