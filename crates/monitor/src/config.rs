@@ -17,6 +17,12 @@ pub struct MonitorConfig {
     pub jump_ring_cells: usize,
     pub calm_seconds: f64,
     pub calm_change: f64,
+    /// Also judge each particle's change over the last `calm_seconds`,
+    /// every half of it, by the same thresholds: a push that builds up over
+    /// many steps is found in physical time at every step size. Judged
+    /// where the particle was slower than `quiet_speed` at the window's
+    /// start and moved at most 2 cells over it.
+    pub windowed_jumps: bool,
     /// Hallmark, quiescent before: over `quiet_seconds` before onset the
     /// particle was never faster than `quiet_speed` (m/s; 0.05 sqrt(g H) at
     /// H = 0.4 m) nor deformed faster than `quiet_rate` (in-plane |dev D|, 1/s).
@@ -67,6 +73,7 @@ impl Default for MonitorConfig {
             jump_ring_cells: 4,
             calm_seconds: 0.03,
             calm_change: 0.5,
+            windowed_jumps: true,
             quiet_seconds: 0.05,
             quiet_speed: 0.1,
             quiet_rate: 2.0,

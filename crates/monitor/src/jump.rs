@@ -17,6 +17,16 @@
 //! (the local flow stopping or turning) explains it. A calm jump is a kick
 //! by this rule; any other is physics unless the energy test says it added
 //! energy. The rule keeps a few snapshots of the velocities for that window.
+//!
+//! A push that builds up over many steps departs from the local flow by
+//! little in any one step, and by the less the smaller the step. So, with
+//! `windowed`, each time a snapshot is taken (every half calm window) the
+//! rule also judges each particle's change since the snapshot a whole calm
+//! window old against the local flow's change over the same span (a plane
+//! fitted to the ring), by the same thresholds: the same instrument in
+//! physical time at every step size. It judges the particles that were
+//! quiet at the span's start and stayed within 2 cells: in moving flow a
+//! particle's change along its path holds gradients no ring describes.
 
 use crate::geometry::Geometry;
 use crate::stats::lower_median;
@@ -55,6 +65,10 @@ pub struct JumpRule {
     /// which the local flow is calm (m/s).
     pub calm_seconds: f64,
     pub calm_change: f64,
+    /// Also judge the change over the calm window, every half window, of
+    /// the particles slower than `quiet_speed` at its start (m/s).
+    pub windowed: bool,
+    pub quiet_speed: f64,
 }
 
 /// Where a particle stands against the rule in the step last observed:
@@ -79,6 +93,17 @@ struct Local {
     window_change: f64,
 }
 
+/// Which per-cell change a ring's median is taken of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Field {
+    /// This step's.
+    Step,
+    /// Since the newest snapshot at least half a calm window old.
+    Window,
+    /// Since the snapshot a whole calm window old (the windowed rule).
+    Span,
+}
+
 /// The rule's snapshots (its only memory) and per-step scratch.
 #[derive(Clone, Debug, Default)]
 pub struct Jumps {
@@ -90,6 +115,14 @@ pub struct Jumps {
     mass: Vec<f64>,
     change: Vec<Vec2>,
     window_change: Vec<Vec2>,
+    /// The windowed rule's scratch: per particle, its change since the
+    /// snapshot a calm window old (NaN: it is newer); per cell, the mass
+    /// that snapshot holds and its mean change; and the ring's median
+    /// change and spread of each cell it judged (NaN spread: unjudged).
+    span_dv: Vec<Vec2>,
+    span_mass: Vec<f64>,
+    span_change: Vec<Vec2>,
+    span_local: Vec<Option<(Vec2, f64)>>,
     /// Per cell: whether `local` holds this step's figures.
     judged: Vec<bool>,
     local: Vec<Local>,
@@ -97,8 +130,10 @@ pub struct Jumps {
     block: Vec<Vec2>,
     sat_m: Vec<f64>,
     sat_p: Vec<Vec2>,
-    /// The ring's cells, each with whether it is a wall's image in x and y.
+    /// The ring's cells, each with whether it is a wall's image in x and y,
+    /// and its offset from the centre cell (cells).
     ring: Vec<(usize, [bool; 2])>,
+    ring_at: Vec<[f64; 2]>,
     xs: Vec<f64>,
     ys: Vec<f64>,
     dev: Vec<f64>,
@@ -108,7 +143,7 @@ impl Jumps {
     /// This step's jumps: the particles whose velocity change departs from
     /// the local flow's.
     pub fn observe(&mut self, geom: &Geometry, v: &StateView, rule: &JumpRule) -> &[Jump] {
-        self.snapshot(v, rule.calm_seconds);
+        let snapped = self.snapshot(v, rule.calm_seconds);
         self.cell_sums(geom, v, rule.calm_seconds);
         self.block_means(geom);
         let cells = geom.cell_count();
@@ -140,7 +175,98 @@ impl Jumps {
                 });
             }
         }
+        if snapped && rule.windowed && self.snaps.len() >= 3 {
+            self.judge_span(geom, v, rule);
+        }
         &self.found
+    }
+
+    /// The windowed rule: each particle's change since the snapshot a calm
+    /// window old, against the ring's over the same span (thresholds and
+    /// the gain test as per step). A particle this step already flagged
+    /// keeps its step's verdict.
+    fn judge_span(&mut self, geom: &Geometry, v: &StateView, rule: &JumpRule) {
+        self.span_sums(geom, v);
+        // Judged: a particle quiet at the span's start (in moving flow the
+        // change along its path holds the flow's own gradients, which no
+        // ring describes), which stayed inside the ring's inner edge.
+        let span = self.snaps[0].t - self.snaps[self.snaps.len() - 1].t;
+        let reach2 = (2.0 * geom.cell / span).powi(2);
+        let quiet2 = rule.quiet_speed.powi(2);
+        let stepped = self.found.len();
+        let mut k = 0;
+        for p in 0..v.x.len() {
+            while k < stepped && (self.found[k].p as usize) < p {
+                k += 1;
+            }
+            let dv = self.span_dv[p];
+            let (now, before) = (v.v[p].norm_squared(), (v.v[p] - dv).norm_squared());
+            let judged = !dv.x.is_nan() && before <= quiet2 && now.max(before) <= reach2;
+            if !judged || (k < stepped && self.found[k].p as usize == p) {
+                continue;
+            }
+            let c = geom.cell_index(v.x[p]);
+            let Some((change, spread)) = self.span_local(geom, c, rule.ring) else {
+                continue;
+            };
+            let residual = (dv - change).norm();
+            if now > before && residual.is_finite() && residual >= rule.speed.max(rule.z * spread) {
+                self.found.push(Jump {
+                    p: p as u32,
+                    residual,
+                    calm: change.norm() < rule.calm_change,
+                });
+            }
+        }
+        self.found.sort_unstable_by_key(|j| j.p);
+    }
+
+    /// Per particle, its change since the oldest snapshot (matched by id),
+    /// and per cell the mass-weighted mean of those changes.
+    fn span_sums(&mut self, geom: &Geometry, v: &StateView) {
+        let n = geom.cell_count();
+        self.span_mass.clear();
+        self.span_mass.resize(n, 0.0);
+        self.span_change.clear();
+        self.span_change.resize(n, Vec2::zeros());
+        self.span_local.clear();
+        self.span_local.resize(n, None);
+        self.span_dv.clear();
+        let s = &self.snaps[self.snaps.len() - 1];
+        let mut k = 0;
+        for p in 0..v.x.len() {
+            while k < s.ids.len() && s.ids[k] < v.id[p] {
+                k += 1;
+            }
+            if k < s.ids.len() && s.ids[k] == v.id[p] {
+                let dv = v.v[p] - s.v[k];
+                let (c, m) = (geom.cell_index(v.x[p]), v.mass[p]);
+                self.span_mass[c] += m;
+                self.span_change[c] += m * dv;
+                self.span_dv.push(dv);
+            } else {
+                self.span_dv.push(Vec2::repeat(f64::NAN));
+            }
+        }
+        for c in 0..n {
+            if self.span_mass[c] > 0.0 {
+                self.span_change[c] /= self.span_mass[c];
+            }
+        }
+    }
+
+    /// Cell `c`'s local change over the span and its spread, computed once
+    /// per judging (None: spray, fewer than `MIN_RING_CELLS` cells).
+    fn span_local(&mut self, geom: &Geometry, c: usize, ring: usize) -> Option<(Vec2, f64)> {
+        if self.span_local[c].is_none() {
+            let judged = if self.ring_of(geom, c, ring, Field::Span) {
+                self.plane_and_spread()
+            } else {
+                (Vec2::repeat(f64::NAN), f64::NAN)
+            };
+            self.span_local[c] = Some(judged);
+        }
+        self.span_local[c].filter(|(_, spread)| spread.is_finite())
     }
 
     /// Particle `p`'s margin in the step `observe` last judged (None: its
@@ -169,8 +295,9 @@ impl Jumps {
         })
     }
 
-    /// Keeps the velocities every half calm window (the three newest).
-    fn snapshot(&mut self, v: &StateView, window: f64) {
+    /// Keeps the velocities every half calm window (the three newest);
+    /// true when it took one this step.
+    fn snapshot(&mut self, v: &StateView, window: f64) -> bool {
         let due = self
             .snaps
             .first()
@@ -189,6 +316,7 @@ impl Jumps {
             s.v.extend_from_slice(v.v);
             self.snaps.insert(0, s);
         }
+        due
     }
 
     /// Per cell, the mass-weighted mean change of its particles this step,
@@ -264,10 +392,35 @@ impl Jumps {
     /// Cell `c`'s local flow: the ring's median change and spread (NaN:
     /// fewer than `MIN_RING_CELLS` cells with material).
     fn local_flow(&mut self, geom: &Geometry, c: usize, ring: usize) -> Local {
+        if !self.ring_of(geom, c, ring, Field::Step) {
+            return Local {
+                change: Vec2::repeat(f64::NAN),
+                spread: f64::NAN,
+                window_change: f64::NAN,
+            };
+        }
+        let (change, spread) = self.median_and_spread(Field::Step);
+        let (window, _) = self.median_and_spread(Field::Window);
+        Local {
+            change,
+            spread,
+            window_change: window.norm(),
+        }
+    }
+
+    /// Fills `ring` with cell `c`'s ring cells holding material (by the
+    /// field's own masses); false when they are fewer than `MIN_RING_CELLS`.
+    fn ring_of(&mut self, geom: &Geometry, c: usize, ring: usize, field: Field) -> bool {
         let [nx, ny] = geom.cells;
         let r = ring as i64;
         let (ci, cj) = ((c % nx) as i64, (c / nx) as i64);
+        let mass = if field == Field::Span {
+            &self.span_mass
+        } else {
+            &self.mass
+        };
         self.ring.clear();
+        self.ring_at.clear();
         for j in cj - r..=cj + r {
             for i in ci - r..=ci + r {
                 if (i - ci).abs().max((j - cj).abs()) < 2 {
@@ -280,34 +433,73 @@ impl Jumps {
                     .map_or((usize::MAX, [false; 2]), |((ii, fx), (jj, fy))| {
                         (ii + nx * jj, [fx, fy])
                     });
-                if o != usize::MAX && self.mass[o] > 0.0 {
+                if o != usize::MAX && mass[o] > 0.0 {
                     self.ring.push((o, flip));
+                    self.ring_at.push([(i - ci) as f64, (j - cj) as f64]);
                 }
             }
         }
-        if self.ring.len() < MIN_RING_CELLS {
-            return Local {
-                change: Vec2::repeat(f64::NAN),
-                spread: f64::NAN,
-                window_change: f64::NAN,
-            };
+        self.ring.len() >= MIN_RING_CELLS
+    }
+
+    /// The span's local change at the centre cell: over a window the flow's
+    /// own gradients build up (a wall's run-up, a one-sided ring at the
+    /// surface or in a corner), so the ring's changes are fitted with a
+    /// plane (gradient by least squares, level by the median of what the
+    /// gradient leaves); the spread is 1.4826 times the median distance
+    /// from the plane.
+    fn plane_and_spread(&mut self) -> (Vec2, f64) {
+        let n = self.ring.len() as f64;
+        let value = |&(o, [fx, fy]): &(usize, [bool; 2]), field: &[Vec2]| {
+            let f = field[o];
+            Vec2::new(if fx { -f.x } else { f.x }, if fy { -f.y } else { f.y })
+        };
+        let (mut sx, mut sy, mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        let (mut sf, mut sxf, mut syf) = (Vec2::zeros(), Vec2::zeros(), Vec2::zeros());
+        for (r, &[x, y]) in self.ring.iter().zip(&self.ring_at) {
+            let f = value(r, &self.span_change);
+            (sx, sy, sxx, sxy, syy) = (sx + x, sy + y, sxx + x * x, sxy + x * y, syy + y * y);
+            (sf, sxf, syf) = (sf + f, sxf + x * f, syf + y * f);
         }
-        let (change, spread) = self.median_and_spread(false);
-        let (window, _) = self.median_and_spread(true);
-        Local {
-            change,
-            spread,
-            window_change: window.norm(),
-        }
+        // Centred sums: the gradient's 2 x 2 normal equations.
+        let (cxx, cxy, cyy) = (sxx - sx * sx / n, sxy - sx * sy / n, syy - sy * sy / n);
+        let (cxf, cyf) = (sxf - sx * sf / n, syf - sy * sf / n);
+        let det = cxx * cyy - cxy * cxy;
+        let (gx, gy) = if det > 1e-9 * (cxx * cyy).max(1.0) {
+            ((cyy * cxf - cxy * cyf) / det, (cxx * cyf - cxy * cxf) / det)
+        } else {
+            (Vec2::zeros(), Vec2::zeros())
+        };
+        let ring = std::mem::take(&mut self.ring);
+        let at = std::mem::take(&mut self.ring_at);
+        let level = |r: &(usize, [bool; 2]), &[x, y]: &[f64; 2]| {
+            value(r, &self.span_change) - x * gx - y * gy
+        };
+        self.xs.clear();
+        self.xs
+            .extend(ring.iter().zip(&at).map(|(r, a)| level(r, a).x));
+        self.ys.clear();
+        self.ys
+            .extend(ring.iter().zip(&at).map(|(r, a)| level(r, a).y));
+        let centre = Vec2::new(lower_median(&mut self.xs), lower_median(&mut self.ys));
+        self.dev.clear();
+        self.dev.extend(
+            ring.iter()
+                .zip(&at)
+                .map(|(r, a)| (level(r, a) - centre).norm()),
+        );
+        (self.ring, self.ring_at) = (ring, at);
+        (centre, 1.4826 * lower_median(&mut self.dev))
     }
 
     /// The ring's component-wise median of the cells' changes (this step's,
-    /// or over the calm window) and 1.4826 times the median distance from it.
-    fn median_and_spread(&mut self, over_window: bool) -> (Vec2, f64) {
-        let field = if over_window {
-            &self.window_change
-        } else {
-            &self.change
+    /// over the calm window or over the span) and 1.4826 times the median
+    /// distance from it.
+    fn median_and_spread(&mut self, field: Field) -> (Vec2, f64) {
+        let field = match field {
+            Field::Step => &self.change,
+            Field::Window => &self.window_change,
+            Field::Span => &self.span_change,
         };
         let at = |&(o, [fx, fy]): &(usize, [bool; 2])| {
             let f: Vec2 = field[o];

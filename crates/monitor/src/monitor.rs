@@ -267,6 +267,8 @@ impl Monitor {
             ring: self.cfg.jump_ring_cells,
             calm_seconds: self.cfg.calm_seconds,
             calm_change: self.cfg.calm_change,
+            windowed: self.cfg.windowed_jumps,
+            quiet_speed: self.cfg.quiet_speed,
         }
     }
 

@@ -11,6 +11,7 @@ mod events_column;
 mod events_dam_break;
 mod events_merge;
 mod events_real_kick;
+mod events_sustained;
 mod front;
 mod hydrostatic;
 mod hydrostatic_floor;
