@@ -450,14 +450,10 @@ impl Jumps {
     /// from the plane.
     fn plane_and_spread(&mut self) -> (Vec2, f64) {
         let n = self.ring.len() as f64;
-        let value = |&(o, [fx, fy]): &(usize, [bool; 2]), field: &[Vec2]| {
-            let f = field[o];
-            Vec2::new(if fx { -f.x } else { f.x }, if fy { -f.y } else { f.y })
-        };
         let (mut sx, mut sy, mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0, 0.0, 0.0);
         let (mut sf, mut sxf, mut syf) = (Vec2::zeros(), Vec2::zeros(), Vec2::zeros());
         for (r, &[x, y]) in self.ring.iter().zip(&self.ring_at) {
-            let f = value(r, &self.span_change);
+            let f = imaged(&self.span_change, r);
             (sx, sy, sxx, sxy, syy) = (sx + x, sy + y, sxx + x * x, sxy + x * y, syy + y * y);
             (sf, sxf, syf) = (sf + f, sxf + x * f, syf + y * f);
         }
@@ -473,7 +469,7 @@ impl Jumps {
         let ring = std::mem::take(&mut self.ring);
         let at = std::mem::take(&mut self.ring_at);
         let level = |r: &(usize, [bool; 2]), &[x, y]: &[f64; 2]| {
-            value(r, &self.span_change) - x * gx - y * gy
+            imaged(&self.span_change, r) - x * gx - y * gy
         };
         self.xs.clear();
         self.xs
@@ -501,10 +497,7 @@ impl Jumps {
             Field::Window => &self.window_change,
             Field::Span => &self.span_change,
         };
-        let at = |&(o, [fx, fy]): &(usize, [bool; 2])| {
-            let f: Vec2 = field[o];
-            Vec2::new(if fx { -f.x } else { f.x }, if fy { -f.y } else { f.y })
-        };
+        let at = |r: &(usize, [bool; 2])| imaged(field, r);
         self.xs.clear();
         self.xs.extend(self.ring.iter().map(|r| at(r).x));
         self.ys.clear();
@@ -515,6 +508,13 @@ impl Jumps {
             .extend(self.ring.iter().map(|r| (at(r) - centre).norm()));
         (centre, 1.4826 * lower_median(&mut self.dev))
     }
+}
+
+/// A ring cell's value of `field`: the cell's own, with the normal
+/// component flipped where the ring cell is a wall's image.
+fn imaged(field: &[Vec2], &(o, [fx, fy]): &(usize, [bool; 2])) -> Vec2 {
+    let f = field[o];
+    Vec2::new(if fx { -f.x } else { f.x }, if fy { -f.y } else { f.y })
 }
 
 /// Cell index `k` along an axis of `n` cells: itself inside, wrapped on a

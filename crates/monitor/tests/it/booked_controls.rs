@@ -13,19 +13,7 @@ use solver::*;
 /// Pressure-implicit water at rest, 0.4 m wide and 0.2 m deep (h = 1 cm),
 /// run 0.2 s so the start-up has settled; its monitor.
 fn settled_implicit_water() -> (Solver, Monitor) {
-    let mut method = method(ShapeKind::Bspline2, TransferKind::Apic);
-    method.formulation = Formulation::PressureImplicit;
-    let scene = Scene {
-        t_end: 1.0,
-        initial: InitialState::Hydrostatic,
-        ..water_box([0.4, 0.3], [0.0, 0.0, 0.4, 0.2], tait(1.5e6, 0.5), 9.81)
-    };
-    let mut s = Solver::new(SolverConfig {
-        scene,
-        method,
-        perturb: vec![],
-    })
-    .unwrap();
+    let mut s = resting_water(Formulation::PressureImplicit);
     let mut m = Monitor::new(MonitorConfig::default(), &s.view());
     while s.time() < 0.2 {
         s.step().unwrap();

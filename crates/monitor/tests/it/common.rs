@@ -30,6 +30,25 @@ pub fn water_box(size: [f64; 2], rect: [f64; 4], material: Material, gravity: f6
     }
 }
 
+/// Water at rest under `formulation` (quadratic B-spline, APIC): 0.4 m
+/// wide and 0.2 m deep in a 0.3 m tall box (h = 1 cm, 1.5 MPa Tait,
+/// 0.5 Pa s, hydrostatic start).
+pub fn resting_water(formulation: Formulation) -> Solver {
+    let mut method = method(ShapeKind::Bspline2, TransferKind::Apic);
+    method.formulation = formulation;
+    let scene = Scene {
+        t_end: 1.0,
+        initial: InitialState::Hydrostatic,
+        ..water_box([0.4, 0.3], [0.0, 0.0, 0.4, 0.2], tait(1.5e6, 0.5), 9.81)
+    };
+    Solver::new(SolverConfig {
+        scene,
+        method,
+        perturb: vec![],
+    })
+    .unwrap()
+}
+
 pub fn tait(k: f64, viscosity: f64) -> Material {
     let mut m = Material::tait(k);
     m.viscosity = viscosity;

@@ -20,19 +20,7 @@ const PATCH: [f64; 4] = [0.19, 0.09, 0.21, 0.11];
 /// from 0.2 s the view adds `ramp` m/s upward to the patch's particles,
 /// spread evenly over 30 ms. The events and the largest step.
 fn ramped_water(formulation: Formulation, windowed: bool, ramp: f64) -> (Vec<Event>, f64) {
-    let mut method = method(ShapeKind::Bspline2, TransferKind::Apic);
-    method.formulation = formulation;
-    let scene = Scene {
-        t_end: 1.0,
-        initial: InitialState::Hydrostatic,
-        ..water_box([0.4, 0.3], [0.0, 0.0, 0.4, 0.2], tait(1.5e6, 0.5), 9.81)
-    };
-    let mut s = Solver::new(SolverConfig {
-        scene,
-        method,
-        perturb: vec![],
-    })
-    .unwrap();
+    let mut s = resting_water(formulation);
     let cfg = MonitorConfig {
         windowed_jumps: windowed,
         ..MonitorConfig::default()
