@@ -2,13 +2,16 @@
 """Counterfactual ensembles of a matrix's events, and their table.
 
     python3 scripts/counterfactuals.py MATRIX_DIR [MATRIX_DIR ...] [--pick anomaly|kick]
-        [--first-per-case] [--max N] [--members 5] [--kick PATH] [--threads 2] [--table-only]
+        [--first-per-case] [--near CASE=T ...] [--max N] [--members 5] [--kick PATH]
+        [--threads 2] [--table-only]
 
 Picks the events of every case (cases and events in name and id order):
 `anomaly` takes the kicks with the hallmark (a kick cause, quiet before and
 past the strain-rate threshold earlier: docs/physics.md section 4b),
 `kick` every kick (inversion, injection or jump); `--first-per-case` keeps
-each case's first. Each one with a checkpoint is explained with `kick
+each case's first. `--near CASE=T` (repeatable) keeps, in each case so
+named, the one kick nearest to time T, and no other case: it finds again
+an event that was logged under an earlier detector, whose id moved. Each one with a checkpoint is explained with `kick
 explain CASE --event K --counterfactual --members M --threads T` unless its
 explain.json already holds counterfactual members. Then prints, in
 Markdown: per event, each change's members reopened and verdict; and per
@@ -28,17 +31,26 @@ import time
 KICKS = ("inversion", "injection", "jump")
 
 
-def picked(matrices, pick, first_per_case):
+def nearest(events, t):
+    return [min(events, key=lambda e: abs(e["t"] - t))] if events else []
+
+
+def picked(matrices, pick, first_per_case, near):
     for m in matrices:
         for path in sorted(glob.glob(os.path.join(m, "*", "summary.json"))):
             s = json.load(open(path))
             case = os.path.dirname(path)
+            name = os.path.basename(case)
+            if near and name not in near:
+                continue
             chosen = []
             for e in sorted(s["events"], key=lambda e: e["id"]):
                 kick = e["cause"] in KICKS
                 hallmark = e["quiescent_before"] and "strain_rate" in e.get("deformed_by", [])
                 if kick and (pick == "kick" or hallmark) and e.get("checkpoint"):
                     chosen.append(e)
+            if near:
+                chosen = [e for t in near[name] for e in nearest(chosen, t)]
             for e in chosen[:1] if first_per_case else chosen:
                 yield case, e
 
@@ -150,13 +162,23 @@ def main():
     ap.add_argument("matrices", nargs="+")
     ap.add_argument("--pick", choices=("anomaly", "kick"), default="anomaly")
     ap.add_argument("--first-per-case", action="store_true")
+    ap.add_argument("--near", action="append", default=[], metavar="CASE=T")
     ap.add_argument("--max", type=int, default=None)
     ap.add_argument("--members", type=int, default=5)
     ap.add_argument("--kick", default="target/release/kick")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--table-only", action="store_true")
     a = ap.parse_args()
-    events = list(picked(a.matrices, a.pick, a.first_per_case))[: a.max]
+    near = {}
+    for item in a.near:
+        name, _, t = item.partition("=")
+        try:
+            near.setdefault(name, []).append(float(t))
+        except ValueError:
+            print(f"counterfactuals.py: --near {item}: expected CASE=T, T a time in s",
+                  file=sys.stderr)
+            sys.exit(2)
+    events = list(picked(a.matrices, a.pick, a.first_per_case, near))[: a.max]
     explained, wall = [], 0.0
     for case, e in events:
         if record(case, e["id"]) is None and not a.table_only:
