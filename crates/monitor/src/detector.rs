@@ -140,8 +140,10 @@ impl Monitor {
         floor: f64,
         gainer: usize,
     ) {
-        // A NaN gain is no injection.
+        // A NaN gain is no injection; with no particle left (the last
+        // deleted) no one gained, and there is no site to place it at.
         if gain.partial_cmp(&floor) != Some(std::cmp::Ordering::Greater)
+            || gainer >= v.x.len()
             || !self.gain_is_local(v, gainer)
         {
             return;

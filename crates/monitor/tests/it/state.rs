@@ -215,3 +215,34 @@ fn damaged_state_is_refused() {
     old[..8].copy_from_slice(b"NOTKICK!");
     assert_eq!(restore(&reseal(&old)), Err(CheckpointError::BadMagic));
 }
+
+#[test]
+fn a_step_that_leaves_no_particle_opens_no_event_at_a_particle() {
+    // A blow-out's last deletions can leave the energy window gaining with
+    // no particle left: there is nowhere to place an injection, and no
+    // particle to index.
+    let mut s = common::resting_water(Formulation::Explicit);
+    let mut m = common::fresh_monitor(&s);
+    for _ in 0..5 {
+        s.step().unwrap();
+        m.observe(&s.view());
+    }
+    s.step().unwrap();
+    let mut v = s.view();
+    let before = v.energy.kinetic;
+    v.energy.kinetic += 1e6;
+    assert!(v.energy.kinetic > before, "a gain far above any floor");
+    (v.x, v.v, v.v_prev, v.accel) = (&[], &[], &[], &[]);
+    (v.mass, v.volume, v.volume0, v.j, v.pressure) = (&[], &[], &[], &[], &[]);
+    (v.deformation, v.stress) = (&[], &[]);
+    (v.dev_rate, v.history, v.material, v.id) = (&[], &[], &[], &[]);
+    let opened = m.events().len();
+    m.observe(&v);
+    assert!(
+        m.events()[opened..]
+            .iter()
+            .all(|e| e.kind != monitor::EventKind::EnergyInjection),
+        "{:?}",
+        &m.events()[opened..]
+    );
+}
