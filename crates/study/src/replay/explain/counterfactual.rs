@@ -453,7 +453,12 @@ fn counterfactual(
     let replayed: Vec<Result<Member, String>> = seeds
         .par_iter()
         .map(|&seed| {
-            let done = member(loaded, window, change, seed);
+            // A member that panics refuses its row; the other rows and
+            // the event's explanation are kept.
+            let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                member(loaded, window, change, seed)
+            }))
+            .unwrap_or_else(|panic| Err(format!("the replay panicked: {}", panic_text(&panic))));
             bar.inc(1);
             done
         })
@@ -470,6 +475,15 @@ fn counterfactual(
     }
     summarise(&mut row);
     row
+}
+
+/// A panic's message, when it carries one.
+fn panic_text(panic: &Box<dyn std::any::Any + Send>) -> String {
+    panic
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+        .unwrap_or_else(|| "no message".into())
 }
 
 /// The row's counts and spreads from its members.
