@@ -11,9 +11,9 @@ past the strain-rate threshold earlier: docs/physics.md section 4b),
 `kick` every kick (inversion, injection or jump); `--first-per-case` keeps
 each case's first. `--near CASE=T` (repeatable) keeps, in each case so
 named, the one kick nearest to time T, and no other case: it finds again
-an event that was logged under an earlier detector, whose id moved. Each one with a checkpoint is explained with `kick
-explain CASE --event K --counterfactual --members M --threads T` unless its
-explain.json already holds counterfactual members. Then prints, in
+an event that was logged under an earlier detector, whose id moved. Each
+one with a checkpoint is explained with `kick explain CASE --event K
+--counterfactual --members M --threads T` unless its explain.json already holds counterfactual members. Then prints, in
 Markdown: per event, each change's members reopened and verdict; and per
 change, over the events whose control reproduced its event (at least 4 of
 5 members), how many it prevented, with the 95 % Wilson interval, and how
@@ -179,6 +179,12 @@ def main():
                   file=sys.stderr)
             sys.exit(2)
     events = list(picked(a.matrices, a.pick, a.first_per_case, near))[: a.max]
+    missing = set(near) - {os.path.basename(case) for case, _ in events}
+    if missing:
+        print(f"counterfactuals.py: --near: no picked kick in {', '.join(sorted(missing))} "
+              f"(no such case under {', '.join(a.matrices)}, or no kick with a checkpoint)",
+              file=sys.stderr)
+        sys.exit(2)
     explained, wall = [], 0.0
     for case, e in events:
         if record(case, e["id"]) is None and not a.table_only:
