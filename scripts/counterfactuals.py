@@ -14,9 +14,9 @@ named, the one kick nearest to time T, and no other case: it finds again
 an event that was logged under an earlier detector, whose id moved. Each
 one with a checkpoint is explained with `kick explain CASE --event K
 --counterfactual --members M --threads T` unless its explain.json already
-holds counterfactual members. Then prints, in Markdown: per event, each change's members reopened and verdict; and per
-change, over the events whose control reproduced its event (at least 4 of
-5 members), how many it prevented, with the 95 % Wilson interval, and how
+holds counterfactual members. Then prints, in Markdown: per event, each
+change's members reopened and verdict; and per change, over the events
+whose control reproduced its event (at least 4 of 5 members), how many it prevented, with the 95 % Wilson interval, and how
 many it delayed, hastened, moved, blew up or let happen again.
 """
 import argparse
