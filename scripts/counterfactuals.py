@@ -16,8 +16,9 @@ one with a checkpoint is explained with `kick explain CASE --event K
 --counterfactual --members M --threads T` unless its explain.json already
 holds counterfactual members. Then prints, in Markdown: per event, each
 change's members reopened and verdict; and per change, over the events
-whose control reproduced its event (at least 4 of 5 members), how many it prevented, with the 95 % Wilson interval, and how
-many it delayed, hastened, moved, blew up or let happen again.
+whose control reproduced its event (at least 4 of 5 members), how many
+it prevented, with the 95 % Wilson interval, and how many it delayed,
+hastened, moved, blew up or let happen again.
 """
 import argparse
 import glob
