@@ -10,8 +10,9 @@ Picks the events of every case (cases and events in name and id order):
 past the strain-rate threshold earlier: docs/physics.md section 4b),
 `kick` every kick (inversion, injection or jump); `--first-per-case` keeps
 each case's first. `--near CASE=T` (repeatable) keeps, in each case so
-named, the one kick nearest to time T, and no other case: it finds again
-an event that was logged under an earlier detector, whose id moved. Each
+named, the one kick nearest to time T (each kick once, in id order), and
+no other case: it finds again an event that was logged under an earlier
+detector, whose id moved; a kick more than 5 ms from T is named. Each
 one with a checkpoint is explained with `kick explain CASE --event K
 --counterfactual --members M --threads T` unless its explain.json already
 holds counterfactual members. Then prints, in Markdown: per event, each
@@ -51,7 +52,14 @@ def picked(matrices, pick, first_per_case, near):
                 if kick and (pick == "kick" or hallmark) and e.get("checkpoint"):
                     chosen.append(e)
             if near:
-                chosen = [e for t in near[name] for e in nearest(chosen, t)]
+                found = {}
+                for t in near[name]:
+                    for e in nearest(chosen, t):
+                        if abs(e["t"] - t) > 0.005:
+                            print(f"{name}: the kick nearest {t} s is event {e['id']} at "
+                                  f"{e['t']:.4f} s", file=sys.stderr)
+                        found[e["id"]] = e
+                chosen = [found[k] for k in sorted(found)]
             for e in chosen[:1] if first_per_case else chosen:
                 yield case, e
 
@@ -179,13 +187,14 @@ def main():
             print(f"counterfactuals.py: --near {item}: expected CASE=T, T a time in s",
                   file=sys.stderr)
             sys.exit(2)
-    events = list(picked(a.matrices, a.pick, a.first_per_case, near))[: a.max]
+    events = list(picked(a.matrices, a.pick, a.first_per_case, near))
     missing = set(near) - {os.path.basename(case) for case, _ in events}
     if missing:
         print(f"counterfactuals.py: --near: no picked kick in {', '.join(sorted(missing))} "
               f"(no such case under {', '.join(a.matrices)}, or no kick with a checkpoint)",
               file=sys.stderr)
         sys.exit(2)
+    events = events[: a.max]
     explained, wall = [], 0.0
     for case, e in events:
         if record(case, e["id"]) is None and not a.table_only:

@@ -229,9 +229,9 @@ fn a_step_that_leaves_no_particle_opens_no_event_at_a_particle() {
     }
     s.step().unwrap();
     let mut v = s.view();
-    let before = v.energy.kinetic;
+    // A gain far above the floor: without the guard this step indexed
+    // particle 0 of the empty state (detector.rs) and panicked.
     v.energy.kinetic += 1e6;
-    assert!(v.energy.kinetic > before, "a gain far above any floor");
     (v.x, v.v, v.v_prev, v.accel) = (&[], &[], &[], &[]);
     (v.mass, v.volume, v.volume0, v.j, v.pressure) = (&[], &[], &[], &[], &[]);
     (v.deformation, v.stress) = (&[], &[]);
