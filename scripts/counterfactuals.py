@@ -140,7 +140,10 @@ def tables(explained):
         for r in rows[1:]:
             name = generic(r["change"])
             if r.get("refused"):
-                cells.append(f"{name}: refused")
+                # A panicked replay is a fault to see, not a change that
+                # does not apply; either way it leaves this change's M.
+                why = " (the replay panicked)" if "panicked" in r["refused"] else ""
+                cells.append(f"{name}: refused{why}")
                 continue
             verdict = rejudged(control, r)
             cells.append(f"{name}: {r['reopened']}/{n} {verdict}")
