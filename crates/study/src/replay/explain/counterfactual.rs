@@ -10,7 +10,7 @@
 
 use super::{Loaded, Window};
 use crate::output::summary::{method_id, Status};
-use crate::run::case::{progress_style, toml_to_json, watches, with_threads};
+use crate::run::case::{panic_message, progress_style, toml_to_json, watches, with_threads};
 use crate::run::{Probe, Rows, Run, RunOptions, Runner, Simulated, Stepper, Watch};
 use crate::study_file::{self, ENSEMBLE_JITTER};
 use indicatif::ProgressBar;
@@ -458,7 +458,7 @@ fn counterfactual(
             let done = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 member(loaded, window, change, seed)
             }))
-            .unwrap_or_else(|panic| Err(format!("the replay panicked: {}", panic_text(&panic))));
+            .unwrap_or_else(|panic| Err(format!("the replay panicked: {}", panic_message(panic))));
             bar.inc(1);
             done
         })
@@ -475,15 +475,6 @@ fn counterfactual(
     }
     summarise(&mut row);
     row
-}
-
-/// A panic's message, when it carries one.
-fn panic_text(panic: &Box<dyn std::any::Any + Send>) -> String {
-    panic
-        .downcast_ref::<String>()
-        .cloned()
-        .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-        .unwrap_or_else(|| "no message".into())
 }
 
 /// The row's counts and spreads from its members.
