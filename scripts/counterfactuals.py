@@ -33,18 +33,14 @@ import time
 KICKS = ("inversion", "injection", "jump")
 
 
-def nearest(events, t):
-    return [min(events, key=lambda e: abs(e["t"] - t))] if events else []
-
-
 def picked(matrices, pick, first_per_case, near):
     for m in matrices:
         for path in sorted(glob.glob(os.path.join(m, "*", "summary.json"))):
-            s = json.load(open(path))
             case = os.path.dirname(path)
             name = os.path.basename(case)
             if near and name not in near:
                 continue
+            s = json.load(open(path))
             chosen = []
             for e in sorted(s["events"], key=lambda e: e["id"]):
                 kick = e["cause"] in KICKS
@@ -53,12 +49,12 @@ def picked(matrices, pick, first_per_case, near):
                     chosen.append(e)
             if near:
                 found = {}
-                for t in near[name]:
-                    for e in nearest(chosen, t):
-                        if abs(e["t"] - t) > 0.005:
-                            print(f"{name}: the kick nearest {t} s is event {e['id']} at "
-                                  f"{e['t']:.4f} s", file=sys.stderr)
-                        found[e["id"]] = e
+                for t in near[name] if chosen else []:
+                    e = min(chosen, key=lambda e: abs(e["t"] - t))
+                    if abs(e["t"] - t) > 0.005:
+                        print(f"{name}: the kick nearest {t} s is event {e['id']} at "
+                              f"{e['t']:.4f} s", file=sys.stderr)
+                    found[e["id"]] = e
                 chosen = [found[k] for k in sorted(found)]
             for e in chosen[:1] if first_per_case else chosen:
                 yield case, e
