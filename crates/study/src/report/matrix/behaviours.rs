@@ -303,6 +303,8 @@ struct RunFigures {
     /// Half of its particles deleted within `BLOW_OUT_STEPS` of the kick
     /// that began its blow-out (`blow_out_kick`).
     blown_out: bool,
+    /// Steps from that kick to half of the particles gone (`blow_out_steps`).
+    blow_out_steps: Option<f64>,
     /// Time at which it had lost `SURVIVAL_LOSS` of its mass (else its end).
     survived: f64,
     /// Ran to t_end without losing `SURVIVAL_LOSS` of its mass.
@@ -317,7 +319,7 @@ impl RunFigures {
         let t = f64_column(&df, "t")?;
         let dt = f64_column(&df, "dt")?;
         let lost = f64_column(&df, "particles_lost")?;
-        let blown_out = blow_out_steps(r, &t, &dt, &lost).is_some_and(|s| s <= BLOW_OUT_STEPS);
+        let steps = blow_out_steps(r, &t, &dt, &lost);
         let mass_lost = f64_column(&df, "mass_lost_fraction")?;
         let loss_at = t
             .iter()
@@ -328,7 +330,8 @@ impl RunFigures {
         Some(RunFigures {
             k: param(r, ParamKey::is_bulk_modulus)?,
             viscous: param(r, ParamKey::is_viscosity).is_some_and(|mu| mu > 0.0),
-            blown_out,
+            blown_out: steps.is_some_and(|s| s <= BLOW_OUT_STEPS),
+            blow_out_steps: steps,
             survived: loss_at.unwrap_or(end),
             survived_to_end: loss_at.is_none()
                 && r.summary.status == Status::Completed
@@ -399,7 +402,8 @@ pub fn behaviours_by_configuration(m: &Matrix, page: &mut Page) {
         if best.as_ref().is_none_or(|b| (held, closeness) > (b.0, b.1)) {
             best = Some((held, closeness, name.clone()));
         }
-        rows.push(score_row(name, &s, high, low));
+        let steps = small_k_steps(runs, k_min);
+        rows.push(score_row(name, &s, high, low, &steps));
     }
     let headers: Vec<String> = [
         "configuration",
@@ -525,7 +529,25 @@ fn score(runs: &[(&Row, RunFigures)], k_min: f64, mux: usize) -> ([Score; 4], Sc
 }
 
 /// A configuration's row of the table.
-fn score_row(name: &str, s: &[Score; 4], high: Score, low: Score) -> (String, Vec<Cell>) {
+/// Behaviour 1's steps per run at the smallest K, for its cell: each
+/// run's steps from its blow-out kick to half the particles gone, "-"
+/// for a run with no such kick or that never lost half.
+fn small_k_steps(runs: &[(&Row, RunFigures)], k_min: f64) -> String {
+    let steps: Vec<String> = runs
+        .iter()
+        .filter(|(_, f)| f.k == k_min)
+        .map(|(_, f)| f.blow_out_steps.map_or("-".into(), |s| format!("{s:.0}")))
+        .collect();
+    steps.join(", ")
+}
+
+fn score_row(
+    name: &str,
+    s: &[Score; 4],
+    high: Score,
+    low: Score,
+    steps: &str,
+) -> (String, Vec<Cell>) {
     let held = s.iter().filter(|x| x.holds()).count();
     let three = format!(
             "{} (&gt; {CHECKERBOARD_HIGH}: {} of {} at K &ge; 1.5 MPa; &lt; {CHECKERBOARD_LOW}: {} of {} at the smallest K)",
@@ -539,7 +561,7 @@ fn score_row(name: &str, s: &[Score; 4], high: Score, low: Score) -> (String, Ve
         String::new(),
         vec![
             Cell::Text(crate::report::html::escape(name)),
-            Cell::Num(s[0].text()),
+            Cell::Num(format!("{}; steps: {steps}", s[0].text())),
             Cell::Num(s[1].text()),
             Cell::Num(three),
             Cell::Num(s[3].text()),
