@@ -335,24 +335,35 @@ impl Monitor {
     }
 
     /// Events for the particles the solver deleted at this step (escaped:
-    /// `blow_out`, inverted: `inversion`), by where they were; the run goes on.
+    /// `blow_out`, inverted: `inversion`, non-finite: `non_finite`), by
+    /// where they were; the run goes on. A non-finite position places
+    /// nothing: an event of such particles alone spans the box.
     pub(crate) fn culled_events(&mut self, v: &StateView, g: f64) {
         use solver::CullReason;
         let kinds = [
             (CullReason::Escaped, EventKind::BlowOut, Rule::OutsideBox),
             (CullReason::Inverted, EventKind::Inversion, Rule::Inversion),
+            (CullReason::NonFinite, EventKind::NonFinite, Rule::NonFinite),
         ];
         for (reason, kind, rule) in kinds {
             let mut cells: Option<CellRange> = None;
             let mut count = 0;
             for c in v.culled.iter().filter(|c| c.reason == reason) {
+                count += 1;
+                if !(c.x.x.is_finite() && c.x.y.is_finite()) {
+                    continue;
+                }
                 let (i, j) = self.geom.cell_of(c.x);
                 let cell = CellRange::of(i, j);
                 cells = Some(cells.map_or(cell, |r| r.union(&cell)));
-                count += 1;
             }
-            let Some(cells) = cells else { continue };
-            let k = self.attach(kind, Cluster::new(cells, rule.into(), 0.0), v, g, false);
+            if count == 0 {
+                continue;
+            }
+            let [ni, nj] = self.geom.cells;
+            let whole = CellRange::of(0, 0).union(&CellRange::of(ni - 1, nj - 1));
+            let cluster = Cluster::new(cells.unwrap_or(whole), rule.into(), 0.0);
+            let k = self.attach(kind, cluster, v, g, false);
             if k == usize::MAX {
                 continue;
             }

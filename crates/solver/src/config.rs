@@ -102,6 +102,10 @@ pub struct Scene {
     pub on_escape: OnLoss,
     /// A particle with J <= 0 or det F <= 0: stop the run or delete it.
     pub on_inversion: OnLoss,
+    /// A particle whose position, velocity, J, pressure, stress or stored
+    /// energy is not a finite number: stop the run, or delete it (Uintah goes on: its relocation
+    /// drops a position no patch holds, and its step skips a NaN speed).
+    pub on_nonfinite: OnLoss,
     /// Fraction of the initial mass that deleted particles may take before
     /// the run counts as blown up (the harness's convention, not Uintah's).
     pub lost_mass_limit: f64,
@@ -146,6 +150,7 @@ impl Default for Scene {
             seed: 0,
             on_escape: OnLoss::Stop,
             on_inversion: OnLoss::Stop,
+            on_nonfinite: OnLoss::Stop,
             lost_mass_limit: 0.1,
             max_j: None,
             no_slip: vec![],
@@ -579,6 +584,11 @@ impl SolverConfig {
             s.on_escape != OnLoss::Keep,
             "scene.on_escape",
             "\"keep\" is for on_inversion only (a particle outside the box has no grid); allowed: \"stop\", \"delete\"",
+        )?;
+        check(
+            s.on_nonfinite != OnLoss::Keep,
+            "scene.on_nonfinite",
+            "\"keep\" is for on_inversion only (a non-finite particle poisons its nodes); allowed: \"stop\", \"delete\"",
         )?;
         if let Some(dz) = s.slab {
             within(dz, 1e-6, 10.0, "scene.slab")?;

@@ -1,6 +1,7 @@
-//! Cull stage (end of step): deletes the particles that left the box or
-//! inverted when the scene says so (`on_escape` / `on_inversion =
-//! "delete"`, Uintah's behaviour), keeping id order, and counts them. Under
+//! Cull stage (end of step): deletes the particles that left the box,
+//! inverted or hold a non-finite state when the scene says so (`on_escape`
+//! / `on_inversion` / `on_nonfinite = "delete"`, Uintah's behaviour),
+//! keeping id order, and counts them. Under
 //! "stop" nothing is deleted: the monitor sees the particle and stops the run.
 //! A particle past an open side of the box (a drained wall) has flowed out:
 //! it is always deleted and counted apart, as outflow, not as a loss.
@@ -19,6 +20,11 @@ pub enum CullReason {
     Inverted,
     /// Flowed out through an open side (a drained wall).
     Drained,
+    /// Its position, velocity, J, pressure, stress or stored energy is not
+    /// a finite number
+    /// (`on_nonfinite = "delete"`); counted with the escaped, as Uintah's
+    /// relocation drops it like a particle that left the domain.
+    NonFinite,
 }
 
 /// A particle deleted at the last step, as it was when deleted.
@@ -69,6 +75,7 @@ impl Losses {
 pub struct CullRules {
     escape: bool,
     inversion: bool,
+    nonfinite: bool,
     /// Open sides [axis][low, high]: outflow.
     open: [[bool; 2]; 2],
     /// det F is checked apart from J (the exp J update keeps J > 0).
@@ -84,11 +91,13 @@ impl CullRules {
     pub fn of(scene: &Scene, j_update: JUpdate, open: [[bool; 2]; 2]) -> Option<Self> {
         let escape = scene.on_escape == OnLoss::Delete;
         let inversion = scene.on_inversion == OnLoss::Delete;
+        let nonfinite = scene.on_nonfinite == OnLoss::Delete;
         let lo = Vec2::from(scene.origin);
         let any_open = open.iter().flatten().any(|&o| o);
-        (escape || inversion || any_open).then_some(CullRules {
+        (escape || inversion || nonfinite || any_open).then_some(CullRules {
             escape,
             inversion,
+            nonfinite,
             open,
             det_apart: j_update == JUpdate::Exp,
             max_j: scene.max_j.unwrap_or(f64::INFINITY),
@@ -110,6 +119,9 @@ impl CullRules {
         if self.inversion && degenerate {
             return Some(CullReason::Inverted);
         }
+        if self.nonfinite && !finite_state(ps, p) {
+            return Some(CullReason::NonFinite);
+        }
         let x = ps.x[p];
         let past_open = |k: usize| {
             (self.open[k][0] && x[k] < self.lo[k]) || (self.open[k][1] && x[k] > self.hi[k])
@@ -117,7 +129,8 @@ impl CullRules {
         if past_open(0) || past_open(1) {
             return Some(CullReason::Drained);
         }
-        // A non-finite position is not an escape: the monitor stops the run on it.
+        // A non-finite position is not an escape: the monitor stops the run
+        // on it unless `on_nonfinite = "delete"` took it above.
         if self.escape
             && (0..2).any(|k| !self.periodic[k] && (x[k] < self.lo[k] || x[k] > self.hi[k]))
         {
@@ -125,6 +138,17 @@ impl CullRules {
         }
         None
     }
+}
+
+/// Position, velocity, J, pressure, stress and stored energy all finite
+/// (what the measures sum and the monitor checks).
+fn finite_state(ps: &Particles, p: usize) -> bool {
+    let (x, v) = (ps.x[p], ps.v[p]);
+    x.iter().chain(v.iter()).all(|c| c.is_finite())
+        && ps.j[p].is_finite()
+        && ps.pressure[p].is_finite()
+        && ps.stored_energy[p].is_finite()
+        && ps.stress[p].iter().all(|s| s.is_finite())
 }
 
 /// Deletes the particles `rules` select; `culled` receives them (cleared
@@ -155,7 +179,7 @@ pub fn cull(
     });
     for c in culled.iter() {
         match c.reason {
-            CullReason::Escaped => {
+            CullReason::Escaped | CullReason::NonFinite => {
                 losses.escaped += 1;
                 losses.mass_escaped += c.mass;
             }

@@ -480,6 +480,7 @@ impl Solver {
         self.step += 1;
         self.time += self.dt;
         self.cull();
+        self.forget_non_finite_work();
         self.measure();
         timing::lap(&mut self.times.other, &mut clock);
         self.times.steps += 1;
@@ -493,6 +494,16 @@ impl Solver {
         let ps = &mut self.particles;
         if deletion::cull(ps, rules, self.time, &mut self.losses, &mut self.culled) > 0 {
             self.stencils.truncate(ps.len());
+        }
+    }
+
+    /// Under `on_nonfinite = "delete"`, a step whose dissipated work came
+    /// out not a number (from particles now deleted as non-finite) books
+    /// none of it, so that the budget goes on: Uintah keeps no such ledger.
+    /// `energy.dissipated` still holds the value the last measure took.
+    fn forget_non_finite_work(&mut self) {
+        if self.cfg.scene.on_nonfinite == config::OnLoss::Delete && !self.dissipated.is_finite() {
+            self.dissipated = self.energy.dissipated;
         }
     }
 

@@ -18,6 +18,7 @@ mod hydrostatic_floor;
 mod inversion;
 mod mechanisms;
 mod mixture;
+mod non_finite;
 mod particle_history;
 mod remedy_booking;
 mod ringing;

@@ -158,3 +158,56 @@ fn an_inverting_particle_carries_no_stress_under_delete() {
         "a particle at J = 1 has no stress either way"
     );
 }
+
+/// A resting block whose middle particle has a velocity that is not a
+/// number, under `on_nonfinite` (linear USF, dt 1e-4 s).
+fn poisoned(on_nonfinite: OnLoss) -> (Solver, u32) {
+    let material = Material::tait(1e5);
+    let mut scene = common::box_scene([1.0, 1.0], [0.1, 0.1, 0.5, 0.5], material, 9.81);
+    scene.on_nonfinite = on_nonfinite;
+    let method = Method {
+        dt_value: Some(1e-4),
+        ..common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usf)
+    };
+    let cfg = SolverConfig {
+        scene: scene.clone(),
+        method,
+        perturb: vec![],
+    };
+    let mut particles = scene::seed(&scene);
+    let planted = particles.len() / 2;
+    particles.v[planted].x = f64::NAN;
+    let id = particles.id[planted];
+    (Solver::with_particles(cfg, particles), id)
+}
+
+/// Under "stop" the NaN spreads through the planted particle's nodes to
+/// its neighbours and stays for the monitor to see. Under
+/// `on_nonfinite = "delete"` every particle it reached is deleted at the
+/// end of that step and counted as escaped (Uintah's relocation drops a
+/// position no patch holds), and the rest steps on finite.
+#[test]
+fn non_finite_particles_are_deleted_under_on_nonfinite_delete() {
+    let (mut kept, _) = poisoned(OnLoss::Stop);
+    let n0 = kept.particle_count();
+    kept.step().unwrap();
+    let reached = kept.view().n_nonfinite;
+    assert!(reached > 1, "the NaN reached the neighbours: {reached}");
+    assert_eq!(kept.particle_count(), n0);
+    let (mut s, id) = poisoned(OnLoss::Delete);
+    s.step().unwrap();
+    let v = s.view();
+    assert_eq!(v.n_nonfinite, 0);
+    assert_eq!(v.culled.len(), reached);
+    assert!(v.culled.iter().all(|c| c.reason == CullReason::NonFinite));
+    assert!(v.culled.iter().any(|c| c.id == id));
+    let l = s.losses();
+    assert_eq!((l.escaped, l.inverted), (reached as u64, 0));
+    assert_eq!(s.particle_count(), n0 - reached);
+    assert!(v.energy.total().is_finite());
+    for _ in 0..5 {
+        s.step().unwrap();
+        assert!(s.view().culled.is_empty(), "what is left stays finite");
+        assert!(s.view().energy.total().is_finite());
+    }
+}
