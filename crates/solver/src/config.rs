@@ -103,8 +103,9 @@ pub struct Scene {
     /// A particle with J <= 0 or det F <= 0: stop the run or delete it.
     pub on_inversion: OnLoss,
     /// A particle whose position, velocity, J, pressure, stress or stored
-    /// energy is not a finite number: stop the run, or delete it (Uintah goes on: its relocation
-    /// drops a position no patch holds, and its step skips a NaN speed).
+    /// energy is not a finite number: stop the run, or delete it (Uintah
+    /// goes on: its relocation drops a position no patch holds, and its
+    /// step skips a NaN speed).
     pub on_nonfinite: OnLoss,
     /// Fraction of the initial mass that deleted particles may take before
     /// the run counts as blown up (the harness's convention, not Uintah's).

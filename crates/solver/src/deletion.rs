@@ -21,9 +21,9 @@ pub enum CullReason {
     /// Flowed out through an open side (a drained wall).
     Drained,
     /// Its position, velocity, J, pressure, stress or stored energy is not
-    /// a finite number
-    /// (`on_nonfinite = "delete"`); counted with the escaped, as Uintah's
-    /// relocation drops it like a particle that left the domain.
+    /// a finite number (`on_nonfinite = "delete"`); counted with the
+    /// escaped, as Uintah's relocation drops it like a particle that left
+    /// the domain.
     NonFinite,
 }
 
