@@ -4,6 +4,7 @@
 
 use crate::common;
 
+use solver::particles::Particles;
 use solver::*;
 
 /// A resting block and, far from it, one cell of particles thrown at
@@ -96,21 +97,12 @@ fn an_inverted_particle_is_deleted_under_delete() {
     let material = Material::tait(1e5);
     let mut scene = common::box_scene([1.0, 1.0], [0.3, 0.3, 0.7, 0.7], material, 0.0);
     scene.on_inversion = OnLoss::Delete;
-    let method = Method {
-        dt_value: Some(1e-3),
-        ..common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usf)
-    };
-    let cfg = SolverConfig {
-        scene: scene.clone(),
-        method,
-        perturb: vec![],
-    };
-    let mut particles = scene::seed(&scene);
-    for (x, v) in particles.x.iter().zip(particles.v.iter_mut()) {
-        v.x = -1500.0 * (x.x - 0.5);
-    }
-    let n0 = particles.len();
-    let mut s = Solver::with_particles(cfg, particles);
+    let mut s = seeded_linear_usf(scene, 1e-3, |particles| {
+        for (x, v) in particles.x.iter().zip(particles.v.iter_mut()) {
+            v.x = -1500.0 * (x.x - 0.5);
+        }
+    });
+    let n0 = s.particle_count();
     s.step().unwrap();
     let v = s.view();
     assert!(v.j.iter().all(|&j| j > 0.0), "no inverted particle is left");
@@ -165,20 +157,30 @@ fn poisoned(on_nonfinite: OnLoss) -> (Solver, u32) {
     let material = Material::tait(1e5);
     let mut scene = common::box_scene([1.0, 1.0], [0.1, 0.1, 0.5, 0.5], material, 9.81);
     scene.on_nonfinite = on_nonfinite;
+    let mut id = 0;
+    let s = seeded_linear_usf(scene, 1e-4, |particles| {
+        let planted = particles.len() / 2;
+        particles.v[planted].x = f64::NAN;
+        id = particles.id[planted];
+    });
+    (s, id)
+}
+
+/// `scene` seeded, its particles changed by `edit`, on linear FLIP USF at
+/// a fixed step `dt`.
+fn seeded_linear_usf(scene: Scene, dt: f64, edit: impl FnOnce(&mut Particles)) -> Solver {
     let method = Method {
-        dt_value: Some(1e-4),
+        dt_value: Some(dt),
         ..common::method(ShapeKind::Linear, TransferKind::Flip, SchemeKind::Usf)
     };
+    let mut particles = scene::seed(&scene);
+    edit(&mut particles);
     let cfg = SolverConfig {
-        scene: scene.clone(),
+        scene,
         method,
         perturb: vec![],
     };
-    let mut particles = scene::seed(&scene);
-    let planted = particles.len() / 2;
-    particles.v[planted].x = f64::NAN;
-    let id = particles.id[planted];
-    (Solver::with_particles(cfg, particles), id)
+    Solver::with_particles(cfg, particles)
 }
 
 /// Under "stop" the NaN spreads through the planted particle's nodes to
