@@ -5,6 +5,7 @@
         [--causes injection,inversion] [--counterfactual] [--max-window-steps N]
     python3 scripts/explain_sample.py MATRIX_DIR --all-explained
     python3 scripts/explain_sample.py MATRIX_DIR --table-only --causes impact --precursors
+    python3 scripts/explain_sample.py MATRIX_DIR --hallmark --precursors
 
 Picks kicks of cause `injection` (or the `--causes` given) from every
 case's summary.json (events open for at most `--max-window-steps` steps
@@ -15,7 +16,8 @@ by K (`materials.water.K`) and by time: collapse (t < 0.15 s), impact
 (deterministic: cases and events in name and id order), then runs
 `kick explain CASE --event K --threads 1` for each (skipping those already
 explained) and prints a table of each event's shares and the means per time
-stratum.
+stratum. `--hallmark` takes, instead of a sample, every event of the given
+causes that the monitor gave the hallmark (the anomaly proper).
 """
 import argparse
 import glob
@@ -74,11 +76,12 @@ def explained_events(matrix):
             if explain_done(case, e["id"]) is not None]
 
 
-def explain(kick, case, event, counterfactual=False):
+def explain(kick, case, event, counterfactual=False, quiet_window=None):
     """Explains the event unless it already is; its explain.json (None if it failed)."""
     done = explain_done(case, event)
     if done is None:
         extra = ["--counterfactual"] if counterfactual else []
+        extra += ["--quiet-window", str(quiet_window)] if quiet_window else []
         subprocess.run([kick, "explain", case, "--event", str(event), "--threads", "1", *extra],
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         done = explain_done(case, event)
@@ -99,9 +102,18 @@ def main():
                     help="also table each event's precursors against its matched quiet boxes, and their tally")
     ap.add_argument("--all-explained", action="store_true",
                     help="table every event of the matrix already explained (picked or not); runs nothing")
+    ap.add_argument("--quiet-window", type=float, default=None,
+                    help="seconds of quiet window to explain (kick explain --quiet-window)")
+    ap.add_argument("--hallmark", action="store_true",
+                    help="every event of the causes with the monitor's hallmark, not a sample")
     a = ap.parse_args()
     if a.all_explained:
         chosen = explained_events(a.matrix)
+    elif a.hallmark:
+        causes = a.causes.split(",")
+        chosen = [((k, stratum(e["t"])), case, e) for k, case, e in events(a.matrix)
+                  if e["cause"] in causes and e.get("checkpoint") and hallmark(e) == "yes"]
+        print(f"events with the hallmark: {len(chosen)}", file=sys.stderr)
     else:
         chosen, sizes = pick(a.matrix, a.n, tuple(a.causes.split(",")), a.max_window_steps)
         print(f"injection kicks per (K, time) stratum: {sizes}", file=sys.stderr)
@@ -109,7 +121,8 @@ def main():
         results = [explain_done(case, e["id"]) for _, case, e in chosen]
     else:
         with ThreadPoolExecutor(a.jobs) as ex:
-            results = list(ex.map(lambda c: explain(a.kick, c[1], c[2]["id"], a.counterfactual), chosen))
+            results = list(ex.map(lambda c: explain(a.kick, c[1], c[2]["id"], a.counterfactual,
+                                                    a.quiet_window), chosen))
     keys = ["internal", "external", "walls", "jump", "small_mass_node", "cell_crossing", "stress_outlier"]
     print("| case | event | K (Pa) | t (s) | stratum | hallmark | matched | closure | largest part | internal | jump | M1 small-mass | M2 crossing | M3 outlier | M4 drift / speed | M4 drift / sqrt(gH) | M5 Courant | prevented by |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
@@ -155,9 +168,10 @@ def precursor_table(chosen, results):
     f = lambda x: "-" if x is None else f"{x:.2f}"
     print()
     print("| case | event | cause | t (s) | named | excess | M1 event / control | M2 event / control "
-          "| M3 event / control | at first step M1 / M2 / M3 | boxes | cancellation | leading |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    tally = {}
+          "| M3 event / control | ringing event / control | quiet window (s) | at first step M1 / M2 / M3 "
+          "| boxes | cancellation | leading |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    tally, ratios = {}, {}
     for (_, case, e), j in zip(chosen, results):
         p = (j or {}).get("precursors")
         if p is None:
@@ -166,17 +180,35 @@ def precursor_table(chosen, results):
         pair = lambda k: f"{f(ev[k])} / {f(ct[k])}"
         print(f"| {os.path.basename(case)} | {e['id']} | {e['cause']} | {e['t']:.3f} | {p['named']} | "
               f"{f(p['excess'])} | {pair('m1_light_node')} | {pair('m2_cell_crossing')} | "
-              f"{pair('m3_stress_outlier')} | {f(on['m1_light_node'])} / {f(on['m2_cell_crossing'])} / "
-              f"{f(on['m3_stress_outlier'])} | {p['control_boxes']} | {f(j['cancellation'])} | "
+              f"{pair('m3_stress_outlier')} | {ringing(p)} | {window_s(j)} | "
+              f"{f(on['m1_light_node'])} / {f(on['m2_cell_crossing'])} / {f(on['m3_stress_outlier'])} | {p['control_boxes']} | {f(j['cancellation'])} | "
               f"{j['leading']['mechanism']} |")
         cause = "impact" if e["cause"] == "impact" else "kick"
         tally.setdefault(cause, {}).setdefault(p["named"], 0)
         tally[cause][p["named"]] += 1
+        if p.get("ringing_event") is not None and p.get("ringing_control"):
+            ratios.setdefault(cause, []).append(p["ringing_event"] / p["ringing_control"])
     print()
     for cause, names in sorted(tally.items()):
         n = sum(names.values())
         print(f"{cause}: {n} explained; named precursor: "
               + ", ".join(f"{k} {v} of {n}" for k, v in sorted(names.items(), key=lambda x: -x[1])))
+        r = sorted(ratios.get(cause, []))
+        if r:
+            print(f"{cause}: quiet-window ringing above its controls' in {sum(x > 1 for x in r)} of "
+                  f"{len(r)}; event / control median {statistics.median(r):.2f} [{r[0]:.2f}, {r[-1]:.2f}]")
+
+
+def ringing(p):
+    """The quiet window's ringing (mean drift over sqrt(g H)), event / control."""
+    e, c = p.get("ringing_event"), p.get("ringing_control")
+    g = lambda x: "-" if x is None else f"{x:.2g}"
+    return f"{g(e)} / {g(c)}" if "ringing_event" in p else "-"
+
+
+def window_s(j):
+    w = j["window"]
+    return f"{w['onset_from'] - w['explain_from'] + 0.01:.2f}"
 
 
 def hallmark(e):

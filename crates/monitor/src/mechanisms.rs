@@ -29,7 +29,7 @@
 //!   nodal advective number, as the event logged them.
 
 use crate::stats::median_and_mad;
-use solver::forensics::ExplainedStep;
+use solver::forensics::{Explained, ExplainedStep};
 use solver::Vec2;
 use std::collections::HashMap;
 
@@ -161,6 +161,11 @@ pub struct Flags {
     pub crossed: usize,
     /// M3: a stress outlier among its neighbours.
     pub outlier: usize,
+    /// M4 in the quiet window: the sum over the particle-steps of the drift
+    /// |v_p - sum N v_i| at P2G (m/s), the velocity the grid does not carry
+    /// (absent from older files).
+    #[serde(default)]
+    pub drift_sum: f64,
 }
 
 impl Flags {
@@ -169,6 +174,15 @@ impl Flags {
         self.light_node += b.light_node;
         self.crossed += b.crossed;
         self.outlier += b.outlier;
+        self.drift_sum += b.drift_sum;
+    }
+
+    /// The mean drift per particle-step (m/s); NaN when empty.
+    pub fn mean_drift(&self) -> f64 {
+        if self.particles == 0 {
+            return f64::NAN;
+        }
+        self.drift_sum / self.particles as f64
     }
 
     /// The shares of particle-steps flagged (M1, M2, M3); NaN when empty.
@@ -229,6 +243,13 @@ pub struct StepParts {
     pub outliers: usize,
     /// The lightest stencil node's share of a full node.
     pub min_node_share: f64,
+}
+
+/// |v_p - sum N v_i| of an explained particle at P2G: its velocity that the
+/// grid does not carry (M4).
+fn drift(e: &Explained) -> f64 {
+    let interpolated: Vec2 = e.nodes.iter().map(|n| n.interpolated).sum();
+    (e.v_before - interpolated).norm()
 }
 
 /// How many distinct values `v` holds (sorted and deduplicated in place).
@@ -306,6 +327,7 @@ impl Mechanisms {
             if self.outlier(q, &cells, &bins, &step.pressure) {
                 f.outlier += 1;
             }
+            f.drift_sum += drift(e);
         }
         f
     }
@@ -374,8 +396,7 @@ impl Mechanisms {
                     outliers.push(s.particle);
                 }
             }
-            let interpolated: Vec2 = e.nodes.iter().map(|n| n.interpolated).sum();
-            drift_sum += (e.v_before - interpolated).norm();
+            drift_sum += drift(e);
             speed_sum += e.v_before.norm();
             counted += 1;
             let size = e.dv.norm() + e.nodes.iter().map(|n| n.parts_size()).sum::<f64>();

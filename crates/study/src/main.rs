@@ -210,6 +210,11 @@ struct ExplainArgs {
     /// evidence of an injection).
     #[arg(long, value_enum, default_value_t = SwitchAt::Onset, requires = "counterfactual")]
     switch_at: SwitchAt,
+    /// The quiet window's length in seconds (default: the case's
+    /// monitor.quiet_seconds), over which the precursors and the ringing
+    /// are measured; the replay starts from the latest checkpoint before it.
+    #[arg(long)]
+    quiet_window: Option<f64>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -695,9 +700,16 @@ fn explain_command(args: ExplainArgs) -> ExitCode {
         counterfactual,
         members,
         switch_at,
+        quiet_window,
     } = args;
     if threads == Some(0) {
         return bad_input("--threads: 0 is out of range (allowed >= 1)");
+    }
+    if let Some(q) = quiet_window.filter(|q| !(q.is_finite() && *q > explain::ONSET_SECONDS)) {
+        return bad_input(&format!(
+            "--quiet-window: {q} is out of range (allowed: seconds above the onset window's {})",
+            explain::ONSET_SECONDS
+        ));
     }
     if !(1..=64).contains(&members) {
         return bad_input(&format!(
@@ -710,6 +722,7 @@ fn explain_command(args: ExplainArgs) -> ExitCode {
         counterfactual,
         members,
         switch_at_quiet: switch_at == SwitchAt::Quiet,
+        quiet_seconds: quiet_window,
     };
     match explain::explain(&case_dir, event, &opts) {
         Ok(o) => {

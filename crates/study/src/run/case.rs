@@ -162,7 +162,7 @@ fn case_runner<'p, S: Stepper>(
     let mut run_opts = RunOptions::new(Some(dir.to_path_buf()), rows);
     run_opts.csv = opts.csv;
     run_opts.end_when_checked = case.output.end_when_checked;
-    run_opts.collapse_from = Some(first_dt);
+    run_opts.collapse_from = crate::run::collapse_reference(first_dt, &case.solver.method);
     let bar = opts.bar.clone().unwrap_or_else(ProgressBar::hidden);
     bar.set_length(1000);
     bar.set_prefix(case.name.clone());

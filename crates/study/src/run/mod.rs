@@ -140,6 +140,15 @@ impl Rows {
 pub const COLLAPSE_SHARE: f64 = 0.01;
 pub const COLLAPSE_STEPS: u64 = 20_000;
 
+/// The step a run's collapse is judged against (`RunOptions::collapse_from`):
+/// `first_dt`, unless the method holds a floor (`method.dt_min`). A floor
+/// raises the stable step instead of letting it shrink, as Uintah's
+/// `delt_min` does, so a step at the floor has not collapsed: the run goes
+/// on, as Uintah's does, until a monitor calls a blow-out or it ends.
+pub fn collapse_reference(first_dt: f64, method: &solver::Method) -> Option<f64> {
+    method.dt_min.is_none().then_some(first_dt)
+}
+
 pub struct RunOptions {
     /// Where the timeseries tables go (none are written without it).
     pub dir: Option<PathBuf>,
@@ -455,6 +464,15 @@ mod tests {
     fn solver() -> Solver {
         let cfg = SolverConfig::benchmark_dam_break(ShapeKind::Linear, TransferKind::Flip, 0.02);
         Solver::new(cfg).unwrap()
+    }
+
+    #[test]
+    fn a_step_held_at_a_floor_is_not_judged_collapsed() {
+        let mut method = solver().config().method.clone();
+        assert_eq!(collapse_reference(2e-3, &method), Some(2e-3));
+        // drop.ups's delt_min: a step held there is 0.005 of the first.
+        method.dt_min = Some(1e-5);
+        assert_eq!(collapse_reference(2e-3, &method), None);
     }
 
     fn runner<'p>(until: u64, rows_every: u64) -> Runner<'p, Solver> {

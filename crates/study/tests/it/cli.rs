@@ -1104,6 +1104,50 @@ fn explain_names_a_planted_stress_outlier_and_a_planted_sliver_node() {
     // The kick came at least 0.02 s after the plant (its onset window is
     // the 0.01 s before its first step).
     assert!(f(&j, &["window", "onset_from"]) > 0.06, "{j}");
+    // The light nodes drive the sliver's particles off the grid's velocity:
+    // in the quiet window they ring more than the matched surface boxes
+    // (measured 2.1e-4 against 8.5e-5 of sqrt(g H)).
+    let (ringing, control) = (
+        f(&j, &["precursors", "ringing_event"]),
+        f(&j, &["precursors", "ringing_control"]),
+    );
+    assert!(control > 0.0 && ringing > 2.0 * control, "{j}");
+    // A shorter quiet window, asked for: it starts 0.03 s before the event
+    // (0.02 s before the onset window), with fewer quiet steps.
+    let dir = out.join("sliver");
+    let id = j["event"].to_string();
+    let short = out.join("sliver_short");
+    let o = kick(&[
+        "explain",
+        dir.to_str().unwrap(),
+        "--event",
+        &id,
+        "--quiet-window",
+        "0.03",
+        "--out",
+        short.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let k: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(short.join("explain.json")).unwrap())
+            .unwrap();
+    let quiet =
+        |j: &serde_json::Value| f(j, &["window", "onset_from"]) - f(j, &["window", "explain_from"]);
+    assert!((quiet(&k) - 0.02).abs() < 1e-9, "{k}");
+    assert!((quiet(&j) - 0.04).abs() < 1e-9, "{j}");
+    let steps = |j: &serde_json::Value| j["precursors"]["quiet_steps"].as_u64().unwrap();
+    assert!(steps(&k) < steps(&j), "{k}");
+    // A window no longer than the onset window's is refused.
+    let o = kick(&[
+        "explain",
+        dir.to_str().unwrap(),
+        "--event",
+        &id,
+        "--quiet-window",
+        "0.01",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--quiet-window"), "{}", stderr(&o));
 }
 
 #[test]

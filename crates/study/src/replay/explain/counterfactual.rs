@@ -616,9 +616,10 @@ fn replay_with_change(
         happens: false,
     };
     // A change whose step collapses stops as a blow-up, as a case does,
-    // instead of crawling to the window's end.
+    // instead of crawling to the window's end (not under a floor).
     let mut opts = RunOptions::new(None, Rows::every_step());
-    opts.collapse_from = Some(stepper.solver.next_dt());
+    let floored = stepper.method.as_ref().unwrap_or(&case.solver.method);
+    opts.collapse_from = crate::run::collapse_reference(stepper.solver.next_dt(), floored);
     let mut runner = Runner::new(stepper, watches, opts);
     runner.attach(WindowInjection {
         from: window.switch_from,

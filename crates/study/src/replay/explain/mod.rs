@@ -1,9 +1,9 @@
 //! `kick explain`: why an event kicked. Replays from the checkpoint before
 //! the event, bit for bit as `kick reproduce` does, taking the steps from
-//! `quiet_seconds` before onset to the event's last step with the solver's
-//! force forensics (`solver::forensics`), and measures the mechanisms
-//! (`monitor::mechanisms`, docs/physics.md section 4c) over the onset
-//! window (`ONSET_SECONDS` before the event's first step to its last).
+//! `quiet_seconds` (or `--quiet-window`) before onset to the event's last
+//! step with the solver's force forensics (`solver::forensics`), and
+//! measures the mechanisms (`monitor::mechanisms`, docs/physics.md section
+//! 4c) over the onset window (`ONSET_SECONDS` before the event's first step to its last).
 //! With `--counterfactual` it restarts from the same checkpoint as an
 //! ensemble per single change, applied from the onset window's start, or
 //! the quiet window's with `--switch-at quiet` (`counterfactual`).
@@ -40,6 +40,9 @@ pub struct ExplainOptions {
     /// Make each change at the quiet window's start, not the onset
     /// window's: the energy window's evidence then postdates the change.
     pub switch_at_quiet: bool,
+    /// The quiet window's length (s) when not the monitor's `quiet_seconds`:
+    /// a longer look back for the precursors and the ringing.
+    pub quiet_seconds: Option<f64>,
 }
 
 /// Bad input (exit 2): missing or corrupted files, unknown event, mixtures.
@@ -294,7 +297,7 @@ struct Loaded {
     others: Vec<CellRange>,
 }
 
-fn load(case_dir: &Path, id: u32) -> Result<Loaded, ExplainError> {
+fn load(case_dir: &Path, id: u32, quiet_seconds: Option<f64>) -> Result<Loaded, ExplainError> {
     let summary_path = case_dir.join("summary.json");
     let events = Summary::read(case_dir).map_err(ExplainError)?.events;
     let Some(logged) = events.iter().find(|e| e.id == id).cloned() else {
@@ -324,7 +327,7 @@ fn load(case_dir: &Path, id: u32) -> Result<Loaded, ExplainError> {
             study_path.display()
         )));
     }
-    let from = logged.t - case.monitor.quiet_seconds;
+    let from = logged.t - quiet_seconds.unwrap_or(case.monitor.quiet_seconds);
     let (checkpoint_name, checkpoint, checkpoint_t) =
         replay_checkpoint(case_dir, &checkpoint_name, from)?;
     let others = events
@@ -389,14 +392,15 @@ fn replay_checkpoint(
 }
 
 pub fn explain(case_dir: &Path, id: u32, opts: &ExplainOptions) -> Result<Outcome, ExplainError> {
-    let loaded = load(case_dir, id)?;
+    let loaded = load(case_dir, id, opts.quiet_seconds)?;
     let out = opts
         .out
         .clone()
         .unwrap_or_else(|| case_dir.join("explain").join(format!("event_{id}")));
     let logged = &loaded.logged;
     let mcfg = &loaded.case.monitor;
-    let (explain_from, onset_from) = (logged.t - mcfg.quiet_seconds, logged.t - ONSET_SECONDS);
+    let quiet_seconds = opts.quiet_seconds.unwrap_or(mcfg.quiet_seconds);
+    let (explain_from, onset_from) = (logged.t - quiet_seconds, logged.t - ONSET_SECONDS);
     let window = Window {
         explain_from,
         onset_from,
@@ -580,8 +584,7 @@ fn m4_ringing(record: &Record, scene: &solver::Scene, window: &Window) -> Ringin
             before.iter().map(|r| of(r)).sum::<f64>() / before.len() as f64
         }
     };
-    let column = monitor::geometry::Geometry::from_scene(scene).column_height;
-    let gravity_wave = (scene.gravity.abs() * column).sqrt();
+    let gravity_wave = gravity_wave(scene);
     Ringing {
         drift_over_speed: mean_before(|r| r.parts.drift),
         drift_over_gravity_wave: if gravity_wave > 0.0 {
@@ -592,6 +595,12 @@ fn m4_ringing(record: &Record, scene: &solver::Scene, window: &Window) -> Ringin
         steps: before.len(),
         window_s: window.onset_from - window.explain_from,
     }
+}
+
+/// sqrt(g H), H the scene's column height (m/s): M4's unit.
+fn gravity_wave(scene: &solver::Scene) -> f64 {
+    let column = monitor::geometry::Geometry::from_scene(scene).column_height;
+    (scene.gravity.abs() * column).sqrt()
 }
 
 /// The record of an explained replay.
@@ -642,6 +651,7 @@ fn explain_record(
             &record.counts,
             record.control_boxes,
             record.control_ids.len(),
+            gravity_wave(&loaded.case.solver.scene),
         ),
         leading: Leading {
             mechanism: leading.into(),

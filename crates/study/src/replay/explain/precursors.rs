@@ -5,7 +5,10 @@
 //! boxes of the event's size in its own rows (so at the same depth),
 //! filled with particles, at least `CONTROL_MARGIN` cells from it and away
 //! from every other event of the window. Unlike the shares of the burst,
-//! they do not count what the kick itself did.
+//! they do not count what the kick itself did. Beside the flags, the quiet
+//! window's ringing: the mean drift of the particles from the grid's
+//! velocity (M4), over sqrt(g H), for the event's particles and the
+//! controls'.
 
 use monitor::mechanisms::Flags;
 use monitor::CellRange;
@@ -67,6 +70,12 @@ pub struct Precursors {
     pub onset_control: Fractions,
     pub control_boxes: usize,
     pub control_particles: usize,
+    /// The quiet window's mean drift |v_p - sum N v_i| per particle-step
+    /// over sqrt(g H) (M4's unit, H the column's height), of the event's
+    /// particles and of the controls': ringing the grid does not carry.
+    /// Not a flag, so it names no precursor.
+    pub ringing_event: f64,
+    pub ringing_control: f64,
     /// The precursor whose quiet-window share exceeds the controls' most,
     /// by at least `NAMED_EXCESS`; "none" otherwise, and "no control" when
     /// no matched box was found.
@@ -75,7 +84,20 @@ pub struct Precursors {
 }
 
 impl Precursors {
-    pub fn new(c: &Counts, control_boxes: usize, control_particles: usize) -> Self {
+    /// `gravity_wave` is sqrt(g H) (m/s); 0 without gravity (ringing NaN).
+    pub fn new(
+        c: &Counts,
+        control_boxes: usize,
+        control_particles: usize,
+        gravity_wave: f64,
+    ) -> Self {
+        let ringing = |f: &Flags| {
+            if gravity_wave > 0.0 {
+                f.mean_drift() / gravity_wave
+            } else {
+                f64::NAN
+            }
+        };
         let (event, control) = (
             Fractions::of(&c.quiet_event),
             Fractions::of(&c.quiet_control),
@@ -98,6 +120,8 @@ impl Precursors {
             onset_control: Fractions::of(&c.onset_control),
             control_boxes,
             control_particles,
+            ringing_event: ringing(&c.quiet_event),
+            ringing_control: ringing(&c.quiet_control),
             named: if control_boxes == 0 || c.quiet_control.particles == 0 {
                 "no control".into()
             } else if best.1 >= NAMED_EXCESS {
@@ -200,20 +224,25 @@ mod tests {
             light_node: l,
             crossed: c,
             outlier: o,
+            drift_sum: 0.01 * n as f64,
         };
         let counts = Counts {
             quiet_event: flags(100, 80, 10, 5),
             quiet_control: flags(400, 40, 40, 0),
             ..Counts::default()
         };
-        let p = Precursors::new(&counts, 4, 100);
+        let p = Precursors::new(&counts, 4, 100, 2.0);
         assert_eq!(p.named, "M1 small-mass node");
-        assert_eq!(Precursors::new(&counts, 0, 0).named, "no control");
+        assert_eq!(Precursors::new(&counts, 0, 0, 2.0).named, "no control");
         assert!((p.excess - 0.7).abs() < 1e-12);
+        // A mean drift of 0.01 m/s per particle-step, over sqrt(g H) = 2 m/s.
+        assert!((p.ringing_event - 0.005).abs() < 1e-15, "{p:?}");
+        assert!((p.ringing_control - 0.005).abs() < 1e-15, "{p:?}");
+        assert!(Precursors::new(&counts, 4, 100, 0.0).ringing_event.is_nan());
         let counts = Counts {
             quiet_event: flags(100, 20, 10, 5),
             ..counts
         };
-        assert_eq!(Precursors::new(&counts, 4, 100).named, "none");
+        assert_eq!(Precursors::new(&counts, 4, 100, 2.0).named, "none");
     }
 }

@@ -165,7 +165,7 @@ mod tests {
             steps_explained: 2,
             closure_rest_max: 1e-12,
             cancellation: 1.0,
-            precursors: Precursors::new(&Default::default(), 0, 0),
+            precursors: Precursors::new(&Default::default(), 0, 0, 1.0),
             shares: Shares {
                 internal: 0.75,
                 small_mass_node: f64::NAN,
