@@ -20,6 +20,7 @@ stratum. `--hallmark` takes, instead of a sample, every event of the given
 causes that the monitor gave the hallmark (the anomaly proper).
 """
 import argparse
+import csv
 import glob
 import json
 import os
@@ -168,10 +169,10 @@ def precursor_table(chosen, results):
     f = lambda x: "-" if x is None else f"{x:.2f}"
     print()
     print("| case | event | cause | t (s) | named | excess | M1 event / control | M2 event / control "
-          "| M3 event / control | ringing event / control | quiet window (s) | at first step M1 / M2 / M3 "
-          "| boxes | cancellation | leading |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    tally, ratios = {}, {}
+          "| M3 event / control | ringing event / control | quiet window (s) | ringing last 0.05 s / first half "
+          "| at first step M1 / M2 / M3 | boxes | cancellation | leading |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    tally, ratios, trends = {}, {}, {}
     for (_, case, e), j in zip(chosen, results):
         p = (j or {}).get("precursors")
         if p is None:
@@ -180,7 +181,7 @@ def precursor_table(chosen, results):
         pair = lambda k: f"{f(ev[k])} / {f(ct[k])}"
         print(f"| {os.path.basename(case)} | {e['id']} | {e['cause']} | {e['t']:.3f} | {p['named']} | "
               f"{f(p['excess'])} | {pair('m1_light_node')} | {pair('m2_cell_crossing')} | "
-              f"{pair('m3_stress_outlier')} | {ringing(p)} | {window_s(j)} | "
+              f"{pair('m3_stress_outlier')} | {ringing(p)} | {window_s(j)} | {f(trend(case, e, j))} | "
               f"{f(on['m1_light_node'])} / {f(on['m2_cell_crossing'])} / {f(on['m3_stress_outlier'])} | {p['control_boxes']} | {f(j['cancellation'])} | "
               f"{j['leading']['mechanism']} |")
         cause = "impact" if e["cause"] == "impact" else "kick"
@@ -188,6 +189,8 @@ def precursor_table(chosen, results):
         tally[cause][p["named"]] += 1
         if p.get("ringing_event") is not None and p.get("ringing_control"):
             ratios.setdefault(cause, []).append(p["ringing_event"] / p["ringing_control"])
+        if trend(case, e, j) is not None:
+            trends.setdefault(cause, []).append(trend(case, e, j))
     print()
     for cause, names in sorted(tally.items()):
         n = sum(names.values())
@@ -197,6 +200,11 @@ def precursor_table(chosen, results):
         if r:
             print(f"{cause}: quiet-window ringing above its controls' in {sum(x > 1 for x in r)} of "
                   f"{len(r)}; event / control median {statistics.median(r):.2f} [{r[0]:.2f}, {r[-1]:.2f}]")
+        r = sorted(trends.get(cause, []))
+        if r:
+            print(f"{cause}: ringing of the last 0.05 s above the window's first half in "
+                  f"{sum(x > 1 for x in r)} of {len(r)}; ratio median {statistics.median(r):.2f} "
+                  f"[{r[0]:.2f}, {r[-1]:.2f}]")
 
 
 def ringing(p):
@@ -204,6 +212,25 @@ def ringing(p):
     e, c = p.get("ringing_event"), p.get("ringing_control")
     g = lambda x: "-" if x is None else f"{x:.2g}"
     return f"{g(e)} / {g(c)}" if "ringing_event" in p else "-"
+
+
+def trend(case, e, j):
+    """The event particles' mean drift over the quiet window's last 0.05 s
+    (before the onset window) over that in its first half: above 1 when
+    the ringing grows into the kick. None for windows under 0.2 s."""
+    w = j["window"]
+    if w["onset_from"] - w["explain_from"] < 0.19:
+        return None
+    path = os.path.join(case, "explain", f"event_{e['id']}", "explain_steps.csv")
+    if not os.path.exists(path):
+        return None
+    rows = [r for r in csv.DictReader(open(path)) if float(r["onset"]) == 0.0]
+    mid = 0.5 * (w["explain_from"] + w["onset_from"])
+    first = [float(r["m4_drift_speed"]) for r in rows if float(r["t"]) < mid]
+    last = [float(r["m4_drift_speed"]) for r in rows if float(r["t"]) >= e["t"] - 0.05]
+    if not first or not last or statistics.mean(first) == 0.0:
+        return None
+    return statistics.mean(last) / statistics.mean(first)
 
 
 def window_s(j):
