@@ -23,6 +23,7 @@ import argparse
 import csv
 import glob
 import json
+import math
 import os
 import statistics
 import subprocess
@@ -80,6 +81,8 @@ def explained_events(matrix):
 def explain(kick, case, event, counterfactual=False, quiet_window=None):
     """Explains the event unless it already is; its explain.json (None if it failed)."""
     done = explain_done(case, event)
+    if done is not None and quiet_window and abs(quiet_seconds(done) - quiet_window) > 1e-9:
+        done = None  # explained over another quiet window: again, over this one
     if done is None:
         extra = ["--counterfactual"] if counterfactual else []
         extra += ["--quiet-window", str(quiet_window)] if quiet_window else []
@@ -169,19 +172,21 @@ def precursor_table(chosen, results):
     f = lambda x: "-" if x is None else f"{x:.2f}"
     print()
     print("| case | event | cause | t (s) | named | excess | M1 event / control | M2 event / control "
-          "| M3 event / control | ringing event / control | quiet window (s) | ringing last 0.05 s / first half "
-          "| at first step M1 / M2 / M3 | boxes | cancellation | leading |")
+          "| M3 event / control | ringing event / control | quiet window (s) "
+          "| ringing last 0.05 s / first half, event / control | at first step M1 / M2 / M3 | boxes "
+          "| cancellation | leading |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    tally, ratios, trends = {}, {}, {}
+    tally, ratios, trend_of = {}, {}, {}
     for (_, case, e), j in zip(chosen, results):
         p = (j or {}).get("precursors")
         if p is None:
             continue
         ev, ct, on = p["quiet_event"], p["quiet_control"], p["onset_event"]
         pair = lambda k: f"{f(ev[k])} / {f(ct[k])}"
+        te, tc = trends(case, e, j)
         print(f"| {os.path.basename(case)} | {e['id']} | {e['cause']} | {e['t']:.3f} | {p['named']} | "
               f"{f(p['excess'])} | {pair('m1_light_node')} | {pair('m2_cell_crossing')} | "
-              f"{pair('m3_stress_outlier')} | {ringing(p)} | {window_s(j)} | {f(trend(case, e, j))} | "
+              f"{pair('m3_stress_outlier')} | {ringing(p)} | {window_s(j)} | {f(te)} / {f(tc)} | "
               f"{f(on['m1_light_node'])} / {f(on['m2_cell_crossing'])} / {f(on['m3_stress_outlier'])} | {p['control_boxes']} | {f(j['cancellation'])} | "
               f"{j['leading']['mechanism']} |")
         cause = "impact" if e["cause"] == "impact" else "kick"
@@ -189,8 +194,9 @@ def precursor_table(chosen, results):
         tally[cause][p["named"]] += 1
         if p.get("ringing_event") is not None and p.get("ringing_control"):
             ratios.setdefault(cause, []).append(p["ringing_event"] / p["ringing_control"])
-        if trend(case, e, j) is not None:
-            trends.setdefault(cause, []).append(trend(case, e, j))
+        for who, t in (("event", te), ("controls", tc)):
+            if t is not None:
+                trend_of.setdefault((cause, who), []).append(t)
     print()
     for cause, names in sorted(tally.items()):
         n = sum(names.values())
@@ -200,11 +206,12 @@ def precursor_table(chosen, results):
         if r:
             print(f"{cause}: quiet-window ringing above its controls' in {sum(x > 1 for x in r)} of "
                   f"{len(r)}; event / control median {statistics.median(r):.2f} [{r[0]:.2f}, {r[-1]:.2f}]")
-        r = sorted(trends.get(cause, []))
-        if r:
-            print(f"{cause}: ringing of the last 0.05 s above the window's first half in "
-                  f"{sum(x > 1 for x in r)} of {len(r)}; ratio median {statistics.median(r):.2f} "
-                  f"[{r[0]:.2f}, {r[-1]:.2f}]")
+        for who in ("event", "controls"):
+            r = sorted(trend_of.get((cause, who), []))
+            if r:
+                print(f"{cause}, {who}: ringing of the last 0.05 s above the window's first half in "
+                      f"{sum(x > 1 for x in r)} of {len(r)}; ratio median {statistics.median(r):.2f} "
+                      f"[{r[0]:.2f}, {r[-1]:.2f}]")
 
 
 def ringing(p):
@@ -214,28 +221,39 @@ def ringing(p):
     return f"{g(e)} / {g(c)}" if "ringing_event" in p else "-"
 
 
-def trend(case, e, j):
-    """The event particles' mean drift over the quiet window's last 0.05 s
-    (before the onset window) over that in its first half: above 1 when
-    the ringing grows into the kick. None for windows under 0.2 s."""
+def trends(case, e, j):
+    """(event, controls): the mean drift over the quiet window's last 0.05 s
+    (before the onset window) over that in its first half, of the event's
+    particles and of the matched quiet boxes' (None where not recorded):
+    above 1 when the ringing grows towards the kick. Nones for windows
+    under 0.2 s."""
     w = j["window"]
-    if w["onset_from"] - w["explain_from"] < 0.19:
-        return None
     path = os.path.join(case, "explain", f"event_{e['id']}", "explain_steps.csv")
-    if not os.path.exists(path):
-        return None
-    rows = [r for r in csv.DictReader(open(path)) if float(r["onset"]) == 0.0]
+    if w["onset_from"] - w["explain_from"] < 0.19 or not os.path.exists(path):
+        return None, None
+    with open(path) as f:
+        rows = [r for r in csv.DictReader(f) if float(r["onset"]) == 0.0]
     mid = 0.5 * (w["explain_from"] + w["onset_from"])
-    first = [float(r["m4_drift_speed"]) for r in rows if float(r["t"]) < mid]
-    last = [float(r["m4_drift_speed"]) for r in rows if float(r["t"]) >= e["t"] - 0.05]
-    if not first or not last or statistics.mean(first) == 0.0:
-        return None
-    return statistics.mean(last) / statistics.mean(first)
+
+    def ratio(column):
+        value = lambda r: float(r[column]) if r.get(column) else math.nan
+        first = [value(r) for r in rows if float(r["t"]) < mid]
+        last = [value(r) for r in rows if float(r["t"]) >= w["onset_from"] - 0.05]
+        first, last = [x for x in first if x == x], [x for x in last if x == x]
+        if not first or not last or statistics.mean(first) == 0.0:
+            return None
+        return statistics.mean(last) / statistics.mean(first)
+    return ratio("m4_drift_speed"), ratio("m4_drift_speed_control")
+
+
+def quiet_seconds(j):
+    """How far before the event its quiet window started (s)."""
+    w = j["window"]
+    return w["onset_from"] - w["explain_from"] + 0.01
 
 
 def window_s(j):
-    w = j["window"]
-    return f"{w['onset_from'] - w['explain_from'] + 0.01:.2f}"
+    return f"{quiet_seconds(j):.2f}"
 
 
 def hallmark(e):

@@ -210,10 +210,13 @@ struct ExplainArgs {
     /// evidence of an injection).
     #[arg(long, value_enum, default_value_t = SwitchAt::Onset, requires = "counterfactual")]
     switch_at: SwitchAt,
-    /// The quiet window's length in seconds (default: the case's
-    /// monitor.quiet_seconds), over which the precursors and the ringing
-    /// are measured; the replay starts from the latest checkpoint before it.
-    #[arg(long)]
+    /// Start the quiet window SECONDS before the event's first step
+    /// (default: the case's monitor.quiet_seconds; it ends where the onset
+    /// window begins): the precursors, the ringing and M4 are measured
+    /// over it, and the replay starts from the latest checkpoint before
+    /// it. Not with --counterfactual, whose members start from the
+    /// monitor's own window.
+    #[arg(long, conflicts_with = "counterfactual")]
     quiet_window: Option<f64>,
 }
 

@@ -467,7 +467,7 @@ mod tests {
     }
 
     #[test]
-    fn a_step_held_at_a_floor_is_not_judged_collapsed() {
+    fn under_a_step_floor_no_step_is_judged_collapsed() {
         let mut method = solver().config().method.clone();
         assert_eq!(collapse_reference(2e-3, &method), Some(2e-3));
         // drop.ups's delt_min: a step held there is 0.005 of the first.

@@ -1112,8 +1112,26 @@ fn explain_names_a_planted_stress_outlier_and_a_planted_sliver_node() {
         f(&j, &["precursors", "ringing_control"]),
     );
     assert!(control > 0.0 && ringing > 2.0 * control, "{j}");
-    // A shorter quiet window, asked for: it starts 0.03 s before the event
-    // (0.02 s before the onset window), with fewer quiet steps.
+}
+
+/// `--quiet-window` starts the quiet window where asked, and is refused
+/// when no longer than the onset window or with `--counterfactual`.
+#[test]
+fn explain_takes_the_quiet_window_asked_for() {
+    let out = scratch("quiet_window");
+    let f = |j: &serde_json::Value, path: &[&str]| {
+        path.iter()
+            .fold(j, |v, k| &v[*k])
+            .as_f64()
+            .unwrap_or(f64::NAN)
+    };
+    let j = explain_first_kick(
+        &out,
+        "sliver",
+        "region = [0.19, 0.195, 0.21, 0.2]\ndx = [0.0, 0.00395]",
+    );
+    // Asked for 0.03 s: it starts 0.03 s before the event (0.02 s before
+    // the onset window), with fewer quiet steps than the default 0.05 s.
     let dir = out.join("sliver");
     let id = j["event"].to_string();
     let short = out.join("sliver_short");
@@ -1137,17 +1155,24 @@ fn explain_names_a_planted_stress_outlier_and_a_planted_sliver_node() {
     assert!((quiet(&j) - 0.04).abs() < 1e-9, "{j}");
     let steps = |j: &serde_json::Value| j["precursors"]["quiet_steps"].as_u64().unwrap();
     assert!(steps(&k) < steps(&j), "{k}");
-    // A window no longer than the onset window's is refused.
-    let o = kick(&[
-        "explain",
-        dir.to_str().unwrap(),
-        "--event",
-        &id,
-        "--quiet-window",
-        "0.01",
-    ]);
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("--quiet-window"), "{}", stderr(&o));
+    // A window no longer than the onset window's is refused, and so is
+    // one with the counterfactuals.
+    for extra in [["0.01", "--threads"], ["0.5", "--counterfactual"]] {
+        let mut args = vec![
+            "explain",
+            dir.to_str().unwrap(),
+            "--event",
+            &id,
+            "--quiet-window",
+        ];
+        args.extend(extra);
+        if extra[1] == "--threads" {
+            args.push("1");
+        }
+        let o = kick(&args);
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains("quiet-window"), "{}", stderr(&o));
+    }
 }
 
 #[test]

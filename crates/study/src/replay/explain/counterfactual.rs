@@ -240,12 +240,14 @@ fn remedy_keys(method: &Method) -> Vec<&'static str> {
 }
 
 /// The case's method under the pressure-implicit formulation: no remedy,
-/// and the step from the flow (a fixed explicit step would be kept).
+/// and the step from the flow (a fixed explicit step, or an explicit
+/// step's floor, would be kept).
 fn pressure_implicit(method: &Method) -> Method {
     Method {
         formulation: solver::Formulation::PressureImplicit,
         remedies: Default::default(),
         dt_value: None,
+        dt_min: None,
         ..method.clone()
     }
 }
@@ -618,7 +620,11 @@ fn replay_with_change(
     // A change whose step collapses stops as a blow-up, as a case does,
     // instead of crawling to the window's end (not under a floor).
     let mut opts = RunOptions::new(None, Rows::every_step());
-    let floored = stepper.method.as_ref().unwrap_or(&case.solver.method);
+    let floored = [Some(&case.solver.method), stepper.method.as_ref()]
+        .into_iter()
+        .flatten()
+        .find(|m| m.dt_min.is_some())
+        .unwrap_or(&case.solver.method);
     opts.collapse_from = crate::run::collapse_reference(stepper.solver.next_dt(), floored);
     let mut runner = Runner::new(stepper, watches, opts);
     runner.attach(WindowInjection {

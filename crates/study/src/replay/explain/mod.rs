@@ -74,6 +74,10 @@ pub struct StepRow {
     /// In the onset window (else: the quiet time before it, M4's window).
     pub onset: bool,
     pub parts: StepParts,
+    /// The matched quiet boxes' mean drift |v_p - sum N v_i| (m/s) at a
+    /// quiet step (NaN in the onset window): the ringing the event's
+    /// `parts.drift_speed` is compared with.
+    pub control_drift_speed: f64,
 }
 
 /// What the explained replay recorded.
@@ -206,11 +210,12 @@ impl Explaining<'_> {
             .collect()
     }
 
-    /// Counts the precursor flags of a quiet step or of the onset step.
-    fn count_flags(&mut self, step: u64, explained: &ExplainedStep, onset: bool) {
+    /// Counts the precursor flags of a quiet step or of the onset step;
+    /// the controls' mean drift at a quiet step (m/s; NaN otherwise).
+    fn count_flags(&mut self, step: u64, explained: &ExplainedStep, onset: bool) -> f64 {
         let quiet = !onset;
         if !(quiet || step == self.window.first_step) {
-            return;
+            return f64::NAN;
         }
         let (ids, controls) = (&self.record.ids, &self.record.control_ids);
         let event = self
@@ -224,9 +229,11 @@ impl Explaining<'_> {
             c.quiet_event.add(&event);
             c.quiet_control.add(&control);
             c.quiet_steps += 1;
+            control.mean_drift()
         } else {
             c.onset_event = event;
             c.onset_control = control;
+            f64::NAN
         }
     }
 }
@@ -263,7 +270,7 @@ impl Stepper for Explaining<'_> {
             self.primed = true;
             return Ok(());
         }
-        self.count_flags(step, &explained, onset);
+        let control_drift_speed = self.count_flags(step, &explained, onset);
         let ids = &self.record.ids;
         let parts = self
             .mechanisms
@@ -274,6 +281,7 @@ impl Stepper for Explaining<'_> {
             dt: explained.dt,
             onset,
             parts,
+            control_drift_speed,
         });
         Ok(())
     }
@@ -392,6 +400,11 @@ fn replay_checkpoint(
 }
 
 pub fn explain(case_dir: &Path, id: u32, opts: &ExplainOptions) -> Result<Outcome, ExplainError> {
+    if opts.counterfactual && opts.quiet_seconds.is_some() {
+        return Err(ExplainError(
+            "--quiet-window: not with --counterfactual (its members start from the monitor's own window)".into(),
+        ));
+    }
     let loaded = load(case_dir, id, opts.quiet_seconds)?;
     let out = opts
         .out
@@ -712,6 +725,7 @@ fn write_steps(rows: &[StepRow], out: &Path) -> std::io::Result<()> {
         ("share_m3_stress_outlier", share(&|s| s.stress_outlier)),
         ("m4_drift", col(&|r| r.parts.drift)),
         ("m4_drift_speed", col(&|r| r.parts.drift_speed)),
+        ("m4_drift_speed_control", col(&|r| r.control_drift_speed)),
         ("rest_max", col(&|r| r.parts.rest_max)),
         ("crossers", col(&|r| r.parts.crossers as f64)),
         ("outliers", col(&|r| r.parts.outliers as f64)),

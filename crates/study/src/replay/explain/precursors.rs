@@ -219,28 +219,28 @@ mod tests {
 
     #[test]
     fn the_named_precursor_exceeds_its_control_by_the_margin() {
-        let flags = |n, l, c, o| Flags {
+        let flags = |n, l, c, o, drift: f64| Flags {
             particles: n,
             light_node: l,
             crossed: c,
             outlier: o,
-            drift_sum: 0.01 * n as f64,
+            drift_sum: drift * n as f64,
         };
         let counts = Counts {
-            quiet_event: flags(100, 80, 10, 5),
-            quiet_control: flags(400, 40, 40, 0),
+            quiet_event: flags(100, 80, 10, 5, 0.02),
+            quiet_control: flags(400, 40, 40, 0, 0.01),
             ..Counts::default()
         };
         let p = Precursors::new(&counts, 4, 100, 2.0);
         assert_eq!(p.named, "M1 small-mass node");
         assert_eq!(Precursors::new(&counts, 0, 0, 2.0).named, "no control");
         assert!((p.excess - 0.7).abs() < 1e-12);
-        // A mean drift of 0.01 m/s per particle-step, over sqrt(g H) = 2 m/s.
-        assert!((p.ringing_event - 0.005).abs() < 1e-15, "{p:?}");
+        // Mean drifts of 0.02 and 0.01 m/s per particle-step, over sqrt(g H) = 2 m/s.
+        assert!((p.ringing_event - 0.01).abs() < 1e-15, "{p:?}");
         assert!((p.ringing_control - 0.005).abs() < 1e-15, "{p:?}");
         assert!(Precursors::new(&counts, 4, 100, 0.0).ringing_event.is_nan());
         let counts = Counts {
-            quiet_event: flags(100, 20, 10, 5),
+            quiet_event: flags(100, 20, 10, 5, 0.02),
             ..counts
         };
         assert_eq!(Precursors::new(&counts, 4, 100, 2.0).named, "none");
