@@ -1050,15 +1050,22 @@ fn explain_first_kick(out: &std::path::Path, name: &str, plant: &str) -> serde_j
     serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap()
 }
 
+/// The number at `path` in an explain.json (NaN when absent or null).
+fn json_f64(j: &serde_json::Value, path: &[&str]) -> f64 {
+    path.iter()
+        .fold(j, |v, k| &v[*k])
+        .as_f64()
+        .unwrap_or(f64::NAN)
+}
+
+/// The sliver-node plant: the top row's 4 particles of two cells moved
+/// 0.2 mm across the surface's node line, their stress untouched.
+const SLIVER: &str = "region = [0.19, 0.195, 0.21, 0.2]\ndx = [0.0, 0.00395]";
+
 #[test]
 fn explain_names_a_planted_stress_outlier_and_a_planted_sliver_node() {
+    let f = json_f64;
     let out = scratch("planted");
-    let f = |j: &serde_json::Value, path: &[&str]| {
-        path.iter()
-            .fold(j, |v, k| &v[*k])
-            .as_f64()
-            .unwrap_or(f64::NAN)
-    };
     // A stress outlier: one cell of the bulk compressed 5 % (7.5 kPa
     // against the neighbours' 1 kPa). It kicks its neighbours at once:
     // the burst's shares name M3, with no light node and no quiet precursor.
@@ -1085,11 +1092,7 @@ fn explain_names_a_planted_stress_outlier_and_a_planted_sliver_node() {
     // their velocity gradient; then they kick, as stress outliers (measured:
     // M3 1.0 of the burst, M1 0.45). The precursor over the quiet window
     // is M1, absent from the matched surface boxes.
-    let j = explain_first_kick(
-        &out,
-        "sliver",
-        "region = [0.19, 0.195, 0.21, 0.2]\ndx = [0.0, 0.00395]",
-    );
+    let j = explain_first_kick(&out, "sliver", SLIVER);
     assert_eq!(j["precursors"]["named"], "M1 small-mass node", "{j}");
     assert!(
         j["precursors"]["control_boxes"].as_u64().unwrap() >= 2,
@@ -1119,17 +1122,8 @@ fn explain_names_a_planted_stress_outlier_and_a_planted_sliver_node() {
 #[test]
 fn explain_takes_the_quiet_window_asked_for() {
     let out = scratch("quiet_window");
-    let f = |j: &serde_json::Value, path: &[&str]| {
-        path.iter()
-            .fold(j, |v, k| &v[*k])
-            .as_f64()
-            .unwrap_or(f64::NAN)
-    };
-    let j = explain_first_kick(
-        &out,
-        "sliver",
-        "region = [0.19, 0.195, 0.21, 0.2]\ndx = [0.0, 0.00395]",
-    );
+    let f = json_f64;
+    let j = explain_first_kick(&out, "sliver", SLIVER);
     // Asked for 0.03 s: it starts 0.03 s before the event (0.02 s before
     // the onset window), with fewer quiet steps than the default 0.05 s.
     let dir = out.join("sliver");
