@@ -298,6 +298,11 @@ fn is_default_projection(p: &ProjectionSettings) -> bool {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ProjectionSettings {
+    /// Where the velocities live: on the nodes with cell pressures (Q1-P0,
+    /// held by the controls below) or on the cell faces (MAC, inf-sup
+    /// stable; it reads none of hourglass, checkerboard, advection,
+    /// free_surface and air_nodes, and its drift correction is by position).
+    pub scheme: ProjectionScheme,
     /// Share of each fluid cell's hourglass velocity (the nodal mode the
     /// cell divergence cannot see) removed per step, 0 ..= 0.25.
     pub hourglass: f64,
@@ -338,6 +343,15 @@ pub struct ProjectionSettings {
     pub max_iterations: u32,
     /// The conjugate gradient's preconditioner.
     pub preconditioner: Preconditioner,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ProjectionScheme {
+    /// Bilinear nodal velocities, cell pressures (Q1-P0).
+    Collocated,
+    /// Staggered: each component on the faces normal to it.
+    Mac,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -407,6 +421,7 @@ pub enum Preconditioner {
 impl Default for ProjectionSettings {
     fn default() -> Self {
         ProjectionSettings {
+            scheme: ProjectionScheme::Collocated,
             hourglass: 0.05,
             checkerboard: 1.5,
             drift: 0.3,
@@ -785,6 +800,51 @@ impl SolverConfig {
             return Err(needs(
                 &format!("method.{key}"),
                 "takes no remedy (its own controls are [method.projection])",
+            ));
+        }
+        if p.scheme == ProjectionScheme::Mac {
+            self.validate_mac()?;
+        }
+        Ok(())
+    }
+
+    /// What the staggered scheme supports: quadratic B-splines centred on
+    /// the faces, PIC, FLIP or APIC, a walled box, and the particles moved
+    /// with the shapes' velocity.
+    fn validate_mac(&self) -> Result<(), ConfigError> {
+        let (m, s) = (&self.method, &self.scene);
+        let needs = |key: &str, what: &str| ConfigError {
+            key: key.into(),
+            message: format!("method.projection.scheme = \"mac\" {what}"),
+        };
+        if m.shape != ShapeKind::Bspline2 {
+            return Err(needs(
+                "method.shape",
+                "transfers with quadratic B-splines on the faces: use \"bspline2\"",
+            ));
+        }
+        if m.transfer == TransferKind::Xpic {
+            return Err(needs(
+                "method.transfer",
+                "takes \"pic\", \"flip\" or \"apic\" (XPIC smooths on the nodes)",
+            ));
+        }
+        if s.periodic.iter().any(|&p| p) {
+            return Err(needs(
+                "scene.periodic",
+                "needs walls on every side (both must be false)",
+            ));
+        }
+        if m.projection.drift_correction != DriftCorrection::Position {
+            return Err(needs(
+                "method.projection.drift_correction",
+                "corrects the packing by position only: use \"position\"",
+            ));
+        }
+        if m.projection.advection != Advection::Shape {
+            return Err(needs(
+                "method.projection.advection",
+                "moves the particles with the faces' velocity: use \"shape\"",
             ));
         }
         Ok(())

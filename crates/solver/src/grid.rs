@@ -225,6 +225,11 @@ impl Grid {
     }
 
     /// The node lies on a no-slip wall: its velocity is held at zero.
+    /// The no-slip walls, [axis][low side, high side].
+    pub fn no_slip_walls(&self) -> [[bool; 2]; 2] {
+        self.no_slip
+    }
+
     pub fn is_pinned(&self, node: usize) -> bool {
         let (i, j) = self.coords(node);
         [(0, i), (1, j)]

@@ -266,6 +266,11 @@ impl Solver {
         self.cfg.method.formulation == Formulation::PressureImplicit
     }
 
+    /// The pressure-implicit step on the staggered (MAC) grid.
+    fn staggered(&self) -> bool {
+        self.implicit() && self.cfg.method.projection.scheme == config::ProjectionScheme::Mac
+    }
+
     /// The pressure-implicit step's scratch (kept when it exists: its
     /// pressure is the next solve's starting guess).
     fn build_projection(&mut self, n: usize) {
@@ -273,6 +278,9 @@ impl Solver {
             self.projection = stages::projection::Scratch::default();
         } else if self.projection.pressure.is_empty() {
             self.projection = stages::projection::Scratch::new(&self.grid, n);
+        }
+        if self.staggered() && self.projection.faces.is_empty() {
+            self.projection.faces = stages::projection::mac::Faces::new(&self.grid);
         }
     }
 
@@ -475,7 +483,11 @@ impl Solver {
     pub(crate) fn finish_step(&mut self) {
         let mut clock = std::time::Instant::now();
         // What G2P reads: after the hooks and a mixture's coupling.
-        self.ke_grid_updated = stages::grid_update::updated_kinetic(&self.grid);
+        self.ke_grid_updated = if self.staggered() {
+            self.projection.faces.kinetic(true)
+        } else {
+            stages::grid_update::updated_kinetic(&self.grid)
+        };
         stages::scheme::from_grid(self, &mut clock);
         self.step += 1;
         self.time += self.dt;

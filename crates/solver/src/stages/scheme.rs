@@ -69,6 +69,35 @@ pub fn to_grid(s: &mut Solver, clock: &mut Instant) {
 
 /// The stages after the grid update: G2P, then the stress under USL and MUSL.
 pub fn from_grid(s: &mut Solver, clock: &mut Instant) {
+    if s.staggered() {
+        let material = &s.cfg.scene.materials[0];
+        let flip_alpha = match s.cfg.method.transfer {
+            TransferKind::Flip => Some(s.cfg.method.flip_alpha),
+            TransferKind::Pic => Some(0.0),
+            _ => None,
+        };
+        s.dissipated += projection::mac::update_particles(
+            &mut s.particles,
+            &s.projection.faces,
+            &s.projection,
+            material,
+            &s.grid,
+            flip_alpha,
+            s.dt,
+        );
+        s.dissipated += projection::mac::correct_packing(
+            &mut s.particles,
+            &mut s.projection,
+            &s.cfg.method.projection,
+            material,
+            &s.grid,
+            s.gravity,
+            s.dt,
+        );
+        s.apply_perturbations();
+        lap(&mut s.times.g2p, clock);
+        return;
+    }
     if s.implicit() {
         g2p(s, clock);
         let material = &s.cfg.scene.materials[0];
@@ -131,7 +160,15 @@ fn project(s: &mut Solver, clock: &mut Instant) {
         settings: &s.cfg.method.projection,
         dt: s.dt,
     };
-    projection::project(&inputs, &mut s.grid, &mut s.projection);
+    if s.staggered() {
+        let affine = s.cfg.method.transfer == TransferKind::Apic;
+        projection::mac::project(&inputs, s.gravity, affine, &mut s.grid, &mut s.projection);
+        // The transfer's share of the budget is the faces' (the nodal
+        // grid's P2G only feeds the monitor).
+        s.ke_grid_p2g = s.projection.faces.kinetic(false);
+    } else {
+        projection::project(&inputs, &mut s.grid, &mut s.projection);
+    }
     let stats = s.projection.stats;
     s.dissipated += stats.dissipated_projection + stats.dissipated_hourglass;
     lap(&mut s.times.grid, clock);

@@ -14,6 +14,7 @@ mod mixture;
 mod par;
 mod pore_pressure;
 mod pressure_implicit;
+mod projection_mac;
 mod quadrature_mixed;
 mod remedy_energy;
 mod remedy_null_space;

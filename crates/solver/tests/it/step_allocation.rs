@@ -105,6 +105,21 @@ fn step_does_not_allocate() {
                         perturb: vec![],
                     });
                 }
+                // The staggered projection, with its packing correction.
+                if shape == ShapeKind::Bspline2 && transfer != TransferKind::Xpic {
+                    configs.push(SolverConfig {
+                        scene: Scene::dam_break(Material::tait(1.5e6)),
+                        method: Method {
+                            formulation: Formulation::PressureImplicit,
+                            projection: ProjectionSettings {
+                                scheme: ProjectionScheme::Mac,
+                                ..Default::default()
+                            },
+                            ..common::method(shape, transfer, SchemeKind::Usl)
+                        },
+                        perturb: vec![],
+                    });
+                }
             }
         }
         for cfg in configs {

@@ -26,7 +26,8 @@
 
 mod advect;
 pub mod inf_sup;
-mod operator;
+pub mod mac;
+pub(super) mod operator;
 mod pcg;
 mod surface;
 
@@ -174,6 +175,8 @@ pub struct Scratch {
     probe_exact: bool,
     /// Per chunk of particles: the viscous work of the particle update.
     partials: Vec<f64>,
+    /// The staggered scheme's faces (empty under the collocated one).
+    pub faces: mac::Faces,
     pub stats: SolveStats,
 }
 
@@ -222,6 +225,7 @@ impl Scratch {
             lower: Vec::with_capacity(n_cells),
             probe_exact: (0..2).all(|a| !grid.periodic[a] || grid.cells[a].is_multiple_of(3)),
             partials: vec![0.0; crate::par::chunk_count(particles)],
+            faces: mac::Faces::default(),
             stats: SolveStats::default(),
         }
     }

@@ -166,7 +166,12 @@ fn assemble_rows(
 
 /// The drift target r from the raw packing errors in `s.target` (moved
 /// to `s.shift` under the drift correction by position).
-fn set_drift_target(s: &mut Scratch, set: &ProjectionSettings, dt: f64, incompressible: bool) {
+pub(super) fn set_drift_target(
+    s: &mut Scratch,
+    set: &ProjectionSettings,
+    dt: f64,
+    incompressible: bool,
+) {
     // The drift target r = drift e~ / dt, e~ the packing error smoothed
     // with weights (1, 2, 1) x (1, 2, 1) over the full cells of the 3 x 3
     // block: the raw per-cell error alternates from cell to cell, and a

@@ -34,31 +34,13 @@ pub(super) fn solve(
     fresh: bool,
     tolerance: f64,
 ) {
-    let n = s.fluid.len();
-    for v in [&mut s.r, &mut s.z, &mut s.d, &mut s.q] {
-        v.clear();
-        v.resize(n, 0.0);
-    }
-    if n == 0 {
-        s.stats.converged = true;
+    let Some(singular) = prepare(s) else {
         return;
-    }
-    // No air cell and no compressibility: p is known up to a constant;
-    // solve for the mean-free part of a mean-free right-hand side.
-    let singular = s.alpha.iter().all(|&a| a == 0.0) && n == s.unknown.len();
-    if singular {
-        remove_mean(&mut s.b);
-        remove_mean(&mut s.x);
-    }
+    };
     let incomplete_cholesky = set.preconditioner != Preconditioner::Jacobi && s.probe_exact;
     if incomplete_cholesky && fresh {
         probe_matrix(grid, s, beta);
-        let tau = if set.preconditioner == Preconditioner::Mic0 {
-            MIC_SHARE
-        } else {
-            0.0
-        };
-        factorise(s, tau);
+        factorise(s, fill_share(set));
     }
     let method = Iteration {
         singular,
@@ -76,6 +58,60 @@ pub(super) fn solve(
         }
     };
     iterate(s, &method, |s| apply_a(grid, s, beta, false), product);
+}
+
+/// Preconditioned conjugate gradient on a matrix already in `s.matrix`
+/// (the staggered scheme assembles its rows), from `s.x`.
+pub(super) fn solve_assembled(s: &mut Scratch, set: &ProjectionSettings, tolerance: f64) {
+    let Some(singular) = prepare(s) else {
+        return;
+    };
+    let incomplete_cholesky = set.preconditioner != Preconditioner::Jacobi;
+    if incomplete_cholesky {
+        factorise(s, fill_share(set));
+    }
+    let method = Iteration {
+        singular,
+        incomplete_cholesky,
+        tolerance,
+        max_iterations: set.max_iterations,
+    };
+    let start = |s: &mut Scratch| {
+        s.d.copy_from_slice(&s.x);
+        apply_matrix(s);
+    };
+    iterate(s, &method, start, apply_matrix);
+}
+
+/// Sizes the iteration's vectors; None when there is no unknown (then
+/// converged), else whether the system is singular. No air cell and no
+/// compressibility: p is known up to a constant, so the solve is for the
+/// mean-free part of a mean-free right-hand side.
+fn prepare(s: &mut Scratch) -> Option<bool> {
+    let n = s.fluid.len();
+    for v in [&mut s.r, &mut s.z, &mut s.d, &mut s.q] {
+        v.clear();
+        v.resize(n, 0.0);
+    }
+    if n == 0 {
+        s.stats.converged = true;
+        return None;
+    }
+    let singular = s.alpha.iter().all(|&a| a == 0.0) && n == s.unknown.len();
+    if singular {
+        remove_mean(&mut s.b);
+        remove_mean(&mut s.x);
+    }
+    Some(singular)
+}
+
+/// The share of the dropped fill MIC(0) moves onto the diagonal (0: IC(0)).
+fn fill_share(set: &ProjectionSettings) -> f64 {
+    if set.preconditioner == Preconditioner::Mic0 {
+        MIC_SHARE
+    } else {
+        0.0
+    }
 }
 
 /// How `iterate` runs: whether the system is singular (mean-free), the

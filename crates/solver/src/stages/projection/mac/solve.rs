@@ -1,0 +1,259 @@
+//! The pressure solve on the staggered grid: with m_f a face's mass, the
+//! fluid cell's pressure solves
+//!
+//!   alpha p_c + sum_f (h^2 / m_f) (p_c - p_across) = alpha p(J^n) - (h^2 / dt) D u*
+//!
+//! over its four faces (a wall face: none; an air cell across: p = 0),
+//! alpha = h^2 / (K_t dt^2); then u_f = u*_f - dt h (p_hi - p_lo) / m_f.
+//! D u is the exact flux balance of the cell's faces, so the gradient's
+//! only kernel is the constant of a closed box.
+
+use super::super::{Scratch, SolveStats, AIR};
+use super::field::FaceField;
+use crate::config::Material;
+
+/// The cell across face `side` of cell (ci, cj) in 3 x 3 slot order
+/// ((dx + 1) + 3 (dy + 1)) with the face's component and index: left,
+/// right, below, above.
+const SIDES: [(usize, usize, i64, i64, i64, i64); 4] = [
+    // (slot, axis, face di, face dj, cell di, cell dj)
+    (3, 0, 0, 0, -1, 0),
+    (5, 0, 1, 0, 1, 0),
+    (1, 1, 0, 0, 0, -1),
+    (7, 1, 0, 1, 0, 1),
+];
+
+/// Fills the matrix rows (3 x 3 slots), right-hand side, diagonal and
+/// starting guess of every fluid cell.
+pub fn assemble(
+    faces: &[FaceField; 2],
+    s: &mut Scratch,
+    mat: &Material,
+    h: f64,
+    dt: f64,
+    light: f64,
+) {
+    let h2 = h * h;
+    let incompressible = mat.k == f64::INFINITY;
+    for v in [&mut s.alpha, &mut s.target, &mut s.b, &mut s.diag, &mut s.x] {
+        v.clear();
+    }
+    s.matrix.clear();
+    s.shift.clear();
+    for k in 0..s.fluid.len() {
+        let c = s.fluid[k] as usize;
+        let (ci, cj) = ((c % s.cells[0]) as i64, (c / s.cells[0]) as i64);
+        let (alpha, p_eos) = if incompressible {
+            (0.0, 0.0)
+        } else {
+            let state = mat.eos(s.vol[c] / s.vol0[c]);
+            (
+                h2 / (state.tangent_modulus.max(1e-300) * dt * dt),
+                state.pressure,
+            )
+        };
+        let mut row = [0.0; 9];
+        row[4] = alpha;
+        for &(slot, axis, fi, fj, _, _) in &SIDES {
+            let field = &faces[axis];
+            let (i, j) = (ci + fi, cj + fj);
+            if field.on_wall(i, j) {
+                continue;
+            }
+            let coupling = h2 / field.operator_mass[field.index(i, j)].max(light);
+            row[4] += coupling;
+            if s.neighbours[k][slot] != AIR {
+                row[slot] = -coupling;
+            }
+        }
+        s.alpha.push(alpha);
+        s.target.push(0.0);
+        s.b.push(alpha * p_eos - h2 / dt * divergence(faces, ci, cj, h, true));
+        s.diag.push(row[4]);
+        s.matrix.push(row);
+        s.x.push(s.pressure[c]);
+    }
+}
+
+/// D u of cell (ci, cj): its faces' net outflow over h (`vel_new`: u*
+/// with the air faces' shares before the correction, u^{n+1} after it;
+/// else u* as predicted).
+pub fn divergence(faces: &[FaceField; 2], ci: i64, cj: i64, h: f64, updated: bool) -> f64 {
+    let read = |field: &FaceField, i: i64, j: i64| {
+        let f = field.index(i, j);
+        if updated {
+            field.vel_new[f]
+        } else {
+            field.vel_star[f]
+        }
+    };
+    let (fx, fy) = (&faces[0], &faces[1]);
+    (read(fx, ci + 1, cj) - read(fx, ci, cj) + read(fy, ci, cj + 1) - read(fy, ci, cj)) / h
+}
+
+/// The pressure of cell (i, j): the solved one, 0 in an air cell.
+fn pressure_at(s: &Scratch, i: i64, j: i64) -> f64 {
+    let c = i as usize + j as usize * s.cells[0];
+    match s.unknown[c] {
+        AIR => 0.0,
+        k => s.x[k as usize],
+    }
+}
+
+/// u^{n+1} = u* - dt h (p_hi - p_lo) / m_f on every in-box face beside a
+/// fluid cell (walls held); the cells' pressures stored for the next solve.
+pub fn correct(faces: &mut [FaceField; 2], s: &mut Scratch, h: f64, dt: f64, light: f64) {
+    for (k, &c) in s.fluid.iter().enumerate() {
+        s.pressure[c as usize] = s.x[k];
+    }
+    for field in faces.iter_mut() {
+        let mut vel = std::mem::take(&mut field.vel_new);
+        apply_gradient(field, s, h, dt, light, &mut vel);
+        field.vel_new = vel;
+    }
+}
+
+/// values_f -= scale h (x_hi - x_lo) / m'_f on the solved faces, for the
+/// solved cell values `s.x` (air: 0); the air faces then follow their
+/// neighbours and the ghosts are filled.
+pub fn apply_gradient(
+    field: &FaceField,
+    s: &Scratch,
+    h: f64,
+    scale: f64,
+    light: f64,
+    values: &mut [f64],
+) {
+    for (f, value) in values.iter_mut().enumerate() {
+        let (i, j) = field.coords(f);
+        if !solved(field, s, i, j) {
+            continue;
+        }
+        // The cells below and above the face along its axis.
+        let (lo, hi) = if field.axis == 0 {
+            ((i - 1, j), (i, j))
+        } else {
+            ((i, j - 1), (i, j))
+        };
+        let jump = pressure_at(s, hi.0, hi.1) - pressure_at(s, lo.0, lo.1);
+        *value -= scale * h * jump / field.operator_mass[f].max(light);
+    }
+    follow_neighbours(field, s, values);
+    field.fill(values);
+}
+
+/// Whether in-box face (i, j) borders a fluid cell (and is not a wall's).
+fn solved(field: &FaceField, s: &Scratch, i: i64, j: i64) -> bool {
+    if !field.in_box(i, j) || field.on_wall(i, j) {
+        return false;
+    }
+    let (lo, hi) = if field.axis == 0 {
+        ((i - 1, j), (i, j))
+    } else {
+        ((i, j - 1), (i, j))
+    };
+    [lo, hi].iter().any(|&(ci, cj)| {
+        (0..s.cells[0] as i64).contains(&ci)
+            && (0..s.cells[1] as i64).contains(&cj)
+            && s.unknown[ci as usize + cj as usize * s.cells[0]] != AIR
+    })
+}
+
+/// An air face's solved neighbours (same component, one face away), and
+/// how many: None for a face that is solved, a wall's, outside the box or
+/// empty.
+fn air_neighbours(field: &FaceField, s: &Scratch, f: usize) -> Option<([usize; 4], usize)> {
+    let (i, j) = field.coords(f);
+    if field.mass[f] <= 0.0 || !field.in_box(i, j) || field.on_wall(i, j) || solved(field, s, i, j)
+    {
+        return None;
+    }
+    let mut out = [0; 4];
+    let mut count = 0;
+    for (di, dj) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
+        if solved(field, s, i + di, j + dj) {
+            out[count] = field.index(i + di, j + dj);
+            count += 1;
+        }
+    }
+    (count > 0).then_some((out, count))
+}
+
+/// The air faces' velocity is their solved neighbours' mean (a kinematic
+/// constraint), so their mass and u* momentum join those neighbours' in
+/// equal shares before the solve: the weight of the material the
+/// B-spline carries beyond the fluid cells rests on the pressure. Sets
+/// `operator_mass` and the neighbours' u* (in `vel_new`).
+pub fn slave_air_faces(field: &mut FaceField, s: &Scratch) {
+    let mut op = std::mem::take(&mut field.operator_mass);
+    op.copy_from_slice(&field.mass);
+    // Momentum first, in `vel_new` as m u*; divided once all shares are in.
+    for f in 0..op.len() {
+        field.vel_new[f] = field.mass[f] * field.vel_star[f];
+    }
+    for f in 0..op.len() {
+        if let Some((neighbours, count)) = air_neighbours(field, s, f) {
+            let share = field.mass[f] / count as f64;
+            for &n in &neighbours[..count] {
+                op[n] += share;
+                field.vel_new[n] += share * field.vel_star[f];
+            }
+        }
+    }
+    for ((u, &m), &star) in field.vel_new.iter_mut().zip(&op).zip(&field.vel_star) {
+        *u = if m > 0.0 { *u / m } else { star };
+    }
+    field.operator_mass = op;
+}
+
+/// Each slaved air face takes its solved neighbours' mean value.
+fn follow_neighbours(field: &FaceField, s: &Scratch, values: &mut [f64]) {
+    for f in 0..values.len() {
+        if let Some((neighbours, count)) = air_neighbours(field, s, f) {
+            let sum: f64 = neighbours[..count].iter().map(|&n| values[n]).sum();
+            values[f] = sum / count as f64;
+        }
+    }
+}
+
+/// The cells' J rate e = D u^{n+1}, and the energy the projection removed:
+/// minus the pressure's work on the faces at the time-centred velocity,
+/// plus what it put into the stored energy (the mean pressure's work, the
+/// backward-Euler loss counted).
+pub fn book(faces: &[FaceField; 2], s: &mut Scratch, h: f64, dt: f64) {
+    let (mut pressure_work, mut compression_loss) = (0.0, 0.0);
+    for (k, &c) in s.fluid.iter().enumerate() {
+        let c = c as usize;
+        let (ci, cj) = ((c % s.cells[0]) as i64, (c / s.cells[0]) as i64);
+        let e = divergence(faces, ci, cj, h, true);
+        s.rate[c] = e;
+        pressure_work += s.x[k] * s.vol[c] * dt * e;
+        if s.alpha[k] > 0.0 {
+            compression_loss += h * h * s.vol[c] * e * e / (2.0 * s.alpha[k]);
+        }
+    }
+    let mut work = 0.0;
+    let mut kinetic_change = 0.0;
+    for field in faces {
+        for f in 0..field.vel_new.len() {
+            let m = field.mass_raw[f];
+            if m == 0.0 {
+                continue;
+            }
+            let du = field.vel_new[f] - field.vel_star[f];
+            work += m * du * 0.5 * (field.vel[f] + field.vel_new[f]);
+            kinetic_change += m * (du * field.vel_new[f] - 0.5 * du * du);
+        }
+    }
+    s.stats.kinetic_change = kinetic_change;
+    s.stats.dissipated_projection = -work + pressure_work + compression_loss;
+    s.stats.dissipated_hourglass = 0.0;
+}
+
+/// The stats of a fresh solve over `fluid` cells.
+pub fn fresh_stats(fluid: usize) -> SolveStats {
+    SolveStats {
+        fluid_cells: fluid,
+        ..SolveStats::default()
+    }
+}
