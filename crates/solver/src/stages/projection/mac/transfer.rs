@@ -177,7 +177,7 @@ mod tests {
             h: 0.01,
             affine: true,
         };
-        for axis in 0..2 {
+        for (axis, c_row) in C0.iter().enumerate() {
             let mut f = field(axis);
             scatter(&src, &mut f);
             let on_faces: f64 = f.momentum.iter().sum();
@@ -192,9 +192,9 @@ mod tests {
                 let st = stencil(&f, Vec2::zeros(), 0.01, ps.x[p]).unwrap();
                 let got = gather(&f, &st, 0.01);
                 assert!((got.v - affine(ps.x[p])[axis]).abs() < 1e-14, "axis {axis}");
-                for b in 0..2 {
-                    assert!((got.c_row[b] - C0[axis][b]).abs() < 1e-11, "C[{axis}][{b}]");
-                    assert!((got.l_row[b] - C0[axis][b]).abs() < 1e-11, "L[{axis}][{b}]");
+                for (b, want) in c_row.iter().enumerate() {
+                    assert!((got.c_row[b] - want).abs() < 1e-11, "C[{axis}][{b}]");
+                    assert!((got.l_row[b] - want).abs() < 1e-11, "L[{axis}][{b}]");
                 }
             }
         }
