@@ -99,7 +99,7 @@ pub fn project(inputs: &Inputs, gravity: Vec2, affine: bool, grid: &mut Grid, s:
     solve::correct(&mut faces.fields, s, h, dt, light);
     solve::book(&faces.fields, s, h, dt);
     super::surface::reconstruct(s, h, false);
-    onto_nodes(&faces, grid, dt);
+    onto_nodes(&faces, grid, s, dt);
     s.faces = faces;
 }
 
@@ -140,8 +140,10 @@ fn predict(field: &mut FaceField, g: f64, dt: f64) {
 }
 
 /// Each in-box active node's velocity: the mean of the two faces of each
-/// component beside it; its acceleration from the P2G velocity.
-fn onto_nodes(faces: &Faces, grid: &mut Grid, dt: f64) {
+/// component beside it; its acceleration from the P2G velocity. The
+/// force forensics (`Scratch::node_changes`) read the whole change from
+/// the nodes' own u* as the pressure's.
+fn onto_nodes(faces: &Faces, grid: &mut Grid, s: &mut Scratch, dt: f64) {
     let [fx, fy] = &faces.fields;
     for &n in &grid.inside {
         let n = n as usize;
@@ -153,10 +155,23 @@ fn onto_nodes(faces: &Faces, grid: &mut Grid, dt: f64) {
         let u = 0.5 * (fx.vel_new[fx.index(i, j - 1)] + fx.vel_new[fx.index(i, j)]);
         let v = 0.5 * (fy.vel_new[fy.index(i - 1, j)] + fy.vel_new[fy.index(i, j)]);
         let vel = grid.project_walls(n, Vec2::new(u, v));
+        let star = grid.vel_new[n];
+        s.before_merge[n] = star;
+        s.before_hourglass[n] = star;
+        s.before_projection[n] = star;
+        s.nodal[n] = (vel - star) / dt;
         grid.accel[n] = (vel - grid.vel[n]) / dt;
         grid.vel_new[n] = vel;
     }
     grid.fill_vel_new(true);
+    for values in [
+        &mut s.nodal,
+        &mut s.before_merge,
+        &mut s.before_hourglass,
+        &mut s.before_projection,
+    ] {
+        grid.fill(values);
+    }
 }
 
 /// The MAC step's particle side: G2P from the faces (PIC, FLIP blend or
