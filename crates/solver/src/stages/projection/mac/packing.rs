@@ -3,9 +3,8 @@
 //! the same operator without its EOS term solves for a displacement whose
 //! flux balance is the drift share of that error, and the particles move
 //! by its quadratic B-spline interpolation. Under APIC each particle takes
-//! the velocity of its affine field where it lands (v + C dx: the move
-//! halved the slosh's energy growth against a move without it); J and the stored energy
-//! are left alone. The gravitational and kinetic energy the moves change
+//! the velocity of its affine field where it lands (v + C dx, consistent
+//! with the move); J and the stored energy are left alone. The gravitational and kinetic energy the moves change
 //! are booked with the projection.
 
 use super::super::operator::set_drift_target;
