@@ -92,7 +92,6 @@ pub fn from_grid(s: &mut Solver, clock: &mut Instant) {
             material,
             &s.grid,
             s.gravity,
-            s.cfg.method.transfer == TransferKind::Apic,
             s.dt,
         );
         s.apply_perturbations();

@@ -2,10 +2,9 @@
 //! faces' mass says the particles pack denser (or looser) than J says,
 //! the same operator without its EOS term solves for a displacement whose
 //! flux balance is the drift share of that error, and the particles move
-//! by its quadratic B-spline interpolation. Under APIC each particle takes
-//! the velocity of its affine field where it lands (v + C dx, consistent
-//! with the move); J and the stored energy are left alone. The gravitational and kinetic energy the moves change
-//! are booked with the projection.
+//! by its quadratic B-spline interpolation. Velocities, J and the stored
+//! energy are left alone; the gravitational energy the move changes is
+//! booked with the projection.
 
 use super::super::operator::set_drift_target;
 use super::super::{pcg, Scratch};
@@ -22,10 +21,8 @@ use crate::particles::{Particles, Vec2};
 /// there, it set a column moving at 2e-3 m/s).
 const SURFACE_REACH: u32 = 2;
 
-/// Moves the particles to correct the packing error the step started with
-/// (under APIC, `carry_velocity`, each with its affine velocity); returns
-/// the energy the moves took out (J/m).
-#[allow(clippy::too_many_arguments)]
+/// Moves the particles to correct the packing error the step started with;
+/// returns the gravitational energy the move took out (J/m).
 pub fn correct_packing(
     particles: &mut Particles,
     s: &mut Scratch,
@@ -33,7 +30,6 @@ pub fn correct_packing(
     mat: &Material,
     grid: &Grid,
     gravity: Vec2,
-    carry_velocity: bool,
     dt: f64,
 ) -> f64 {
     if set.drift == 0.0 || s.fluid.is_empty() {
@@ -48,7 +44,7 @@ pub fn correct_packing(
     let mut removed = 0.0;
     if s.shift.iter().any(|&r| r != 0.0) {
         solve_shift(&mut faces, s, set, h, dt, set.light_node_share * full_mass);
-        removed = move_particles(particles, &faces, grid, gravity, carry_velocity);
+        removed = move_particles(particles, &faces, grid, gravity);
         s.stats.dissipated_projection += removed;
     }
     s.faces = faces;
@@ -132,16 +128,8 @@ fn solve_shift(
     };
 }
 
-/// x_p += the displacement interpolated at x_p (under APIC, `carry_velocity`,
-/// v_p += C_p dx_p); returns the energy the moves took out: sum m_p g .
-/// dx_p less the kinetic energy they added.
-fn move_particles(
-    particles: &mut Particles,
-    faces: &Faces,
-    grid: &Grid,
-    gravity: Vec2,
-    carry_velocity: bool,
-) -> f64 {
+/// x_p += the displacement interpolated at x_p; returns sum m_p g . dx_p.
+fn move_particles(particles: &mut Particles, faces: &Faces, grid: &Grid, gravity: Vec2) -> f64 {
     let (origin, h) = (grid.origin, grid.h);
     let mut energy = 0.0;
     for p in 0..particles.len() {
@@ -162,14 +150,6 @@ fn move_particles(
             let dx = Vec2::new(dx, dy);
             energy += particles.mass[p] * gravity.dot(&dx);
             particles.x[p] = x + dx;
-            if carry_velocity {
-                // The particle takes its affine field's velocity where it
-                // lands; the kinetic energy that changes is booked here.
-                let v = particles.v[p];
-                let v_new = v + particles.affine[p] * dx;
-                energy -= 0.5 * particles.mass[p] * (v_new.norm_squared() - v.norm_squared());
-                particles.v[p] = v_new;
-            }
         }
     }
     energy
