@@ -506,6 +506,13 @@ mod tests {
         );
         assert_eq!(name_part("method", &toml("{ f_reset = true }")), "f_reset");
         assert_eq!(name_part("scene.box", &toml("[0.8, 0.6]")), "box0.8x0.6");
+        assert_eq!(
+            name_part(
+                "scene",
+                &toml("{ box = [1.6, 0.4], body = [{ rect = [0.1, 0.0, 0.5, 0.2], material = \"water\" }] }")
+            ),
+            "box1.6x0.4-body0.4x0.2"
+        );
     }
 
     #[test]

@@ -61,6 +61,21 @@ fn plain_part(key: &str, v: &Value) -> String {
                 .collect();
             flows.join("+")
         }
+        // Bodies without flows, by their rectangles' sizes (`body0.3x0.6`).
+        ("body", Value::Array(bodies)) if bodies.iter().all(|b| b.get("rect").is_some()) => bodies
+            .iter()
+            .map(|b| {
+                let r: Vec<f64> = b["rect"]
+                    .as_array()
+                    .map_or(vec![], |r| r.iter().map(as_f64).collect());
+                let size = |a: usize| {
+                    let d = r.get(a + 2).zip(r.get(a)).map_or(0.0, |(hi, lo)| hi - lo);
+                    (d * 1e9).round() / 1e9
+                };
+                format!("body{}x{}", size(0), size(1))
+            })
+            .collect::<Vec<_>>()
+            .join("+"),
         (_, Value::String(s)) => s.clone(),
         // A table that changes nothing: the axis's reference value.
         (_, Value::Table(t)) if t.is_empty() => "base".into(),
