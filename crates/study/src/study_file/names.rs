@@ -62,18 +62,10 @@ fn plain_part(key: &str, v: &Value) -> String {
             flows.join("+")
         }
         // Bodies without flows, by their rectangles' sizes (`body0.3x0.6`).
-        ("body", Value::Array(bodies)) if bodies.iter().all(|b| b.get("rect").is_some()) => bodies
+        ("body", Value::Array(bodies)) if bodies.iter().all(|b| body_rect(b).is_some()) => bodies
             .iter()
-            .map(|b| {
-                let r: Vec<f64> = b["rect"]
-                    .as_array()
-                    .map_or(vec![], |r| r.iter().map(as_f64).collect());
-                let size = |a: usize| {
-                    let d = r.get(a + 2).zip(r.get(a)).map_or(0.0, |(hi, lo)| hi - lo);
-                    (d * 1e9).round() / 1e9
-                };
-                format!("body{}x{}", size(0), size(1))
-            })
+            .filter_map(body_rect)
+            .map(|r| format!("body{}x{}", size(r[2] - r[0]), size(r[3] - r[1])))
             .collect::<Vec<_>>()
             .join("+"),
         (_, Value::String(s)) => s.clone(),
@@ -97,6 +89,20 @@ fn plain_part(key: &str, v: &Value) -> String {
         }
         (_, other) => format!("{last}{other}"),
     }
+}
+
+/// A body's rectangle, read typed.
+fn body_rect(body: &Value) -> Option<[f64; 4]> {
+    #[derive(serde::Deserialize)]
+    struct Body {
+        rect: [f64; 4],
+    }
+    body.clone().try_into::<Body>().ok().map(|b| b.rect)
+}
+
+/// A length as a name shows it (round-off of a difference dropped).
+fn size(d: f64) -> f64 {
+    (d * 1e9).round() / 1e9
 }
 
 /// The remedy a key names (`method.j_bar`, or `j_bar` inside a method table).
