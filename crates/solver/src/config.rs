@@ -300,8 +300,9 @@ fn is_default_projection(p: &ProjectionSettings) -> bool {
 pub struct ProjectionSettings {
     /// Where the velocities live: on the nodes with cell pressures (Q1-P0,
     /// held by the controls below) or on the cell faces (MAC, inf-sup
-    /// stable; it reads none of hourglass, checkerboard, advection,
-    /// free_surface and air_nodes, and its drift correction is by position).
+    /// stable; it reads none of hourglass, checkerboard, free_surface and
+    /// air_nodes, its advection is the shapes' and its drift correction
+    /// is by position).
     pub scheme: ProjectionScheme,
     /// Share of each fluid cell's hourglass velocity (the nodal mode the
     /// cell divergence cannot see) removed per step, 0 ..= 0.25.
