@@ -372,10 +372,6 @@ pub enum Advection {
     Bilinear,
     /// x += dt sum N_ip v_i with the run's shapes (B-spline tails included).
     Shape,
-    /// The shapes' velocity at the midpoint of the move, x_m = x + dt/2
-    /// v(x), then x += dt v(x_m): second order in the step, so the moved
-    /// packing drifts by dt^2 per unit time, not dt (staggered scheme only).
-    Midpoint,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -809,12 +805,6 @@ impl SolverConfig {
         }
         if p.scheme == ProjectionScheme::Mac {
             self.validate_mac()?;
-        } else if p.advection == Advection::Midpoint {
-            return Err(needs(
-                "method.projection.advection",
-                "moves the particles at the midpoint on the staggered scheme only \
-                 (scheme = \"mac\"); the collocated one takes \"shape\" or \"bilinear\"",
-            ));
         }
         Ok(())
     }
@@ -852,10 +842,10 @@ impl SolverConfig {
                 "corrects the packing by position only: use \"position\"",
             ));
         }
-        if m.projection.advection == Advection::Bilinear {
+        if m.projection.advection != Advection::Shape {
             return Err(needs(
                 "method.projection.advection",
-                "moves the particles with the faces' velocity: use \"shape\" or \"midpoint\"",
+                "moves the particles with the faces' velocity: use \"shape\"",
             ));
         }
         Ok(())

@@ -78,11 +78,11 @@ pub fn from_grid(s: &mut Solver, clock: &mut Instant) {
         };
         s.dissipated += projection::mac::update_particles(
             &mut s.particles,
+            &s.projection.faces,
             &s.projection,
             material,
             &s.grid,
             flip_alpha,
-            s.cfg.method.projection.advection == crate::config::Advection::Midpoint,
             s.dt,
         );
         s.dissipated += projection::mac::correct_packing(

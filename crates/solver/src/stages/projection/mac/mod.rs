@@ -60,15 +60,6 @@ impl Faces {
             .sum()
     }
 
-    /// u^{n+1} interpolated at `x` (None beyond the padded faces).
-    pub fn velocity_at(&self, origin: Vec2, h: f64, x: Vec2) -> Option<Vec2> {
-        let [u, v] = self
-            .fields
-            .each_ref()
-            .map(|field| stencil(field, origin, h, x).map(|st| gather(field, &st, h).v));
-        Some(Vec2::new(u?, v?))
-    }
-
     pub fn is_empty(&self) -> bool {
         self.fields[0].vel.is_empty()
     }
@@ -184,22 +175,20 @@ fn onto_nodes(faces: &Faces, grid: &mut Grid, s: &mut Scratch, dt: f64) {
 }
 
 /// The MAC step's particle side: G2P from the faces (PIC, FLIP blend or
-/// APIC; positions with the PIC velocity, or under `midpoint` with the
-/// velocity at the midpoint of the move), then F, J^{n+1} = J^n (1 + dt e)
+/// APIC; positions with the PIC velocity), then F, J^{n+1} = J^n (1 + dt e)
 /// of the particle's cell, the viscous stress, the cell's pressure and the
 /// stored energy. Returns the viscous work. Serial (a reduction of work in
 /// particle order).
 pub fn update_particles(
     particles: &mut Particles,
+    faces: &Faces,
     s: &Scratch,
     m: &crate::config::Material,
     grid: &Grid,
     flip_alpha: Option<f64>,
-    midpoint: bool,
     dt: f64,
 ) -> f64 {
     let (origin, h, cells_x) = (grid.origin, grid.h, s.cells[0]);
-    let faces = &s.faces;
     let mut work = 0.0;
     for p in 0..particles.len() {
         let x = particles.x[p];
@@ -222,14 +211,7 @@ pub fn update_particles(
         if flip_alpha.is_none() {
             particles.affine[p] = Mat2::new(gx.c_row.x, gx.c_row.y, gy.c_row.x, gy.c_row.y);
         }
-        particles.x[p] = x + dt
-            * if midpoint {
-                faces
-                    .velocity_at(origin, h, x + 0.5 * dt * v_pic)
-                    .unwrap_or(v_pic)
-            } else {
-                v_pic
-            };
+        particles.x[p] = x + dt * v_pic;
         let l = Mat2::new(gx.l_row.x, gx.l_row.y, gy.l_row.x, gy.l_row.y);
         let c = s.particle_cell[p] as usize;
         let j_next = particles.j[p] * (1.0 + dt * s.rate[c]);
