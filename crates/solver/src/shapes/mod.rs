@@ -162,10 +162,9 @@ impl Shape {
                 (dw[0], dw[1]) = (-1.0, 1.0);
             }
             ShapeKind::Bspline2 if W == 3 => {
-                // f in [0.5, 1.5): node distances f, f - 1, f - 2.
-                let (d0, d1, d2) = (1.5 - f, f - 1.0, f - 0.5);
-                (w[0], w[1], w[2]) = (0.5 * d0 * d0, 0.75 - d1 * d1, 0.5 * d2 * d2);
-                (dw[0], dw[1], dw[2]) = (-d0, -2.0 * d1, d2);
+                let (w3, dw3) = bspline::quadratic_stencil(f);
+                w.copy_from_slice(&w3);
+                dw.copy_from_slice(&dw3);
             }
             // uGIMP's half-width is fixed: call its kernel directly (the
             // general arm's dispatch per node kept it out of line).

@@ -78,7 +78,6 @@ pub fn from_grid(s: &mut Solver, clock: &mut Instant) {
         };
         s.dissipated += projection::mac::update_particles(
             &mut s.particles,
-            &s.projection.faces,
             &s.projection,
             material,
             &s.grid,

@@ -49,6 +49,27 @@ pub fn solver(scene: Scene, method: Method) -> Solver {
     .expect("valid config")
 }
 
+/// A water column `depth` deep (rho0 1000, g 9.81): the largest
+/// |p - rho0 g (depth - y)| / (rho0 g depth) over the particles (each
+/// reads its cell pressure through the reconstructed gradient), and the
+/// largest |v|.
+pub fn hydrostatic_departure(s: &Solver, depth: f64) -> (f64, f64) {
+    let v = s.view();
+    let scale = 1000.0 * 9.81 * depth;
+    let dp = (0..v.x.len())
+        .map(|p| (v.pressure[p] - 1000.0 * 9.81 * (depth - v.x[p].y)).abs() / scale)
+        .fold(0.0, f64::max);
+    let speed = v.v.iter().map(|u| u.norm()).fold(0.0, f64::max);
+    (dp, speed)
+}
+
+/// Linear theory's period of mode 1 in the 0.4 m slosh tank filled to
+/// `depth`: 2 pi / sqrt(g k tanh(k d)), k = pi / 0.4.
+pub fn slosh_period(depth: f64) -> f64 {
+    let k = std::f64::consts::PI / 0.4;
+    2.0 * std::f64::consts::PI / (9.81 * k * (k * depth).tanh()).sqrt()
+}
+
 /// The error a refused config gets (None when it is accepted).
 pub fn refusal(scene: Scene, method: Method) -> Option<ConfigError> {
     Solver::new(SolverConfig {

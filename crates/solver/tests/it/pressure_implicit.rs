@@ -37,21 +37,9 @@ fn incompressible() -> Material {
     }
 }
 
-/// The hydrostatic pressure rho0 g (DEPTH - y) at a particle at `y` (the
-/// particles read the cell pressure through its reconstructed gradient).
-fn hydrostatic_at(y: f64) -> f64 {
-    1000.0 * 9.81 * (DEPTH - y)
-}
-
-/// max |p - rho0 g d| / (rho0 g DEPTH) over the particles, and max |v|.
+/// The column's departure from rho0 g (DEPTH - y), and its fastest speed.
 fn departure(s: &Solver) -> (f64, f64) {
-    let v = s.view();
-    let scale = 1000.0 * 9.81 * DEPTH;
-    let dp = (0..v.x.len())
-        .map(|p| (v.pressure[p] - hydrostatic_at(v.x[p].y)).abs() / scale)
-        .fold(0.0, f64::max);
-    let speed = v.v.iter().map(|u| u.norm()).fold(0.0, f64::max);
-    (dp, speed)
+    common::hydrostatic_departure(s, DEPTH)
 }
 
 /// A flat column brought to rest: with linear shapes the incompressible
@@ -486,12 +474,6 @@ fn slosh_wave(mut s: Solver, t_end: f64) -> (f64, f64) {
     (period, -num / den)
 }
 
-/// Linear theory's period of the slosh tank's mode 1 at `depth`.
-fn slosh_theory(depth: f64) -> f64 {
-    let k = std::f64::consts::PI / 0.4;
-    2.0 * std::f64::consts::PI / (9.81 * k * (k * depth).tanh()).sqrt()
-}
-
 /// The slosh tank filled to `depth` under the quadratic B-spline APIC
 /// implicit step with its projection settings as `adjust` leaves them:
 /// the period's error against linear theory and the decay rate over 5 s.
@@ -501,7 +483,7 @@ fn slosh_at(depth: f64, adjust: impl Fn(&mut ProjectionSettings)) -> (f64, f64) 
     let mut method = implicit(ShapeKind::Bspline2, TransferKind::Apic);
     adjust(&mut method.projection);
     let (period, decay) = slosh_wave(common::solver(scene, method), 5.0);
-    (period / slosh_theory(depth) - 1.0, decay)
+    (period / common::slosh_period(depth) - 1.0, decay)
 }
 
 /// Under the cell surface a surface node's acceleration is p / (rho h s),

@@ -29,17 +29,6 @@ fn water(k: f64) -> Material {
     }
 }
 
-/// max |p - rho0 g d| / (rho0 g DEPTH) over the particles, and max |v|.
-fn departure(s: &Solver) -> (f64, f64) {
-    let v = s.view();
-    let scale = 1000.0 * 9.81 * DEPTH;
-    let dp = (0..v.x.len())
-        .map(|p| (v.pressure[p] - 1000.0 * 9.81 * (DEPTH - v.x[p].y)).abs() / scale)
-        .fold(0.0, f64::max);
-    let speed = v.v.iter().map(|u| u.norm()).fold(0.0, f64::max);
-    (dp, speed)
-}
-
 /// A flat column brought to rest: the faces' pressure jumps balance each
 /// face's weight exactly (the gradient is the divergence's transpose, no
 /// kernel to hold), the air faces above the surface follow the solved
@@ -59,7 +48,7 @@ fn a_column_stays_at_rest_with_the_hydrostatic_pressure_and_no_control() {
         for _ in 0..300 {
             s.step().unwrap();
         }
-        let (dp, speed) = departure(&s);
+        let (dp, speed) = common::hydrostatic_departure(&s, DEPTH);
         let stats = s.projection_stats().unwrap();
         assert!(stats.converged, "K {k}: {stats:?}");
         assert!(speed < still, "K {k}: speed {speed} m/s");
@@ -126,8 +115,7 @@ fn the_slosh_keeps_j_at_one_and_linear_theorys_period() {
     }
     assert!(crossings.len() >= 2, "crossings {crossings:?}");
     let period = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
-    let k = std::f64::consts::PI / 0.4;
-    let theory = 2.0 * std::f64::consts::PI / (9.81 * k * (k * DEPTH).tanh()).sqrt();
+    let theory = common::slosh_period(DEPTH);
     let error = period / theory - 1.0;
     assert!(error.abs() < 0.005, "period {period} s against {theory} s");
 }

@@ -37,11 +37,29 @@ pub fn shift_particles(
     if s.shift.len() != n || s.shift.iter().all(|&r| r == 0.0) {
         return 0.0;
     }
-    let h2 = grid.h * grid.h;
-    // The operator without its EOS diagonal: the probed matrix loses it
-    // too, and the pressure matrix's factor preconditions (at K = infinity
-    // it is the same matrix).
-    for k in 0..n {
+    solve_displacement(s, grid.h * grid.h, dt, |s| {
+        solve(grid, s, set, beta, false, set.drift_tolerance)
+    });
+    apply_g(grid, s, |s, k| s.x[k]);
+    let bilinear = set.advection == Advection::Bilinear;
+    let removed = crate::shapes::with_width!(shape, W => move_particles::<W>(particles, stencils, shape, grid, gravity, bilinear, s));
+    s.stats.dissipated_projection += removed;
+    removed
+}
+
+/// The drift correction's solve, shared by both schemes: the pressure's
+/// operator without its EOS diagonal (the matrix read or assembled loses
+/// it too, and the pressure matrix's factor preconditions: at K = infinity
+/// it is the same matrix), right-hand side h^2 dt s for the drift rate s,
+/// from 0, by `solve_with`. The stats stay the pressure solve's, with the
+/// displacement's iterations.
+pub(super) fn solve_displacement(
+    s: &mut Scratch,
+    h2: f64,
+    dt: f64,
+    solve_with: impl FnOnce(&mut Scratch),
+) {
+    for k in 0..s.fluid.len() {
         s.diag[k] -= s.alpha[k];
         if let Some(row) = s.matrix.get_mut(k) {
             row[4] -= s.alpha[k];
@@ -51,17 +69,11 @@ pub fn shift_particles(
         s.x[k] = 0.0;
     }
     let pressure_solve = s.stats;
-    solve(grid, s, set, beta, false, set.drift_tolerance);
-    let shift_iterations = s.stats.iterations;
+    solve_with(s);
     s.stats = SolveStats {
-        shift_iterations,
+        shift_iterations: s.stats.iterations,
         ..pressure_solve
     };
-    apply_g(grid, s, |s, k| s.x[k]);
-    let bilinear = set.advection == Advection::Bilinear;
-    let removed = crate::shapes::with_width!(shape, W => move_particles::<W>(particles, stencils, shape, grid, gravity, bilinear, s));
-    s.stats.dissipated_projection += removed;
-    removed
 }
 
 /// x_p += sum N_ip d_i for the nodal displacement d in `s.nodal` (N the

@@ -27,7 +27,7 @@
 mod advect;
 pub mod inf_sup;
 pub mod mac;
-pub(super) mod operator;
+mod operator;
 mod pcg;
 mod surface;
 

@@ -181,7 +181,6 @@ fn onto_nodes(faces: &Faces, grid: &mut Grid, s: &mut Scratch, dt: f64) {
 /// particle order).
 pub fn update_particles(
     particles: &mut Particles,
-    faces: &Faces,
     s: &Scratch,
     m: &crate::config::Material,
     grid: &Grid,
@@ -189,6 +188,7 @@ pub fn update_particles(
     dt: f64,
 ) -> f64 {
     let (origin, h, cells_x) = (grid.origin, grid.h, s.cells[0]);
+    let faces = &s.faces;
     let mut work = 0.0;
     for p in 0..particles.len() {
         let x = particles.x[p];

@@ -6,6 +6,7 @@
 //! energy are left alone; the gravitational energy the move changes is
 //! booked with the projection.
 
+use super::super::advect::solve_displacement;
 use super::super::operator::set_drift_target;
 use super::super::{pcg, Scratch};
 use super::solve::apply_gradient;
@@ -110,27 +111,16 @@ fn solve_shift(
     dt: f64,
     light: f64,
 ) {
-    let pressure_solve = s.stats;
-    for k in 0..s.fluid.len() {
-        s.matrix[k][4] -= s.alpha[k];
-        s.diag[k] -= s.alpha[k];
-        s.alpha[k] = 0.0;
-        s.b[k] = h * h * dt * s.shift[k];
-    }
     // The pressure is kept per cell (`s.pressure`); `s.x` is free.
-    s.x.fill(0.0);
-    pcg::solve_assembled(s, set, set.drift_tolerance);
-    let shift_iterations = s.stats.iterations;
+    solve_displacement(s, h * h, dt, |s| {
+        pcg::solve_assembled(s, set, set.drift_tolerance)
+    });
     for field in faces.fields.iter_mut() {
         let mut shift = std::mem::take(&mut field.shift);
         shift.fill(0.0);
         apply_gradient(field, s, h, 1.0, light, &mut shift);
         field.shift = shift;
     }
-    s.stats = super::super::SolveStats {
-        shift_iterations,
-        ..pressure_solve
-    };
 }
 
 /// x_p += the displacement interpolated at x_p; returns sum m_p g . dx_p.

@@ -12,15 +12,15 @@ use super::super::{Scratch, SolveStats, AIR};
 use super::field::FaceField;
 use crate::config::Material;
 
-/// The cell across face `side` of cell (ci, cj) in 3 x 3 slot order
-/// ((dx + 1) + 3 (dy + 1)) with the face's component and index: left,
-/// right, below, above.
-const SIDES: [(usize, usize, i64, i64, i64, i64); 4] = [
-    // (slot, axis, face di, face dj, cell di, cell dj)
-    (3, 0, 0, 0, -1, 0),
-    (5, 0, 1, 0, 1, 0),
-    (1, 1, 0, 0, 0, -1),
-    (7, 1, 0, 1, 0, 1),
+/// A cell's four faces, left, right, below and above: the slot of the
+/// cell across in 3 x 3 order ((dx + 1) + 3 (dy + 1)), the face's
+/// component and its index from the cell's (ci, cj).
+const SIDES: [(usize, usize, i64, i64); 4] = [
+    // (slot, axis, face di, face dj)
+    (3, 0, 0, 0),
+    (5, 0, 1, 0),
+    (1, 1, 0, 0),
+    (7, 1, 0, 1),
 ];
 
 /// Fills the matrix rows (3 x 3 slots), right-hand side, diagonal and
@@ -54,7 +54,7 @@ pub fn assemble(
         };
         let mut row = [0.0; 9];
         row[4] = alpha;
-        for &(slot, axis, fi, fj, _, _) in &SIDES {
+        for &(slot, axis, fi, fj) in &SIDES {
             let field = &faces[axis];
             let (i, j) = (ci + fi, cj + fj);
             if field.on_wall(i, j) {
@@ -68,27 +68,29 @@ pub fn assemble(
         }
         s.alpha.push(alpha);
         s.target.push(0.0);
-        s.b.push(alpha * p_eos - h2 / dt * divergence(faces, ci, cj, h, true));
+        s.b.push(alpha * p_eos - h2 / dt * divergence(faces, ci, cj, h));
         s.diag.push(row[4]);
         s.matrix.push(row);
         s.x.push(s.pressure[c]);
     }
 }
 
-/// D u of cell (ci, cj): its faces' net outflow over h (`vel_new`: u*
-/// with the air faces' shares before the correction, u^{n+1} after it;
-/// else u* as predicted).
-pub fn divergence(faces: &[FaceField; 2], ci: i64, cj: i64, h: f64, updated: bool) -> f64 {
-    let read = |field: &FaceField, i: i64, j: i64| {
-        let f = field.index(i, j);
-        if updated {
-            field.vel_new[f]
-        } else {
-            field.vel_star[f]
-        }
-    };
-    let (fx, fy) = (&faces[0], &faces[1]);
-    (read(fx, ci + 1, cj) - read(fx, ci, cj) + read(fy, ci, cj + 1) - read(fy, ci, cj)) / h
+/// D u of cell (ci, cj): its faces' net outflow over h, of `vel_new` (u*
+/// with the air faces' shares before the correction, u^{n+1} after it).
+pub fn divergence(faces: &[FaceField; 2], ci: i64, cj: i64, h: f64) -> f64 {
+    let [fx, fy] = faces;
+    let u = |field: &FaceField, i: i64, j: i64| field.vel_new[field.index(i, j)];
+    (u(fx, ci + 1, cj) - u(fx, ci, cj) + u(fy, ci, cj + 1) - u(fy, ci, cj)) / h
+}
+
+/// The two cells a face of `field` at (i, j) separates, below and above
+/// along its component's axis.
+fn cells_beside(field: &FaceField, i: i64, j: i64) -> [(i64, i64); 2] {
+    if field.axis == 0 {
+        [(i - 1, j), (i, j)]
+    } else {
+        [(i, j - 1), (i, j)]
+    }
 }
 
 /// The pressure of cell (i, j): the solved one, 0 in an air cell.
@@ -129,12 +131,7 @@ pub fn apply_gradient(
         if !solved(field, s, i, j) {
             continue;
         }
-        // The cells below and above the face along its axis.
-        let (lo, hi) = if field.axis == 0 {
-            ((i - 1, j), (i, j))
-        } else {
-            ((i, j - 1), (i, j))
-        };
+        let [lo, hi] = cells_beside(field, i, j);
         let jump = pressure_at(s, hi.0, hi.1) - pressure_at(s, lo.0, lo.1);
         *value -= scale * h * jump / field.operator_mass[f].max(light);
     }
@@ -147,16 +144,9 @@ fn solved(field: &FaceField, s: &Scratch, i: i64, j: i64) -> bool {
     if !field.in_box(i, j) || field.on_wall(i, j) {
         return false;
     }
-    let (lo, hi) = if field.axis == 0 {
-        ((i - 1, j), (i, j))
-    } else {
-        ((i, j - 1), (i, j))
-    };
-    [lo, hi].iter().any(|&(ci, cj)| {
-        (0..s.cells[0] as i64).contains(&ci)
-            && (0..s.cells[1] as i64).contains(&cj)
-            && s.unknown[ci as usize + cj as usize * s.cells[0]] != AIR
-    })
+    cells_beside(field, i, j)
+        .iter()
+        .any(|&(ci, cj)| s.cell_at(ci, cj).is_some_and(|c| s.unknown[c] != AIR))
 }
 
 /// An air face's solved neighbours (same component, one face away), and
@@ -225,7 +215,7 @@ pub fn book(faces: &[FaceField; 2], s: &mut Scratch, h: f64, dt: f64) {
     for (k, &c) in s.fluid.iter().enumerate() {
         let c = c as usize;
         let (ci, cj) = ((c % s.cells[0]) as i64, (c / s.cells[0]) as i64);
-        let e = divergence(faces, ci, cj, h, true);
+        let e = divergence(faces, ci, cj, h);
         s.rate[c] = e;
         pressure_work += s.x[k] * s.vol[c] * dt * e;
         if s.alpha[k] > 0.0 {

@@ -4,6 +4,7 @@
 
 use super::field::FaceField;
 use crate::particles::{Mat2, Particles, Vec2};
+use crate::shapes::bspline::quadratic_stencil;
 
 /// APIC's inverse inertia D^-1 h^2 of the quadratic B-spline.
 const INVERSE_INERTIA: f64 = 4.0;
@@ -37,10 +38,7 @@ pub fn stencil(field: &FaceField, origin: Vec2, h: f64, x: Vec2) -> Option<FaceS
             return None;
         }
         let f = xr - base as f64;
-        // f in [0.5, 1.5): distances to the three faces f, f - 1, f - 2.
-        let (d0, d1, d2) = (1.5 - f, f - 1.0, f - 0.5);
-        w[a] = [0.5 * d0 * d0, 0.75 - d1 * d1, 0.5 * d2 * d2];
-        dw[a] = [-d0, -2.0 * d1, d2];
+        (w[a], dw[a]) = quadratic_stencil(f);
         first[a] = base;
         frac[a] = f;
     }
