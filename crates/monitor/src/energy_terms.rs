@@ -107,14 +107,20 @@ impl Monitor {
     /// dt (v_y^n + v_y^{n+1}) / 2 each. Of it, the part beyond the position
     /// update at the new velocity, m g (dy - dt v_y^{n+1}), is the
     /// *advection* term: positions moved other than by the particles' own
-    /// velocity (FLIP's grid velocity, the drift correction, wall clamps),
-    /// judged in the ledger by its net like any booked term. The rest, m g
+    /// velocity (FLIP's grid velocity, wall clamps), judged in the ledger
+    /// by its net like any booked term. The rest, m g
     /// dt (v_y^{n+1} - v_y^n) / 2, is what symplectic Euler adds beside the
     /// physics; it telescopes over a window. Over a step that deleted or
-    /// added particles neither is defined, and both are left out.
+    /// added particles neither is defined, and both are left out. The
+    /// potential energy the pressure-implicit drift correction moved is
+    /// the solver's own booking (in the projection's dissipation), so it
+    /// is left out here (booked twice, it read as a budget drift of the
+    /// whole move).
     fn book_gravity_stepping(&mut self, v: &StateView, g: f64) {
         let pe = v.energy.gravitational;
+        let booked_move = v.projection.map_or(0.0, |p| p.stats.dissipated_packing);
         if let Some(prev) = self.prev_potential.filter(|_| !self.ids_changed) {
+            let prev = prev - booked_move;
             let (mut centred, mut new) = (0.0, 0.0);
             for p in 0..v.x.len() {
                 centred += v.mass[p] * 0.5 * (v.v[p].y + v.v_prev[p].y);

@@ -339,6 +339,9 @@ pub struct ProjectionSettings {
     /// A node lighter than this share of rho0 h^2 takes that mass in the
     /// pressure operator and its velocity correction (free-surface nodes).
     pub light_node_share: f64,
+    /// The mass each face's pressure gradient divides by (staggered scheme
+    /// only): the particles' mass on it, or the material's rho0 h^2.
+    pub face_density: FaceDensity,
     /// Relative residual |b - A p| / |b| at which the conjugate gradient stops.
     pub tolerance: f64,
     pub max_iterations: u32,
@@ -408,6 +411,19 @@ pub enum AirNodes {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+pub enum FaceDensity {
+    /// The particles' mass on the face (with the air faces' shares): where
+    /// the particles pack unevenly, the projection reads the packing as
+    /// density, and gravity turns it over (denser packing sinks).
+    Particles,
+    /// rho0 h^2 on every face whose two cells and their neighbours are
+    /// fluid; nearer the surface the particles' mass, capped at rho0 h^2.
+    /// The fluid is one density, so the packing carries no buoyancy.
+    Material,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Preconditioner {
     /// The diagonal.
     Jacobi,
@@ -433,6 +449,7 @@ impl Default for ProjectionSettings {
             free_surface: FreeSurface::Cell,
             air_nodes: AirNodes::Slaved,
             light_node_share: 0.01,
+            face_density: FaceDensity::Particles,
             tolerance: 1e-8,
             max_iterations: 4000,
             preconditioner: Preconditioner::Mic0,
@@ -803,8 +820,21 @@ impl SolverConfig {
                 "takes no remedy (its own controls are [method.projection])",
             ));
         }
+        self.validate_scheme()
+    }
+
+    /// The staggered scheme's own checks; the collocated one refuses the
+    /// staggered scheme's keys.
+    fn validate_scheme(&self) -> Result<(), ConfigError> {
+        let p = &self.method.projection;
         if p.scheme == ProjectionScheme::Mac {
-            self.validate_mac()?;
+            return self.validate_mac();
+        }
+        if p.face_density != FaceDensity::Particles {
+            return Err(ConfigError {
+                key: "method.projection.face_density".into(),
+                message: "applies to the staggered scheme only: set method.projection.scheme = \"mac\", or use \"particles\"".into(),
+            });
         }
         Ok(())
     }

@@ -179,3 +179,45 @@ fn flip(set: impl FnOnce(&mut solver::remedies::RemedySettings)) -> Method {
     set(&mut m.remedies);
     m
 }
+
+/// The pressure-implicit step's drift correction moves particles and
+/// books the potential energy the move changes as the projection's
+/// dissipation; the budget's gravity stepping term leaves that move out.
+/// Booked twice, the budget drifted by the correction's whole move (the
+/// stock dam break: 21 to 24 J/m of 157 at h = 1 cm over 5 s). On a
+/// coarse dam break (h = 2 cm, 150 kPa, 0.4 s) the correction moves
+/// several times more energy than the budget's largest drift, which stays
+/// within 0.2 % of the initial potential energy. Measured on this build:
+/// collocated, moved 5.73 J/m, drift 0.030 (5.70 booked twice); staggered,
+/// moved 2.48, drift 0.173.
+#[test]
+fn the_drift_corrections_move_is_booked_once() {
+    for scheme in [ProjectionScheme::Collocated, ProjectionScheme::Mac] {
+        let mut method = modern();
+        method.formulation = Formulation::PressureImplicit;
+        method.projection.scheme = scheme;
+        let mut material = Material::tait(1.5e5);
+        material.viscosity = 0.5;
+        let mut scene = Scene::dam_break(material);
+        scene.cell = 0.02;
+        scene.t_end = 0.4;
+        let cfg = SolverConfig {
+            scene,
+            method,
+            perturb: vec![],
+        };
+        let mut s = Solver::new(cfg).unwrap();
+        let mut m = Monitor::new(MonitorConfig::default(), &s.view());
+        let potential = s.energy().gravitational;
+        let (mut moved, mut closure) = (0.0f64, 0.0f64);
+        while !s.finished() {
+            s.step().unwrap();
+            moved += s.projection_stats().unwrap().dissipated_packing.abs();
+            closure = closure.max(m.observe(&s.view()).budget_drift.abs());
+        }
+        assert!(
+            closure < 2e-3 * potential && moved > 3.0 * closure,
+            "{scheme:?}: the correction moved {moved} J/m, the budget drifted by {closure} of {potential}"
+        );
+    }
+}

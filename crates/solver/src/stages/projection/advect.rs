@@ -44,6 +44,7 @@ pub fn shift_particles(
     let bilinear = set.advection == Advection::Bilinear;
     let removed = crate::shapes::with_width!(shape, W => move_particles::<W>(particles, stencils, shape, grid, gravity, bilinear, s));
     s.stats.dissipated_projection += removed;
+    s.stats.dissipated_packing += removed;
     removed
 }
 

@@ -75,6 +75,10 @@ pub struct SolveStats {
     /// counted), plus the gravitational energy the drift correction by
     /// position took out (J/m).
     pub dissipated_projection: f64,
+    /// Of `dissipated_projection`, the gravitational energy the drift
+    /// correction by position took out this step (J/m): the monitor's
+    /// gravity stepping term leaves it out, since it is booked here.
+    pub dissipated_packing: f64,
     /// Energy the hourglass control removed: minus its velocity change's
     /// work at the time-centred velocity (J/m).
     pub dissipated_hourglass: f64,
@@ -289,7 +293,7 @@ impl Scratch {
 
     /// Whether every cell within `reach` cells of `c` (off a walled box:
     /// the wall's image) is fluid.
-    fn deep(&self, c: usize, reach: i64) -> bool {
+    pub(super) fn deep(&self, c: usize, reach: i64) -> bool {
         let (ci, cj) = ((c % self.cells[0]) as i64, (c / self.cells[0]) as i64);
         (-reach..=reach).all(|dj| {
             (-reach..=reach).all(|di| {

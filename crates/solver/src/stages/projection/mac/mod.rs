@@ -22,7 +22,7 @@ pub use packing::correct_packing;
 
 use super::surface::mark_fluid;
 use super::{Inputs, Scratch};
-use crate::config::FreeSurface;
+use crate::config::{FaceDensity, FreeSurface};
 use crate::grid::Grid;
 use crate::particles::{Mat2, Particles, Vec2};
 use crate::viscosity;
@@ -90,8 +90,9 @@ pub fn project(inputs: &Inputs, gravity: Vec2, affine: bool, grid: &mut Grid, s:
         scatter(&src, field);
         predict(field, gravity[field.axis], dt);
     }
+    let material = (set.face_density == FaceDensity::Material).then_some(full_mass);
     for field in faces.fields.iter_mut() {
-        solve::slave_air_faces(field, s);
+        solve::slave_air_faces(field, s, material);
     }
     s.stats = solve::fresh_stats(s.fluid.len());
     solve::assemble(&faces.fields, s, mat, h, dt, light);

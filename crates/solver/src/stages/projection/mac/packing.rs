@@ -52,6 +52,7 @@ pub fn correct_packing(
         solve_shift(&mut faces, s, set, h, dt, set.light_node_share * full_mass);
         removed = move_particles(particles, &faces, grid, gravity);
         s.stats.dissipated_projection += removed;
+        s.stats.dissipated_packing += removed;
     }
     s.faces = faces;
     removed

@@ -173,8 +173,10 @@ fn air_neighbours(field: &FaceField, s: &Scratch, f: usize) -> Option<([usize; 4
 /// constraint), so their mass and u* momentum join those neighbours' in
 /// equal shares before the solve: the weight of the material the
 /// B-spline carries beyond the fluid cells rests on the pressure. Sets
-/// `operator_mass` and the neighbours' u* (in `vel_new`).
-pub fn slave_air_faces(field: &mut FaceField, s: &Scratch) {
+/// `operator_mass` and the neighbours' u* (in `vel_new`); with `material`
+/// = Some(rho0 h^2), the operator takes the material's density instead
+/// (`material_density`).
+pub fn slave_air_faces(field: &mut FaceField, s: &Scratch, material: Option<f64>) {
     let mut op = std::mem::take(&mut field.operator_mass);
     op.copy_from_slice(&field.mass);
     // Momentum first, in `vel_new` as m u*; divided once all shares are in.
@@ -193,7 +195,30 @@ pub fn slave_air_faces(field: &mut FaceField, s: &Scratch) {
     for ((u, &m), &star) in field.vel_new.iter_mut().zip(&op).zip(&field.vel_star) {
         *u = if m > 0.0 { *u / m } else { star };
     }
+    if let Some(full) = material {
+        material_density(field, s, full, &mut op);
+    }
     field.operator_mass = op;
+}
+
+/// `face_density = "material"`: a face whose two cells and their
+/// neighbours are all fluid takes rho0 h^2; a face nearer the surface
+/// keeps the particles' mass (its fill), capped at rho0 h^2. The
+/// particles' mass varies with their packing, and a projection that reads
+/// it as density lets gravity sink the denser packing and lift the looser
+/// (docs/findings/projection_mac.md, "The packing's buoyancy").
+fn material_density(field: &FaceField, s: &Scratch, full: f64, op: &mut [f64]) {
+    for (f, m) in op.iter_mut().enumerate() {
+        let (i, j) = field.coords(f);
+        if !field.in_box(i, j) || field.on_wall(i, j) {
+            continue;
+        }
+        let inside = cells_beside(field, i, j).iter().all(|&(ci, cj)| {
+            s.cell_at(ci, cj)
+                .is_some_and(|c| s.unknown[c] != AIR && s.deep(c, 1))
+        });
+        *m = if inside { full } else { m.min(full) };
+    }
 }
 
 /// Each slaved air face takes its solved neighbours' mean value.
