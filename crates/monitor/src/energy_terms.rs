@@ -112,21 +112,21 @@ impl Monitor {
     /// dt (v_y^{n+1} - v_y^n) / 2, is what symplectic Euler adds beside the
     /// physics; it telescopes over a window. Over a step that deleted or
     /// added particles neither is defined, and both are left out. The
-    /// potential energy the pressure-implicit drift correction moved is
-    /// the solver's own booking (in the projection's dissipation), so it
-    /// is left out here (booked twice, it read as a budget drift of the
-    /// whole move).
+    /// pressure-implicit drift correction's move is such an advection, but
+    /// the solver books it (in its dissipation): it is left out of the
+    /// stepping term (booked twice, it read as a budget drift of the whole
+    /// move) and the ledger reads it as the advection's, not the
+    /// projection's (`ledger_entry`).
     fn book_gravity_stepping(&mut self, v: &StateView, g: f64) {
         let pe = v.energy.gravitational;
         let booked_move = v.projection.map_or(0.0, |p| p.stats.dissipated_packing);
         if let Some(prev) = self.prev_potential.filter(|_| !self.ids_changed) {
-            let prev = prev - booked_move;
             let (mut centred, mut new) = (0.0, 0.0);
             for p in 0..v.x.len() {
                 centred += v.mass[p] * 0.5 * (v.v[p].y + v.v_prev[p].y);
                 new += v.mass[p] * v.v[p].y;
             }
-            let term = (pe - prev) - g * v.dt * centred;
+            let term = (pe - prev + booked_move) - g * v.dt * centred;
             let advection = (pe - prev) - g * v.dt * new;
             if term.is_finite() && advection.is_finite() {
                 self.gravity_stepping += term;
@@ -145,7 +145,8 @@ impl Monitor {
             self.ledger.present.insert(TRANSFER);
         }
         if let Some(p) = v.projection {
-            terms[PROJECTION] += p.stats.dissipated_projection;
+            // The drift correction's move is the advection term's.
+            terms[PROJECTION] += p.stats.dissipated_projection - p.stats.dissipated_packing;
             terms[HOURGLASS] += p.stats.dissipated_hourglass;
             self.ledger.present.insert(PROJECTION);
             self.ledger.present.insert(HOURGLASS);
