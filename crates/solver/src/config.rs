@@ -416,9 +416,10 @@ pub enum FaceDensity {
     /// the particles pack unevenly, the projection reads the packing as
     /// density, and gravity turns it over (denser packing sinks).
     Particles,
-    /// rho0 h^2 on every face whose two cells and their neighbours are
-    /// fluid; nearer the surface the particles' mass, capped at rho0 h^2.
-    /// The fluid is one density, so the packing carries no buoyancy.
+    /// rho0 h^2 / J on every face whose two cells and their neighbours
+    /// are fluid (J the cells' particle volumes over their rest volumes);
+    /// nearer the surface the particles' mass, capped there. The fluid's
+    /// density then follows its compression, not its packing.
     Material,
 }
 

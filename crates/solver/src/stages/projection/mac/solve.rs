@@ -202,22 +202,35 @@ pub fn slave_air_faces(field: &mut FaceField, s: &Scratch, material: Option<f64>
 }
 
 /// `face_density = "material"`: a face whose two cells and their
-/// neighbours are all fluid takes rho0 h^2; a face nearer the surface
-/// keeps the particles' mass (its fill), capped at rho0 h^2. The
-/// particles' mass varies with their packing, and a projection that reads
-/// it as density lets gravity sink the denser packing and lift the looser
-/// (docs/findings/projection_mac.md, "The packing's buoyancy").
+/// neighbours are all fluid takes the material's mass rho0 h^2 / J (J the
+/// mean of its two cells' particle volumes over their rest volumes); a
+/// face nearer the surface keeps the particles' mass (its fill), capped
+/// there. The particles' mass varies with their packing, and a projection
+/// that reads it as density lets gravity sink the denser packing and lift
+/// the looser (docs/findings/projection_mac.md, "The packing's buoyancy").
 fn material_density(field: &FaceField, s: &Scratch, full: f64, op: &mut [f64]) {
+    let compression = |c: usize| {
+        if s.vol[c] > 0.0 && s.vol0[c] > 0.0 {
+            s.vol0[c] / s.vol[c]
+        } else {
+            1.0
+        }
+    };
     for (f, m) in op.iter_mut().enumerate() {
         let (i, j) = field.coords(f);
         if !field.in_box(i, j) || field.on_wall(i, j) {
             continue;
         }
-        let inside = cells_beside(field, i, j).iter().all(|&(ci, cj)| {
-            s.cell_at(ci, cj)
-                .is_some_and(|c| s.unknown[c] != AIR && s.deep(c, 1))
-        });
-        *m = if inside { full } else { m.min(full) };
+        let beside = cells_beside(field, i, j).map(|(ci, cj)| s.cell_at(ci, cj));
+        let [Some(lo), Some(hi)] = beside else {
+            *m = m.min(full);
+            continue;
+        };
+        let material = full * 0.5 * (compression(lo) + compression(hi));
+        let inside = [lo, hi]
+            .iter()
+            .all(|&c| s.unknown[c] != AIR && s.deep(c, 1));
+        *m = if inside { material } else { m.min(material) };
     }
 }
 
