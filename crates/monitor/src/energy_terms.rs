@@ -163,12 +163,17 @@ impl Monitor {
         self.ledger_terms = terms;
         // The base: what no term books. The solver adds the projection's and
         // the hourglass control's removals to the dissipation: taken out here,
-        // they count as terms; the remedies' parts the loss and the
-        // dissipation already hold are taken back (`detector_offset` less the
-        // remedies' own removals).
+        // they count as terms (the solve's; the drift correction's move stays
+        // in the dissipation, so its potential energy change nets to 0 in
+        // the total); the remedies' parts the loss and the dissipation
+        // already hold are taken back (`detector_offset` less the remedies'
+        // own removals).
         let held = self.booking.detector_offset(loss_counted) - self.booking.dissipated();
         // Gravity's stepping term is booked exactly, less the advection's
-        // part, which is a term.
+        // part, which is a term. The drift correction's move is out of the
+        // first and in the second, so `symplectic` carries +R for a move
+        // that removed R: the base falls by R, which the advection term
+        // books.
         let symplectic = self.gravity_stepping - self.advection_stepping;
         let base = v.energy.total() - terms[PROJECTION] - terms[HOURGLASS] - symplectic + held;
         Entry {
