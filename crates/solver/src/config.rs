@@ -340,7 +340,7 @@ pub struct ProjectionSettings {
     /// pressure operator and its velocity correction (free-surface nodes).
     pub light_node_share: f64,
     /// The mass each face's pressure gradient divides by (staggered scheme
-    /// only): the particles' mass on it, or the material's rho0 h^2.
+    /// only): the particles' mass on it, or the material's rho0 h^2 / J.
     pub face_density: FaceDensity,
     /// Relative residual |b - A p| / |b| at which the conjugate gradient stops.
     pub tolerance: f64,
