@@ -86,13 +86,14 @@ impl Monitor {
         // velocity's energy is counted, so the loss is measured on the grid
         // (particles before P2G minus the grid after it, the updated grid
         // minus the particles after G2P), each part >= 0 away from walls.
-        let step_loss = match v.affine_inertia {
-            Some(_) => {
-                // An impulse is no transfer: it stays an injection.
-                (v.ke_particles_p2g - v.ke_grid_p2g)
-                    + (v.ke_grid_updated - (v.energy.kinetic_with_affine() - v.impulse_kinetic))
-            }
-            None => scan.transfer_loss,
+        // The staggered step's transfers are read on its faces under any
+        // transfer: the particle-side FLIP reading cannot see its P2G.
+        let step_loss = if v.staggered || v.affine_inertia.is_some() {
+            // An impulse is no transfer: it stays an injection.
+            (v.ke_particles_p2g - v.ke_grid_p2g)
+                + (v.ke_grid_updated - (v.energy.kinetic_with_affine() - v.impulse_kinetic))
+        } else {
+            scan.transfer_loss
         };
         if step_loss.is_finite() {
             self.transfer_loss += step_loss;

@@ -76,6 +76,9 @@ pub struct StateView<'a> {
     /// the affine kinetic energy is in `energy.affine`, and the transfer
     /// loss is measured on the grid (docs/physics.md section 4).
     pub affine_inertia: Option<f64>,
+    /// The pressure-implicit step's velocities live on the cell faces
+    /// (`ke_grid_*` are the faces'; the nodes only follow them).
+    pub staggered: bool,
     /// Kinetic energy the `[[perturb]]` impulses of the last step added.
     pub impulse_kinetic: f64,
     /// Total P2G nodal mass of the last step (ghost nodes included, before folding).
@@ -151,6 +154,7 @@ pub fn make(s: &Solver) -> StateView<'_> {
         ke_grid_p2g: s.ke_grid_p2g,
         ke_grid_updated: s.ke_grid_updated,
         affine_inertia: s.affine_inertia(),
+        staggered: s.staggered(),
         impulse_kinetic: s.impulse_kinetic,
         grid_mass_p2g: s.grid_mass_p2g,
         courant: s.courant,

@@ -231,3 +231,44 @@ fn the_drift_corrections_move_is_booked_once() {
         );
     }
 }
+
+/// The staggered step's transfers are read on its faces whatever the
+/// transfer (the particle-side FLIP reading cannot see its P2G): under PIC
+/// and FLIP, on the coarse dam break without the drift correction, the
+/// budget's largest drift stays within 0.5 % of the initial potential
+/// energy. Measured on this build: PIC 0.23 J/m, FLIP 0.72, of 157
+/// (read from the particles, PIC drifted by 2.24).
+#[test]
+fn the_staggered_transfers_are_read_on_the_faces() {
+    for transfer in [TransferKind::Pic, TransferKind::Flip] {
+        let mut method = Method {
+            transfer,
+            ..modern()
+        };
+        method.formulation = Formulation::PressureImplicit;
+        method.projection.scheme = ProjectionScheme::Mac;
+        method.projection.drift = 0.0;
+        let mut material = Material::tait(1.5e5);
+        material.viscosity = 0.5;
+        let mut scene = Scene::dam_break(material);
+        scene.cell = 0.02;
+        scene.t_end = 0.4;
+        let cfg = SolverConfig {
+            scene,
+            method,
+            perturb: vec![],
+        };
+        let mut s = Solver::new(cfg).unwrap();
+        let mut m = Monitor::new(MonitorConfig::default(), &s.view());
+        let potential = s.energy().gravitational;
+        let mut closure = 0.0f64;
+        while !s.finished() {
+            s.step().unwrap();
+            closure = closure.max(m.observe(&s.view()).budget_drift.abs());
+        }
+        assert!(
+            closure < 5e-3 * potential,
+            "{transfer:?}: the budget drifted by {closure} of {potential}"
+        );
+    }
+}
