@@ -5,8 +5,15 @@ command in docs/findings/*.md (in code blocks and in inline code) is read
 for the repository paths it names (studies/*.toml, scripts/*, docs/*,
 crates/*), and each must exist in the repository (git ls-files).
 Placeholders (DIR, OUT, ...) and output folders (--out, reports/) are not
-files to read. Usage: scripts/findings_commands.py [FILE ...]; exits 1
-listing each missing file with where it is cited."""
+files to read.
+
+It also checks that each findings file (README.md aside) opens with its
+result: a paragraph starting `**Current result` within the first lines
+after the title, naming the commit (7 to 40 hex digits) of a build.
+
+Usage: scripts/findings_commands.py [FILE ...]; exits 1 listing each
+missing file with where it is cited, and each file without its opening
+result."""
 import re
 import subprocess
 import sys
@@ -57,10 +64,28 @@ def commands(text):
     return sorted(found)
 
 
+# The opening result must start within this many lines after the title.
+OPENING_LINES = 4
+COMMIT = re.compile(r"\b[0-9a-f]{7,40}\b")
+
+
+def opening_problem(text):
+    """Why the file does not open with its result, or None when it does."""
+    lines = text.splitlines()
+    body = [n for n, line in enumerate(lines) if line.strip() and not line.startswith("# ")]
+    start = next((n for n in body[:OPENING_LINES] if lines[n].startswith("**Current result")), None)
+    if start is None:
+        return "does not open with a `**Current result**` paragraph"
+    end = next((n for n in range(start, len(lines)) if not lines[n].strip()), len(lines))
+    if not COMMIT.search(" ".join(lines[start:end])):
+        return "its opening result names no commit"
+    return None
+
+
 def main(paths):
     files = tracked()
     paths = paths or sorted(str(p) for p in (ROOT / "docs" / "findings").glob("*.md"))
-    missing = []
+    missing, unopened = [], []
     for p in paths:
         p = Path(p).resolve()
         text = p.read_text()
@@ -72,10 +97,13 @@ def main(paths):
                     continue
                 if cited not in files:
                     missing.append(f"{p.relative_to(ROOT)}:{n}: {cited}  ({cmd.strip()[:80]})")
-    for m in missing:
+        if p.name != "README.md" and (why := opening_problem(text)):
+            unopened.append(f"{p.relative_to(ROOT)}: {why}")
+    for m in missing + unopened:
         print(m)
     print(f"findings_commands: {len(missing)} cited file(s) missing from the repository")
-    return 1 if missing else 0
+    print(f"findings_commands: {len(unopened)} file(s) without their opening result")
+    return 1 if missing or unopened else 0
 
 
 if __name__ == "__main__":
