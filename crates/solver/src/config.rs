@@ -330,6 +330,9 @@ pub struct ProjectionSettings {
     /// (whose cell-integrated divergence is the solved D u, so a cell's
     /// particles keep their packing) or the run's shape functions'.
     pub advection: Advection,
+    /// How the particles' positions step through that velocity field
+    /// (staggered scheme only): one Euler step, or the midpoint rule.
+    pub advection_step: AdvectionStep,
     /// Where the free surface's p = 0 sits: at the air cells' centres, or
     /// inside the cell where the grid's fluid fraction crosses a half.
     pub free_surface: FreeSurface,
@@ -375,6 +378,15 @@ pub enum Advection {
     Bilinear,
     /// x += dt sum N_ip v_i with the run's shapes (B-spline tails included).
     Shape,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AdvectionStep {
+    /// x += dt v(x).
+    Euler,
+    /// x += dt v(x + dt v(x) / 2): second order in dt along a path.
+    Midpoint,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -447,6 +459,7 @@ impl Default for ProjectionSettings {
             drift_tolerance: 1e-6,
             drift_depth: 0,
             advection: Advection::Shape,
+            advection_step: AdvectionStep::Euler,
             free_surface: FreeSurface::Cell,
             air_nodes: AirNodes::Slaved,
             light_node_share: 0.01,
@@ -837,12 +850,17 @@ impl SolverConfig {
                 message: "applies to the staggered scheme only: set method.projection.scheme = \"mac\", or use \"particles\"".into(),
             });
         }
+        if p.advection_step != AdvectionStep::Euler {
+            return Err(ConfigError {
+                key: "method.projection.advection_step".into(),
+                message: "applies to the staggered scheme only: set method.projection.scheme = \"mac\", or use \"euler\"".into(),
+            });
+        }
         Ok(())
     }
 
     /// What the staggered scheme supports: quadratic B-splines centred on
-    /// the faces, PIC, FLIP or APIC, a walled box, and the particles moved
-    /// with the shapes' velocity.
+    /// the faces, PIC, FLIP or APIC, and a walled box.
     fn validate_mac(&self) -> Result<(), ConfigError> {
         let (m, s) = (&self.method, &self.scene);
         let needs = |key: &str, what: &str| ConfigError {
@@ -871,12 +889,6 @@ impl SolverConfig {
             return Err(needs(
                 "method.projection.drift_correction",
                 "corrects the packing by position only: use \"position\"",
-            ));
-        }
-        if m.projection.advection != Advection::Shape {
-            return Err(needs(
-                "method.projection.advection",
-                "moves the particles with the faces' velocity: use \"shape\"",
             ));
         }
         Ok(())

@@ -79,6 +79,7 @@ pub fn from_grid(s: &mut Solver, clock: &mut Instant) {
         s.dissipated += projection::mac::update_particles(
             &mut s.particles,
             &s.projection,
+            &s.cfg.method.projection,
             material,
             &s.grid,
             flip_alpha,

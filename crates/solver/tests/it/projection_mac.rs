@@ -241,16 +241,24 @@ fn what_the_staggered_scheme_cannot_do_is_refused_by_key() {
     );
     let mut m = mac(TransferKind::Apic);
     m.projection.advection = Advection::Bilinear;
-    assert_eq!(
-        key_of(scene(), m).as_deref(),
-        Some("method.projection.advection")
-    );
-    let mut m = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
-    m.formulation = Formulation::PressureImplicit;
+    m.projection.advection_step = AdvectionStep::Midpoint;
+    assert_eq!(key_of(scene(), m), None);
+    let collocated = || {
+        let mut m = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
+        m.formulation = Formulation::PressureImplicit;
+        m
+    };
+    let mut m = collocated();
     m.projection.face_density = FaceDensity::Material;
     assert_eq!(
         key_of(scene(), m).as_deref(),
         Some("method.projection.face_density")
+    );
+    let mut m = collocated();
+    m.projection.advection_step = AdvectionStep::Midpoint;
+    assert_eq!(
+        key_of(scene(), m).as_deref(),
+        Some("method.projection.advection_step")
     );
     let mut s = scene();
     s.periodic = [true, false];

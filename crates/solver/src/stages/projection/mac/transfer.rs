@@ -50,6 +50,32 @@ pub fn stencil(field: &FaceField, origin: Vec2, h: f64, x: Vec2) -> Option<FaceS
     })
 }
 
+/// Component `field.axis` of the faces' new velocity at `x`, linear
+/// between the four nearest faces (the MAC grid's bilinear element); None
+/// beyond the padded faces.
+#[inline]
+pub fn linear_velocity(field: &FaceField, origin: Vec2, h: f64, x: Vec2) -> Option<f64> {
+    let mut first = [0i64; 2];
+    let mut frac = [0.0; 2];
+    for a in 0..2 {
+        let xr = (x[a] - origin[a]) / h - field.offset[a];
+        if !xr.is_finite() {
+            return None;
+        }
+        let base = xr.floor() as i64;
+        if !field.holds(base, a) || !field.holds(base + 1, a) {
+            return None;
+        }
+        first[a] = base;
+        frac[a] = xr - base as f64;
+    }
+    let at = |di: i64, dj: i64| field.vel_new[field.index(first[0] + di, first[1] + dj)];
+    let (fx, fy) = (frac[0], frac[1]);
+    let low = (1.0 - fx) * at(0, 0) + fx * at(1, 0);
+    let high = (1.0 - fx) * at(0, 1) + fx * at(1, 1);
+    Some((1.0 - fy) * low + fy * high)
+}
+
 /// What P2G reads of the particles.
 pub struct Sources<'a> {
     pub particles: &'a Particles,
@@ -152,7 +178,8 @@ mod tests {
 
     /// P2G puts each particle's momentum on its component's faces exactly
     /// (the affine part sums to zero: sum w (x_f - x_p) = 0), and G2P of a
-    /// face field that is affine returns its value and gradient exactly.
+    /// face field that is affine returns its value and gradient exactly, as
+    /// does the bilinear element.
     #[test]
     fn the_face_transfers_keep_momentum_and_read_an_affine_field_exactly() {
         let mut ps = Particles::default();
@@ -190,6 +217,11 @@ mod tests {
                 let st = stencil(&f, Vec2::zeros(), 0.01, ps.x[p]).unwrap();
                 let got = gather(&f, &st, 0.01);
                 assert!((got.v - affine(ps.x[p])[axis]).abs() < 1e-14, "axis {axis}");
+                let linear = linear_velocity(&f, Vec2::zeros(), 0.01, ps.x[p]).unwrap();
+                assert!(
+                    (linear - affine(ps.x[p])[axis]).abs() < 1e-14,
+                    "axis {axis}"
+                );
                 for (b, want) in c_row.iter().enumerate() {
                     assert!((got.c_row[b] - want).abs() < 1e-11, "C[{axis}][{b}]");
                     assert!((got.l_row[b] - want).abs() < 1e-11, "L[{axis}][{b}]");
