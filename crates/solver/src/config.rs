@@ -301,8 +301,7 @@ pub struct ProjectionSettings {
     /// Where the velocities live: on the nodes with cell pressures (Q1-P0,
     /// held by the controls below) or on the cell faces (MAC, inf-sup
     /// stable; it reads none of hourglass, checkerboard, free_surface and
-    /// air_nodes, its advection is the shapes' and its drift correction
-    /// is by position).
+    /// air_nodes, and its drift correction is by position).
     pub scheme: ProjectionScheme,
     /// Share of each fluid cell's hourglass velocity (the nodal mode the
     /// cell divergence cannot see) removed per step, 0 ..= 0.25.
@@ -327,8 +326,10 @@ pub struct ProjectionSettings {
     /// height, so a wave reads as packing error there.
     pub drift_depth: u32,
     /// The velocity field the particles move with: the bilinear element's
-    /// (whose cell-integrated divergence is the solved D u, so a cell's
-    /// particles keep their packing) or the run's shape functions'.
+    /// (on the collocated scheme its cell-integrated divergence is the
+    /// solved D u; on the staggered one it is each component linear
+    /// between its nearest faces, exact for an affine field) or the run's
+    /// shape functions'.
     pub advection: Advection,
     /// How the particles' positions step through that velocity field
     /// (staggered scheme only): one Euler step, or the midpoint rule.

@@ -219,7 +219,7 @@ fn advect(
 }
 
 /// The MAC step's particle side: G2P from the faces (PIC, FLIP blend or
-/// APIC; positions with the PIC velocity), then F, J^{n+1} = J^n (1 + dt e)
+/// APIC; positions by `advect`), then F, J^{n+1} = J^n (1 + dt e)
 /// of the particle's cell, the viscous stress, the cell's pressure and the
 /// stored energy. Returns the viscous work. Serial (a reduction of work in
 /// particle order).
@@ -307,19 +307,20 @@ mod tests {
     }
 
     /// The radius after 20 steps of OMEGA dt = 0.1 from 2 cm, by `step`
-    /// through the bilinear element (exact for a rotation).
-    fn radius_after(step: AdvectionStep) -> f64 {
+    /// through `advection`'s field (both exact for a rotation, which is
+    /// affine), the shapes' velocity passed as v_PIC.
+    fn radius_after(advection: Advection, step: AdvectionStep) -> f64 {
         let faces = rotating_faces();
         let set = ProjectionSettings {
-            advection: Advection::Bilinear,
+            advection,
             advection_step: step,
             ..Default::default()
         };
         let (dt, centre) = (0.1 / OMEGA, Vec2::new(0.04, 0.04));
         let mut x = centre + Vec2::new(0.02, 0.0);
         for _ in 0..20 {
-            let v = velocity_at(&faces, Advection::Bilinear, Vec2::zeros(), 0.01, x).unwrap();
-            x = advect(&faces, &set, Vec2::zeros(), 0.01, x, v, dt);
+            let v_pic = velocity_at(&faces, Advection::Shape, Vec2::zeros(), 0.01, x).unwrap();
+            x = advect(&faces, &set, Vec2::zeros(), 0.01, x, v_pic, dt);
         }
         (x - centre).norm() / 0.02
     }
@@ -328,12 +329,18 @@ mod tests {
     /// sqrt(1 + (OMEGA dt)^2); the midpoint rule by sqrt(1 + (OMEGA dt)^4 / 4).
     #[test]
     fn the_midpoint_rule_keeps_a_rotations_circles() {
-        let euler = radius_after(AdvectionStep::Euler);
-        let midpoint = radius_after(AdvectionStep::Midpoint);
-        assert!((euler - 1.01f64.powi(10)).abs() < 1e-12, "Euler: {euler}");
-        assert!(
-            (midpoint - (1.0 + 2.5e-5f64).powi(10)).abs() < 1e-12,
-            "midpoint: {midpoint}"
-        );
+        for advection in [Advection::Shape, Advection::Bilinear] {
+            let euler = radius_after(advection, AdvectionStep::Euler);
+            let midpoint = radius_after(advection, AdvectionStep::Midpoint);
+            let (want_euler, want_midpoint) = (1.01f64.powi(10), (1.0 + 2.5e-5f64).powi(10));
+            assert!(
+                (euler - want_euler).abs() < 1e-12,
+                "{advection:?} Euler: {euler}"
+            );
+            assert!(
+                (midpoint - want_midpoint).abs() < 1e-12,
+                "{advection:?} midpoint: {midpoint}"
+            );
+        }
     }
 }
