@@ -334,6 +334,11 @@ pub struct ProjectionSettings {
     /// How the particles' positions step through that velocity field
     /// (staggered scheme only): one Euler step, or the midpoint rule.
     pub advection_step: AdvectionStep,
+    /// A cell without particles whose four neighbours hold particles
+    /// (staggered scheme only): air, at p = 0, or fluid, with a row in the
+    /// solve, so that a hole the packing opens inside the water is not a
+    /// free surface the water falls into.
+    pub holes: Holes,
     /// Where the free surface's p = 0 sits: at the air cells' centres, or
     /// inside the cell where the grid's fluid fraction crosses a half.
     pub free_surface: FreeSurface,
@@ -379,6 +384,15 @@ pub enum Advection {
     Bilinear,
     /// x += dt sum N_ip v_i with the run's shapes (B-spline tails included).
     Shape,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Holes {
+    /// p = 0 in the hole, as at the free surface.
+    Air,
+    /// The hole is a fluid cell of the solve (its J read as 1).
+    Fluid,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -461,6 +475,7 @@ impl Default for ProjectionSettings {
             drift_depth: 0,
             advection: Advection::Shape,
             advection_step: AdvectionStep::Euler,
+            holes: Holes::Air,
             free_surface: FreeSurface::Cell,
             air_nodes: AirNodes::Slaved,
             light_node_share: 0.01,
@@ -849,6 +864,12 @@ impl SolverConfig {
             return Err(ConfigError {
                 key: "method.projection.face_density".into(),
                 message: "applies to the staggered scheme only: set method.projection.scheme = \"mac\", or use \"particles\"".into(),
+            });
+        }
+        if p.holes != Holes::Air {
+            return Err(ConfigError {
+                key: "method.projection.holes".into(),
+                message: "applies to the staggered scheme only: set method.projection.scheme = \"mac\", or use \"air\"".into(),
             });
         }
         if p.advection_step != AdvectionStep::Euler {

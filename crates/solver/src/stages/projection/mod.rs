@@ -291,6 +291,16 @@ impl Scratch {
         (inside / (inside - outside)).clamp(MIN_SURFACE_SHARE, 1.0)
     }
 
+    /// Cell `c`'s particle volumes over their rest volumes; 1 in a cell
+    /// that holds none (a hole the staggered scheme solves as fluid).
+    pub(super) fn cell_j(&self, c: usize) -> f64 {
+        if self.vol0[c] > 0.0 {
+            self.vol[c] / self.vol0[c]
+        } else {
+            1.0
+        }
+    }
+
     /// Whether every cell within `reach` cells of `c` (off a walled box:
     /// the wall's image) is fluid.
     pub(super) fn deep(&self, c: usize, reach: i64) -> bool {
@@ -356,7 +366,7 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
         inputs.dt,
     );
     let full_mass = mat.rho0 * grid.h * grid.h;
-    mark_fluid(ps, grid, s, set.free_surface, full_mass);
+    mark_fluid(ps, grid, s, set.free_surface, full_mass, false);
     let light = set.light_node_share * full_mass;
     prepare_velocities(grid, s, set, light, dt);
     assemble(grid, s, mat, set, dt, full_mass);

@@ -174,15 +174,17 @@ pub(super) fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64, light: f64, mir
     }
 }
 
-/// Fluid cells (those holding a particle; under the ghost surface also at
-/// least half full), each particle's cell, the cells' volumes, the
-/// unknowns' corners and their ghost weights.
+/// Fluid cells (those holding a particle, and with `holes` an empty cell
+/// whose four neighbours hold one; under the ghost surface also at least
+/// half full), each particle's cell, the cells' volumes, the unknowns'
+/// corners and their ghost weights.
 pub(super) fn mark_fluid(
     ps: &Particles,
     grid: &Grid,
     s: &mut Scratch,
     surface: FreeSurface,
     full_mass: f64,
+    holes: bool,
 ) {
     bin_particles(ps, grid, s);
     let ghost = surface != FreeSurface::Cell;
@@ -190,7 +192,7 @@ pub(super) fn mark_fluid(
     if ghost {
         fill_levels(grid, s, full_mass);
     }
-    mark_cells(grid, s, ghost);
+    mark_cells(grid, s, ghost, holes);
     fill_ghost_weights(s, ghost);
     fill_neighbour_rows(s);
     fill_full_quads(s);
@@ -249,7 +251,21 @@ fn fill_levels(grid: &Grid, s: &mut Scratch, full_mass: f64) {
 
 /// The unknowns: each fluid cell numbered, its corners kept and flagged as
 /// fluid nodes; a cell left out reads p = 0.
-fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool) {
+/// Whether cell `c` is empty with all four neighbours holding particles.
+fn is_hole(s: &Scratch, c: usize) -> bool {
+    let (nx, ny) = (s.cells[0], s.cells[1]);
+    let (ci, cj) = (c % nx, c / nx);
+    s.vol0[c] == 0.0
+        && ci > 0
+        && cj > 0
+        && ci + 1 < nx
+        && cj + 1 < ny
+        && [c - 1, c + 1, c - nx, c + nx]
+            .iter()
+            .all(|&d| s.vol0[d] > 0.0)
+}
+
+fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool, holes: bool) {
     // The flags live on the owner nodes (a periodic edge's two sides are one node).
     for c in &s.corners {
         for &n in c {
@@ -262,7 +278,8 @@ fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool) {
         // A cell whose corners the particles' stencils do not all reach (a
         // particle clamped into it from outside the box) has no operator row.
         let reached = corners.iter().all(|&n| grid.is_active(n as usize));
-        if s.vol0[c] > 0.0 && reached && (!ghost || s.level[c] >= 0.0) {
+        let held = s.vol0[c] > 0.0 || (holes && is_hole(s, c));
+        if held && reached && (!ghost || s.level[c] >= 0.0) {
             s.unknown[c] = s.fluid.len() as u32;
             s.fluid.push(c as u32);
             for n in corners {

@@ -22,7 +22,9 @@ pub use packing::correct_packing;
 
 use super::surface::mark_fluid;
 use super::{Inputs, Scratch};
-use crate::config::{Advection, AdvectionStep, FaceDensity, FreeSurface, ProjectionSettings};
+use crate::config::{
+    Advection, AdvectionStep, FaceDensity, FreeSurface, Holes, ProjectionSettings,
+};
 use crate::grid::Grid;
 use crate::particles::{Mat2, Particles, Vec2};
 use crate::viscosity;
@@ -78,7 +80,8 @@ pub fn project(inputs: &Inputs, gravity: Vec2, affine: bool, grid: &mut Grid, s:
     let h = grid.h;
     let full_mass = mat.rho0 * h * h;
     let light = set.light_node_share * full_mass;
-    mark_fluid(ps, grid, s, FreeSurface::Cell, full_mass);
+    let holes = set.holes == Holes::Fluid;
+    mark_fluid(ps, grid, s, FreeSurface::Cell, full_mass, holes);
     let mut faces = std::mem::take(&mut s.faces);
     let src = Sources {
         particles: ps,

@@ -86,7 +86,7 @@ fn packing_errors(
             let error = if incompressible {
                 packing - 1.0
             } else {
-                packing * s.vol[c] / s.vol0[c] - 1.0
+                packing * s.cell_j(c) - 1.0
             };
             sum += error;
             count += 1;

@@ -46,7 +46,7 @@ pub fn assemble(
         let (alpha, p_eos) = if incompressible {
             (0.0, 0.0)
         } else {
-            let state = mat.eos(s.vol[c] / s.vol0[c]);
+            let state = mat.eos(s.cell_j(c));
             (
                 h2 / (state.tangent_modulus.max(1e-300) * dt * dt),
                 state.pressure,
