@@ -249,8 +249,6 @@ fn fill_levels(grid: &Grid, s: &mut Scratch, full_mass: f64) {
     }
 }
 
-/// The unknowns: each fluid cell numbered, its corners kept and flagged as
-/// fluid nodes; a cell left out reads p = 0.
 /// Whether cell `c` is empty with all four neighbours holding particles.
 fn is_hole(s: &Scratch, c: usize) -> bool {
     let (nx, ny) = (s.cells[0], s.cells[1]);
@@ -265,6 +263,8 @@ fn is_hole(s: &Scratch, c: usize) -> bool {
             .all(|&d| s.vol0[d] > 0.0)
 }
 
+/// The unknowns: each fluid cell numbered, its corners kept and flagged as
+/// fluid nodes; a cell left out reads p = 0.
 fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool, holes: bool) {
     // The flags live on the owner nodes (a periodic edge's two sides are one node).
     for c in &s.corners {
