@@ -860,25 +860,27 @@ impl SolverConfig {
         if p.scheme == ProjectionScheme::Mac {
             return self.validate_mac();
         }
-        if p.face_density != FaceDensity::Particles {
-            return Err(ConfigError {
-                key: "method.projection.face_density".into(),
-                message: "applies to the staggered scheme only: set method.projection.scheme = \"mac\", or use \"particles\"".into(),
-            });
+        // Each staggered-only key, whether it is set, and its default.
+        let staggered_only = [
+            (
+                "face_density",
+                p.face_density != FaceDensity::Particles,
+                "particles",
+            ),
+            ("holes", p.holes != Holes::Air, "air"),
+            (
+                "advection_step",
+                p.advection_step != AdvectionStep::Euler,
+                "euler",
+            ),
+        ];
+        match staggered_only.iter().find(|(_, set, _)| *set) {
+            Some((key, _, default)) => Err(ConfigError {
+                key: format!("method.projection.{key}"),
+                message: format!("applies to the staggered scheme only: set method.projection.scheme = \"mac\", or use \"{default}\""),
+            }),
+            None => Ok(()),
         }
-        if p.holes != Holes::Air {
-            return Err(ConfigError {
-                key: "method.projection.holes".into(),
-                message: "applies to the staggered scheme only: set method.projection.scheme = \"mac\", or use \"air\"".into(),
-            });
-        }
-        if p.advection_step != AdvectionStep::Euler {
-            return Err(ConfigError {
-                key: "method.projection.advection_step".into(),
-                message: "applies to the staggered scheme only: set method.projection.scheme = \"mac\", or use \"euler\"".into(),
-            });
-        }
-        Ok(())
     }
 
     /// What the staggered scheme supports: quadratic B-splines centred on

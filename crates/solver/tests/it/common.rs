@@ -59,8 +59,12 @@ pub fn hydrostatic_departure(s: &Solver, depth: f64) -> (f64, f64) {
     let dp = (0..v.x.len())
         .map(|p| (v.pressure[p] - 1000.0 * 9.81 * (depth - v.x[p].y)).abs() / scale)
         .fold(0.0, f64::max);
-    let speed = v.v.iter().map(|u| u.norm()).fold(0.0, f64::max);
-    (dp, speed)
+    (dp, max_speed(&v))
+}
+
+/// The largest particle speed |v| of a view.
+pub fn max_speed(v: &StateView) -> f64 {
+    v.v.iter().map(|u| u.norm()).fold(0.0, f64::max)
 }
 
 /// Linear theory's period of mode 1 in the 0.4 m slosh tank filled to

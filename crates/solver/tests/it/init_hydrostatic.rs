@@ -86,7 +86,7 @@ fn a_gated_column_stands_hydrostatic_at_rest_until_the_gate_is_lifted() {
     let v = s.view();
     let reference = reference_pressure(&v);
     let x_max = v.x.iter().map(|x| x.x).fold(f64::MIN, f64::max);
-    let speed = v.v.iter().map(|u| u.norm()).fold(0.0, f64::max);
+    let speed = common::max_speed(&v);
     let all = relative_rms(&v, &reference, |_| true);
     eprintln!("gated: x_max {x_max:.5} m, speed {speed:.1e}, pressure rel RMS {all:.4}");
     // Behind the gate at x = 0.2 m (the last particle column sits l / 2 inside it).

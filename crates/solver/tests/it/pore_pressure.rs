@@ -61,8 +61,7 @@ fn saturated_at_rest(shape: ShapeKind) -> Mixture {
 }
 
 fn max_speed(mix: &Mixture, phase: usize) -> f64 {
-    let v = mix.phase(phase).view();
-    v.v.iter().map(|u| u.norm()).fold(0.0, f64::max)
+    common::max_speed(&mix.phase(phase).view())
 }
 
 fn bang_bang() -> Drag {

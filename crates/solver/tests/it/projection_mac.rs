@@ -93,7 +93,7 @@ fn the_materials_density_follows_the_columns_compression() {
         .map(|(p, vol)| p * vol)
         .sum();
     let weight: f64 = v.mass.iter().zip(v.x).map(|(m, x)| 9.81 * m * x.y).sum();
-    let speed = v.v.iter().map(|u| u.norm()).fold(0.0, f64::max);
+    let speed = common::max_speed(&v);
     assert!(speed < 1e-4, "the column is not at rest: {speed} m/s");
     let ratio = held / weight;
     assert!((ratio - 1.0).abs() < 0.01, "sum p V / g sum m y = {ratio}");
@@ -310,7 +310,7 @@ fn a_hole_read_as_fluid_does_not_draw_the_water_in() {
             s.step().unwrap();
         }
         let v = s.view();
-        let speed = v.v.iter().map(|u| u.norm()).fold(0.0, f64::max);
+        let speed = common::max_speed(&v);
         let in_hole =
             v.x.iter()
                 .filter(|x| (0.04..0.05).contains(&x.x) && (0.05..0.06).contains(&x.y))

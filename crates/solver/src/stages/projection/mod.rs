@@ -292,7 +292,8 @@ impl Scratch {
     }
 
     /// Cell `c`'s particle volumes over their rest volumes; 1 in a cell
-    /// that holds none (a hole the staggered scheme solves as fluid).
+    /// that holds none (a hole the staggered scheme solves as fluid, an
+    /// empty cell under the ghost surface).
     pub(super) fn cell_j(&self, c: usize) -> f64 {
         if self.vol0[c] > 0.0 {
             self.vol[c] / self.vol0[c]

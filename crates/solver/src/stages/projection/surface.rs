@@ -240,12 +240,7 @@ fn fill_levels(grid: &Grid, s: &mut Scratch, full_mass: f64) {
                 }
             })
             .sum();
-        let j = if s.vol0[c] > 0.0 {
-            s.vol[c] / s.vol0[c]
-        } else {
-            1.0
-        };
-        s.level[c] = mass / (4.0 * full_mass) * j - 0.5;
+        s.level[c] = mass / (4.0 * full_mass) * s.cell_j(c) - 0.5;
     }
 }
 
