@@ -384,6 +384,10 @@ pub enum Advection {
     Bilinear,
     /// x += dt sum N_ip v_i with the run's shapes (B-spline tails included).
     Shape,
+    /// Staggered only: each component linear between the two faces of the
+    /// particle's cell, constant along them (the lowest Raviart-Thomas
+    /// element), divergence-free at every point of a balanced cell.
+    Flux,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -391,8 +395,16 @@ pub enum Advection {
 pub enum Holes {
     /// p = 0 in the hole, as at the free surface.
     Air,
-    /// The hole is a fluid cell of the solve (its J read as 1).
+    /// The hole is a fluid cell of the solve (its J read as 1); a wall
+    /// counts as a side that holds particles.
     Fluid,
+    /// As `Fluid`, and a cell that was fluid stays fluid when its
+    /// particles leave it (its J read as 1) while the empty cells of the
+    /// box's top row do not reach it through empty cells, or while its
+    /// corners' mass still fills half of it: a pocket the particles'
+    /// sampling opens inside the water keeps its volume; air that the
+    /// water closes in is still air.
+    Enclosed,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -868,6 +880,7 @@ impl SolverConfig {
                 "particles",
             ),
             ("holes", p.holes != Holes::Air, "air"),
+            ("advection", p.advection == Advection::Flux, "shape"),
             (
                 "advection_step",
                 p.advection_step != AdvectionStep::Euler,

@@ -327,8 +327,46 @@ pub fn save(s: &Solver) -> Vec<u8> {
     // The pressure-implicit step's cell pressure: the next solve's starting guess.
     w.u64(s.projection.pressure.len() as u64);
     w.f64s(&s.projection.pressure);
+    save_fluid_cells(&mut w, s);
     save_sustained(&mut w, &s.sustained);
     w.seal()
+}
+
+/// Marks the optional section of the last step's fluid cells ("FLUIDCL1"),
+/// written under `holes = "enclosed"`, which reads them.
+const FLUID_CELLS_TAG: u64 = u64::from_le_bytes(*b"FLUIDCL1");
+
+fn save_fluid_cells(w: &mut Writer, s: &Solver) {
+    if s.cfg.method.projection.holes != crate::config::Holes::Enclosed {
+        return;
+    }
+    let cells = s.projection.fluid_cells();
+    w.u64(FLUID_CELLS_TAG);
+    w.u64(cells.len() as u64);
+    w.u32s(cells);
+}
+
+fn load_fluid_cells(r: &mut Reader, s: &mut Solver) -> Result<(), CheckpointError> {
+    let tagged =
+        r.0.get(..8)
+            .is_some_and(|b| b == FLUID_CELLS_TAG.to_le_bytes());
+    if !tagged {
+        return Ok(());
+    }
+    r.u64()?;
+    let n = r.u64()? as usize;
+    if n > r.0.len() / 4 {
+        return Err(CheckpointError::Truncated);
+    }
+    let mut cells = vec![0u32; n];
+    r.u32s(&mut cells)?;
+    if !s.projection.restore_fluid_cells(&cells) {
+        return Err(CheckpointError::UnknownCode {
+            what: "fluid cell",
+            code: n as u64,
+        });
+    }
+    Ok(())
 }
 
 /// Marks the optional section of plants with a duration ("SUSTAIN1").
@@ -526,6 +564,7 @@ pub fn load(s: &mut Solver, bytes: &[u8]) -> Result<(), CheckpointError> {
         });
     }
     r.f64s(&mut s.projection.pressure)?;
+    load_fluid_cells(&mut r, s)?;
     load_sustained(&mut r, &mut s.sustained)?;
     r.finish()
 }

@@ -33,7 +33,7 @@ mod surface;
 
 pub use advect::{shift_particles, update_particles};
 
-use crate::config::{AirNodes, FreeSurface, Material, ProjectionSettings};
+use crate::config::{AirNodes, FreeSurface, Holes, Material, ProjectionSettings};
 use crate::grid::{Grid, PAD};
 use crate::particles::{Particles, Vec2};
 use operator::{add_checkerboard, apply_g, assemble, divergence, UNWEIGHTED};
@@ -179,6 +179,12 @@ pub struct Scratch {
     probe_exact: bool,
     /// Per chunk of particles: the viscous work of the particle update.
     partials: Vec<f64>,
+    /// Per cell: empty and reached from the box's top row through empty
+    /// cells (`holes = "enclosed"`), and the flood's stack.
+    open_air: Vec<bool>,
+    /// Per cell: fluid at the last step.
+    was_fluid: Vec<bool>,
+    flood: Vec<u32>,
     /// The staggered scheme's faces (empty under the collocated one).
     pub faces: mac::Faces,
     pub stats: SolveStats,
@@ -229,6 +235,9 @@ impl Scratch {
             lower: Vec::with_capacity(n_cells),
             probe_exact: (0..2).all(|a| !grid.periodic[a] || grid.cells[a].is_multiple_of(3)),
             partials: vec![0.0; crate::par::chunk_count(particles)],
+            open_air: vec![false; n_cells],
+            was_fluid: vec![false; n_cells],
+            flood: Vec::with_capacity(n_cells),
             faces: mac::Faces::default(),
             stats: SolveStats::default(),
         }
@@ -245,6 +254,22 @@ impl Scratch {
         let pressure = dt * self.nodal[n];
         let extrapolation = grid.vel_new[n] - self.before_merge[n] - hourglass - pressure;
         [hourglass, pressure, extrapolation]
+    }
+
+    /// The last step's fluid cells (what `holes = "enclosed"` reads).
+    pub fn fluid_cells(&self) -> &[u32] {
+        &self.fluid
+    }
+
+    /// Restores the last step's fluid cells from a checkpoint; false if
+    /// one lies outside the grid.
+    pub fn restore_fluid_cells(&mut self, cells: &[u32]) -> bool {
+        if cells.iter().any(|&c| c as usize >= self.unknown.len()) {
+            return false;
+        }
+        self.fluid.clear();
+        self.fluid.extend_from_slice(cells);
+        true
     }
 
     /// Per cell: the V0 of the particles it held at the last step.
@@ -367,7 +392,7 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
         inputs.dt,
     );
     let full_mass = mat.rho0 * grid.h * grid.h;
-    mark_fluid(ps, grid, s, set.free_surface, full_mass, false);
+    mark_fluid(ps, grid, s, set.free_surface, full_mass, Holes::Air);
     let light = set.light_node_share * full_mass;
     prepare_velocities(grid, s, set, light, dt);
     assemble(grid, s, mat, set, dt, full_mass);

@@ -4,7 +4,7 @@
 //! and the pressure gradient the particles read.
 
 use super::{owner, Scratch, AIR, CORNERS};
-use crate::config::FreeSurface;
+use crate::config::{FreeSurface, Holes};
 use crate::grid::{Grid, PAD};
 use crate::particles::{Particles, Vec2};
 
@@ -184,14 +184,17 @@ pub(super) fn mark_fluid(
     s: &mut Scratch,
     surface: FreeSurface,
     full_mass: f64,
-    holes: bool,
+    holes: Holes,
 ) {
     bin_particles(ps, grid, s);
+    if holes == Holes::Enclosed {
+        flood_open_air(s);
+    }
     let ghost = surface != FreeSurface::Cell;
-    s.orthogonal = surface == FreeSurface::GhostOrthogonal;
-    if ghost {
+    if ghost || holes == Holes::Enclosed {
         fill_levels(grid, s, full_mass);
     }
+    s.orthogonal = surface == FreeSurface::GhostOrthogonal;
     mark_cells(grid, s, ghost, holes);
     fill_ghost_weights(s, ghost);
     fill_neighbour_rows(s);
@@ -201,7 +204,9 @@ pub(super) fn mark_fluid(
 /// Clears the last step's fluid cells, then bins the particles: each one's
 /// cell, and the cells' sums of V and V0.
 fn bin_particles(ps: &Particles, grid: &Grid, s: &mut Scratch) {
+    s.was_fluid.fill(false);
     for c in s.fluid.drain(..) {
+        s.was_fluid[c as usize] = true;
         s.unknown[c as usize] = AIR;
         s.rate[c as usize] = 0.0;
     }
@@ -244,23 +249,45 @@ fn fill_levels(grid: &Grid, s: &mut Scratch, full_mass: f64) {
     }
 }
 
-/// Whether cell `c` is empty with all four neighbours holding particles.
+/// Whether cell `c` is empty with each of its four sides a wall or a
+/// cell holding particles (the staggered scheme's box is walled).
 fn is_hole(s: &Scratch, c: usize) -> bool {
-    let (nx, ny) = (s.cells[0], s.cells[1]);
-    let (ci, cj) = (c % nx, c / nx);
+    let (ci, cj) = ((c % s.cells[0]) as i64, (c / s.cells[0]) as i64);
     s.vol0[c] == 0.0
-        && ci > 0
-        && cj > 0
-        && ci + 1 < nx
-        && cj + 1 < ny
-        && [c - 1, c + 1, c - nx, c + nx]
+        && [(-1, 0), (1, 0), (0, -1), (0, 1)]
             .iter()
-            .all(|&d| s.vol0[d] > 0.0)
+            .all(|&(di, dj)| s.cell_at(ci + di, cj + dj).is_none_or(|d| s.vol0[d] > 0.0))
+}
+
+/// Flags in `s.open_air` the empty cells that the empty cells of the box's
+/// top row reach through empty cells (side by side, not across corners).
+fn flood_open_air(s: &mut Scratch) {
+    let nx = s.cells[0];
+    s.open_air.fill(false);
+    s.flood.clear();
+    let top = nx * (s.cells[1] - 1);
+    for c in top..top + nx {
+        if s.vol0[c] == 0.0 {
+            s.open_air[c] = true;
+            s.flood.push(c as u32);
+        }
+    }
+    while let Some(c) = s.flood.pop() {
+        let (ci, cj) = ((c as usize % nx) as i64, (c as usize / nx) as i64);
+        for (di, dj) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
+            if let Some(d) = s.cell_at(ci + di, cj + dj) {
+                if s.vol0[d] == 0.0 && !s.open_air[d] {
+                    s.open_air[d] = true;
+                    s.flood.push(d as u32);
+                }
+            }
+        }
+    }
 }
 
 /// The unknowns: each fluid cell numbered, its corners kept and flagged as
 /// fluid nodes; a cell left out reads p = 0.
-fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool, holes: bool) {
+fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool, holes: Holes) {
     // The flags live on the owner nodes (a periodic edge's two sides are one node).
     for c in &s.corners {
         for &n in c {
@@ -273,7 +300,14 @@ fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool, holes: bool) {
         // A cell whose corners the particles' stencils do not all reach (a
         // particle clamped into it from outside the box) has no operator row.
         let reached = corners.iter().all(|&n| grid.is_active(n as usize));
-        let held = s.vol0[c] > 0.0 || (holes && is_hole(s, c));
+        let held = s.vol0[c] > 0.0
+            || match holes {
+                Holes::Air => false,
+                Holes::Fluid => is_hole(s, c),
+                Holes::Enclosed => {
+                    is_hole(s, c) || s.was_fluid[c] && (s.level[c] >= 0.0 || !s.open_air[c])
+                }
+            };
         if held && reached && (!ghost || s.level[c] >= 0.0) {
             s.unknown[c] = s.fluid.len() as u32;
             s.fluid.push(c as u32);
@@ -342,5 +376,94 @@ fn fill_full_quads(s: &mut Scratch) {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::AIR;
+    use crate::config::*;
+    use crate::{Solver, Vec2};
+
+    /// A 0.1 x 0.1 m column at rest in a 0.1 x 0.3 m box, h = 1 cm, no
+    /// gravity, incompressible, on the staggered scheme; `pocket` cells
+    /// are left empty at t = 0.
+    fn column(holes: Holes, pocket: &[[f64; 4]]) -> Solver {
+        let body = |rect| Body {
+            rect,
+            material: String::new(),
+            velocity: [0.0, 0.0],
+            fraction: 1.0,
+            phase: None,
+            flow: None,
+        };
+        let mut bodies = vec![body([0.0, 0.0, 0.1, 0.1])];
+        for &[x0, y0, x1, y1] in pocket {
+            // Cut the pocket out of the first body: below, above, left, right.
+            bodies = vec![
+                body([0.0, 0.0, 0.1, y0]),
+                body([0.0, y1, 0.1, 0.1]),
+                body([0.0, y0, x0, y1]),
+                body([x1, y0, 0.1, y1]),
+            ];
+        }
+        let scene = Scene {
+            size: [0.1, 0.3],
+            cell: 0.01,
+            ppc: 2,
+            gravity: 0.0,
+            bodies,
+            materials: vec![Material::new(f64::INFINITY)],
+            ..Scene::default()
+        };
+        let mut method = Method {
+            formulation: Formulation::PressureImplicit,
+            shape: ShapeKind::Bspline2,
+            transfer: TransferKind::Apic,
+            ..Method::default()
+        };
+        method.projection.scheme = ProjectionScheme::Mac;
+        method.projection.face_density = FaceDensity::Material;
+        method.projection.drift = 0.0;
+        method.projection.holes = holes;
+        Solver::new(SolverConfig {
+            scene,
+            method,
+            perturb: vec![],
+        })
+        .unwrap()
+    }
+
+    /// Whether cells (4, 5) and (5, 5) are fluid after the last step.
+    fn pocket_is_fluid(s: &Solver) -> [bool; 2] {
+        [4, 5].map(|i| s.projection.unknown[i + 5 * s.projection.cells[0]] != AIR)
+    }
+
+    /// Cells (4, 5) and (5, 5) are fluid; their particles then move one
+    /// cell down, leaving a two-cell pocket inside the water: under
+    /// `enclosed` it stays fluid, under `fluid` (not a one-cell hole) and
+    /// `air` it turns to air. A pocket that was never water (left empty at
+    /// t = 0) is air under `enclosed` too.
+    #[test]
+    fn an_enclosed_pocket_that_was_water_stays_fluid_and_air_stays_air() {
+        for (holes, kept) in [
+            (Holes::Enclosed, true),
+            (Holes::Fluid, false),
+            (Holes::Air, false),
+        ] {
+            let mut s = column(holes, &[]);
+            s.step().unwrap();
+            assert_eq!(pocket_is_fluid(&s), [true, true], "{holes:?}");
+            for x in s.particles.x.iter_mut() {
+                if (0.04..0.06).contains(&x.x) && (0.05..0.06).contains(&x.y) {
+                    *x -= Vec2::new(0.0, 0.01);
+                }
+            }
+            s.step().unwrap();
+            assert_eq!(pocket_is_fluid(&s), [kept, kept], "{holes:?}");
+        }
+        let mut s = column(Holes::Enclosed, &[[0.04, 0.05, 0.06, 0.06]]);
+        s.step().unwrap();
+        assert_eq!(pocket_is_fluid(&s), [false, false], "planted pocket");
     }
 }

@@ -22,13 +22,11 @@ pub use packing::correct_packing;
 
 use super::surface::mark_fluid;
 use super::{Inputs, Scratch};
-use crate::config::{
-    Advection, AdvectionStep, FaceDensity, FreeSurface, Holes, ProjectionSettings,
-};
+use crate::config::{Advection, AdvectionStep, FaceDensity, FreeSurface, ProjectionSettings};
 use crate::grid::Grid;
 use crate::particles::{Mat2, Particles, Vec2};
 use crate::viscosity;
-use transfer::{gather, linear_velocity, scatter, stencil, Sources};
+use transfer::{flux_velocity, gather, linear_velocity, scatter, stencil, Sources};
 
 /// Both components' faces.
 #[derive(Clone, Debug, Default)]
@@ -80,8 +78,7 @@ pub fn project(inputs: &Inputs, gravity: Vec2, affine: bool, grid: &mut Grid, s:
     let h = grid.h;
     let full_mass = mat.rho0 * h * h;
     let light = set.light_node_share * full_mass;
-    let holes = set.holes == Holes::Fluid;
-    mark_fluid(ps, grid, s, FreeSurface::Cell, full_mass, holes);
+    mark_fluid(ps, grid, s, FreeSurface::Cell, full_mass, set.holes);
     let mut faces = std::mem::take(&mut s.faces);
     let src = Sources {
         particles: ps,
@@ -191,6 +188,10 @@ fn velocity_at(faces: &Faces, advection: Advection, origin: Vec2, h: f64, x: Vec
             linear_velocity(fx, origin, h, x)?,
             linear_velocity(fy, origin, h, x)?,
         ),
+        Advection::Flux => Vec2::new(
+            flux_velocity(fx, origin, h, x)?,
+            flux_velocity(fy, origin, h, x)?,
+        ),
     })
 }
 
@@ -208,8 +209,8 @@ fn advect(
 ) -> Vec2 {
     let here = match set.advection {
         Advection::Shape => v_pic,
-        Advection::Bilinear => {
-            velocity_at(faces, Advection::Bilinear, origin, h, x).unwrap_or(v_pic)
+        Advection::Bilinear | Advection::Flux => {
+            velocity_at(faces, set.advection, origin, h, x).unwrap_or(v_pic)
         }
     };
     match set.advection_step {
