@@ -398,13 +398,12 @@ pub enum Holes {
     /// The hole is a fluid cell of the solve (its J read as 1); a wall
     /// counts as a side that holds particles.
     Fluid,
-    /// As `Fluid`, and a cell that was fluid stays fluid when its
-    /// particles leave it (its J read as 1) while the empty cells of the
-    /// box's top row do not reach it through empty cells, or while its
-    /// corners' mass still fills half of it: a pocket the particles'
-    /// sampling opens inside the water keeps its volume; air that the
-    /// water closes in is still air.
-    Enclosed,
+    /// As `Fluid`, and a cell that was fluid at the last step stays fluid
+    /// when its particles leave it (its J read as 1) while its corners'
+    /// B-spline mass fills at least half of it: a pocket the particles'
+    /// sampling opens inside the water keeps its volume; air the water
+    /// closes in (never fluid) is still air.
+    Kept,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

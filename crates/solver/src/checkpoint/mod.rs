@@ -333,11 +333,11 @@ pub fn save(s: &Solver) -> Vec<u8> {
 }
 
 /// Marks the optional section of the last step's fluid cells ("FLUIDCL1"),
-/// written under `holes = "enclosed"`, which reads them.
+/// written under `holes = "kept"`, which reads them.
 const FLUID_CELLS_TAG: u64 = u64::from_le_bytes(*b"FLUIDCL1");
 
 fn save_fluid_cells(w: &mut Writer, s: &Solver) {
-    if s.cfg.method.projection.holes != crate::config::Holes::Enclosed {
+    if s.cfg.method.projection.holes != crate::config::Holes::Kept {
         return;
     }
     let cells = s.projection.fluid_cells();

@@ -340,17 +340,17 @@ fn a_hole_read_as_fluid_does_not_draw_the_water_in() {
     assert_eq!(fluid_filled, 0, "read as fluid the hole fills");
 }
 
-/// Under `holes = "enclosed"` a step reads the last step's fluid cells, so
-/// a checkpoint carries them: a dam break with the flux element and the
-/// midpoint rule, restarted at step 240 (where this build keeps emptied
-/// cells fluid, from step 239 on; without them the restart parts at once),
-/// ends bit-identical at step 300.
+/// Under `holes = "kept"` a step reads the last step's fluid cells, so a
+/// checkpoint carries them: a dam break with the flux element and the
+/// midpoint rule, restarted at step 240 (this build keeps emptied cells
+/// fluid there; written without them, the restart parts), ends
+/// bit-identical at step 300.
 #[test]
-fn a_restart_with_enclosed_holes_is_bit_identical() {
+fn a_restart_with_kept_holes_is_bit_identical() {
     let scene = common::box_scene([0.6, 0.4], [0.0, 0.0, 0.2, 0.3], water(f64::INFINITY), 9.81);
     let mut method = mac(TransferKind::Apic);
     method.projection.face_density = FaceDensity::Material;
-    method.projection.holes = Holes::Enclosed;
+    method.projection.holes = Holes::Kept;
     method.projection.advection = Advection::Flux;
     method.projection.advection_step = AdvectionStep::Midpoint;
     let mut a = common::solver(scene.clone(), method.clone());

@@ -179,12 +179,8 @@ pub struct Scratch {
     probe_exact: bool,
     /// Per chunk of particles: the viscous work of the particle update.
     partials: Vec<f64>,
-    /// Per cell: empty and reached from the box's top row through empty
-    /// cells (`holes = "enclosed"`), and the flood's stack.
-    open_air: Vec<bool>,
-    /// Per cell: fluid at the last step.
+    /// Per cell: fluid at the last step (what `holes = "kept"` reads).
     was_fluid: Vec<bool>,
-    flood: Vec<u32>,
     /// The staggered scheme's faces (empty under the collocated one).
     pub faces: mac::Faces,
     pub stats: SolveStats,
@@ -235,9 +231,7 @@ impl Scratch {
             lower: Vec::with_capacity(n_cells),
             probe_exact: (0..2).all(|a| !grid.periodic[a] || grid.cells[a].is_multiple_of(3)),
             partials: vec![0.0; crate::par::chunk_count(particles)],
-            open_air: vec![false; n_cells],
             was_fluid: vec![false; n_cells],
-            flood: Vec::with_capacity(n_cells),
             faces: mac::Faces::default(),
             stats: SolveStats::default(),
         }
@@ -256,7 +250,7 @@ impl Scratch {
         [hourglass, pressure, extrapolation]
     }
 
-    /// The last step's fluid cells (what `holes = "enclosed"` reads).
+    /// The last step's fluid cells (what `holes = "kept"` reads).
     pub fn fluid_cells(&self) -> &[u32] {
         &self.fluid
     }

@@ -187,11 +187,8 @@ pub(super) fn mark_fluid(
     holes: Holes,
 ) {
     bin_particles(ps, grid, s);
-    if holes == Holes::Enclosed {
-        flood_open_air(s);
-    }
     let ghost = surface != FreeSurface::Cell;
-    if ghost || holes == Holes::Enclosed {
+    if ghost || holes == Holes::Kept {
         fill_levels(grid, s, full_mass);
     }
     s.orthogonal = surface == FreeSurface::GhostOrthogonal;
@@ -259,32 +256,6 @@ fn is_hole(s: &Scratch, c: usize) -> bool {
             .all(|&(di, dj)| s.cell_at(ci + di, cj + dj).is_none_or(|d| s.vol0[d] > 0.0))
 }
 
-/// Flags in `s.open_air` the empty cells that the empty cells of the box's
-/// top row reach through empty cells (side by side, not across corners).
-fn flood_open_air(s: &mut Scratch) {
-    let nx = s.cells[0];
-    s.open_air.fill(false);
-    s.flood.clear();
-    let top = nx * (s.cells[1] - 1);
-    for c in top..top + nx {
-        if s.vol0[c] == 0.0 {
-            s.open_air[c] = true;
-            s.flood.push(c as u32);
-        }
-    }
-    while let Some(c) = s.flood.pop() {
-        let (ci, cj) = ((c as usize % nx) as i64, (c as usize / nx) as i64);
-        for (di, dj) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
-            if let Some(d) = s.cell_at(ci + di, cj + dj) {
-                if s.vol0[d] == 0.0 && !s.open_air[d] {
-                    s.open_air[d] = true;
-                    s.flood.push(d as u32);
-                }
-            }
-        }
-    }
-}
-
 /// The unknowns: each fluid cell numbered, its corners kept and flagged as
 /// fluid nodes; a cell left out reads p = 0.
 fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool, holes: Holes) {
@@ -304,9 +275,7 @@ fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool, holes: Holes) {
             || match holes {
                 Holes::Air => false,
                 Holes::Fluid => is_hole(s, c),
-                Holes::Enclosed => {
-                    is_hole(s, c) || s.was_fluid[c] && (s.level[c] >= 0.0 || !s.open_air[c])
-                }
+                Holes::Kept => is_hole(s, c) || s.was_fluid[c] && s.level[c] >= 0.0,
             };
         if held && reached && (!ghost || s.level[c] >= 0.0) {
             s.unknown[c] = s.fluid.len() as u32;
@@ -439,30 +408,43 @@ mod tests {
         [4, 5].map(|i| s.projection.unknown[i + 5 * s.projection.cells[0]] != AIR)
     }
 
+    /// One step, then the particles inside `region` ([x0, y0, x1, y1])
+    /// moved by `by`, then another step.
+    fn empty_after_a_step(holes: Holes, region: [f64; 4], by: Vec2) -> Solver {
+        let mut s = column(holes, &[]);
+        s.step().unwrap();
+        assert_eq!(pocket_is_fluid(&s), [true, true], "{holes:?}");
+        for x in s.particles.x.iter_mut() {
+            if (region[0]..region[2]).contains(&x.x) && (region[1]..region[3]).contains(&x.y) {
+                *x += by;
+            }
+        }
+        s.step().unwrap();
+        s
+    }
+
     /// Cells (4, 5) and (5, 5) are fluid; their particles then move one
-    /// cell down, leaving a two-cell pocket inside the water: under
-    /// `enclosed` it stays fluid, under `fluid` (not a one-cell hole) and
-    /// `air` it turns to air. A pocket that was never water (left empty at
-    /// t = 0) is air under `enclosed` too.
+    /// cell down, leaving a two-cell pocket inside the water: under `kept`
+    /// it stays fluid (its corners' mass fills more than half of it), under
+    /// `fluid` (not a one-cell hole) and `air` it turns to air. Emptied
+    /// four cells wide and three deep (its particles moved into the air
+    /// above), the pocket's middle is air under `kept` too; and a pocket
+    /// that was never water (left empty at t = 0) is air.
     #[test]
-    fn an_enclosed_pocket_that_was_water_stays_fluid_and_air_stays_air() {
+    fn a_pocket_that_was_water_stays_fluid_and_air_stays_air() {
+        let down = Vec2::new(0.0, -0.01);
         for (holes, kept) in [
-            (Holes::Enclosed, true),
+            (Holes::Kept, true),
             (Holes::Fluid, false),
             (Holes::Air, false),
         ] {
-            let mut s = column(holes, &[]);
-            s.step().unwrap();
-            assert_eq!(pocket_is_fluid(&s), [true, true], "{holes:?}");
-            for x in s.particles.x.iter_mut() {
-                if (0.04..0.06).contains(&x.x) && (0.05..0.06).contains(&x.y) {
-                    *x -= Vec2::new(0.0, 0.01);
-                }
-            }
-            s.step().unwrap();
+            let s = empty_after_a_step(holes, [0.04, 0.05, 0.06, 0.06], down);
             assert_eq!(pocket_is_fluid(&s), [kept, kept], "{holes:?}");
         }
-        let mut s = column(Holes::Enclosed, &[[0.04, 0.05, 0.06, 0.06]]);
+        let up = Vec2::new(0.0, 0.15);
+        let s = empty_after_a_step(Holes::Kept, [0.03, 0.04, 0.07, 0.07], up);
+        assert_eq!(pocket_is_fluid(&s), [false, false], "wide pocket");
+        let mut s = column(Holes::Kept, &[[0.04, 0.05, 0.06, 0.06]]);
         s.step().unwrap();
         assert_eq!(pocket_is_fluid(&s), [false, false], "planted pocket");
     }
