@@ -346,27 +346,29 @@ fn save_fluid_cells(w: &mut Writer, s: &Solver) {
     w.u32s(cells);
 }
 
+/// The last step's fluid cells, or none without the section: a restore
+/// then starts as a fresh run does, whatever the solver held before.
 fn load_fluid_cells(r: &mut Reader, s: &mut Solver) -> Result<(), CheckpointError> {
     let tagged =
         r.0.get(..8)
             .is_some_and(|b| b == FLUID_CELLS_TAG.to_le_bytes());
-    if !tagged {
-        return Ok(());
+    let mut cells = vec![];
+    if tagged {
+        r.u64()?;
+        let n = r.u64()? as usize;
+        // Each value is stored in 8 bytes.
+        if n > r.0.len() / 8 {
+            return Err(CheckpointError::Truncated);
+        }
+        cells.resize(n, 0u32);
+        r.u32s(&mut cells)?;
     }
-    r.u64()?;
-    let n = r.u64()? as usize;
-    if n > r.0.len() / 4 {
-        return Err(CheckpointError::Truncated);
-    }
-    let mut cells = vec![0u32; n];
-    r.u32s(&mut cells)?;
-    if !s.projection.restore_fluid_cells(&cells) {
-        return Err(CheckpointError::UnknownCode {
+    s.projection
+        .restore_fluid_cells(&cells)
+        .map_err(|cell| CheckpointError::UnknownCode {
             what: "fluid cell",
-            code: n as u64,
-        });
-    }
-    Ok(())
+            code: cell as u64,
+        })
 }
 
 /// Marks the optional section of plants with a duration ("SUSTAIN1").

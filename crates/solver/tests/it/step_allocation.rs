@@ -105,20 +105,29 @@ fn step_does_not_allocate() {
                         perturb: vec![],
                     });
                 }
-                // The staggered projection, with its packing correction.
+                // The staggered projection, with its packing correction;
+                // and with the flux path and kept holes.
                 if shape == ShapeKind::Bspline2 && transfer != TransferKind::Xpic {
-                    configs.push(SolverConfig {
-                        scene: Scene::dam_break(Material::tait(1.5e6)),
-                        method: Method {
-                            formulation: Formulation::PressureImplicit,
-                            projection: ProjectionSettings {
-                                scheme: ProjectionScheme::Mac,
-                                ..Default::default()
+                    for (advection, advection_step, holes) in [
+                        (Advection::Shape, AdvectionStep::Euler, Holes::Air),
+                        (Advection::Flux, AdvectionStep::Midpoint, Holes::Kept),
+                    ] {
+                        configs.push(SolverConfig {
+                            scene: Scene::dam_break(Material::tait(1.5e6)),
+                            method: Method {
+                                formulation: Formulation::PressureImplicit,
+                                projection: ProjectionSettings {
+                                    scheme: ProjectionScheme::Mac,
+                                    advection,
+                                    advection_step,
+                                    holes,
+                                    ..Default::default()
+                                },
+                                ..common::method(shape, transfer, SchemeKind::Usl)
                             },
-                            ..common::method(shape, transfer, SchemeKind::Usl)
-                        },
-                        perturb: vec![],
-                    });
+                            perturb: vec![],
+                        });
+                    }
                 }
             }
         }

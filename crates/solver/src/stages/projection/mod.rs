@@ -122,7 +122,7 @@ pub struct Scratch {
     /// Per unknown: the corner nodes (padded indices).
     corners: Vec<[u32; 4]>,
     /// Per cell: the grid's fluid fraction less a half (the free surface's
-    /// level; the ghost surfaces only).
+    /// level; the ghost surfaces and `holes = "kept"` only).
     level: Vec<f64>,
     /// Per unknown and corner: 1 / theta where the cell diagonally across
     /// that corner is air (theta the share of the way to its centre at
@@ -255,15 +255,20 @@ impl Scratch {
         &self.fluid
     }
 
-    /// Restores the last step's fluid cells from a checkpoint; false if
-    /// one lies outside the grid.
-    pub fn restore_fluid_cells(&mut self, cells: &[u32]) -> bool {
-        if cells.iter().any(|&c| c as usize >= self.unknown.len()) {
-            return false;
+    /// Restores the last step's fluid cells from a checkpoint (none when
+    /// it holds none), the cells fluid before it cleared: `unknown` is
+    /// not `AIR` exactly for the cells `fluid` lists. Returns the first
+    /// cell outside the grid, if any.
+    pub fn restore_fluid_cells(&mut self, cells: &[u32]) -> Result<(), u32> {
+        if let Some(&c) = cells.iter().find(|&&c| c as usize >= self.unknown.len()) {
+            return Err(c);
         }
-        self.fluid.clear();
+        for c in self.fluid.drain(..) {
+            self.unknown[c as usize] = AIR;
+            self.rate[c as usize] = 0.0;
+        }
         self.fluid.extend_from_slice(cells);
-        true
+        Ok(())
     }
 
     /// Per cell: the V0 of the particles it held at the last step.

@@ -174,10 +174,11 @@ pub(super) fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64, light: f64, mir
     }
 }
 
-/// Fluid cells (those holding a particle, and with `holes` an empty cell
-/// whose four neighbours hold one; under the ghost surface also at least
-/// half full), each particle's cell, the cells' volumes, the unknowns'
-/// corners and their ghost weights.
+/// Fluid cells (those holding a particle; with `holes` other than air an
+/// empty cell each of whose sides is a wall or holds one, and with
+/// `"kept"` an emptied one still half full; under the ghost surface also
+/// at least half full), each particle's cell, the cells' volumes, the
+/// unknowns' corners and their ghost weights.
 pub(super) fn mark_fluid(
     ps: &Particles,
     grid: &Grid,

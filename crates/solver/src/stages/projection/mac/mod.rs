@@ -175,8 +175,8 @@ fn onto_nodes(faces: &Faces, grid: &mut Grid, s: &mut Scratch, dt: f64) {
     }
 }
 
-/// The faces' velocity at `x`: the shapes' (B-spline) or the bilinear
-/// element's; None beyond the padded faces.
+/// The faces' velocity at `x`: the shapes' (B-spline), the bilinear
+/// element's or the flux element's; None beyond the padded faces.
 fn velocity_at(faces: &Faces, advection: Advection, origin: Vec2, h: f64, x: Vec2) -> Option<Vec2> {
     let [fx, fy] = &faces.fields;
     Some(match advection {
