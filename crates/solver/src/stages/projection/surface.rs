@@ -350,7 +350,7 @@ fn fill_full_quads(s: &mut Scratch) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::AIR;
     use crate::config::*;
     use crate::{Solver, Vec2};
@@ -358,7 +358,7 @@ mod tests {
     /// A 0.1 x 0.1 m column at rest in a 0.1 x 0.3 m box, h = 1 cm, no
     /// gravity, incompressible, on the staggered scheme; `pocket` cells
     /// are left empty at t = 0.
-    fn column(holes: Holes, pocket: &[[f64; 4]]) -> Solver {
+    pub(crate) fn column(holes: Holes, pocket: &[[f64; 4]]) -> Solver {
         let body = |rect| Body {
             rect,
             material: String::new(),
