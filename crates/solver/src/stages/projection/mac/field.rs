@@ -38,6 +38,9 @@ pub struct FaceField {
     pub vel_star: Vec<f64>,
     /// The packing correction's displacement.
     pub shift: Vec<f64>,
+    /// Per face: whether this step's solve sets it (it borders a fluid
+    /// cell and is not a wall's), filled by `solve::mark_solved`.
+    pub solved: Vec<bool>,
 }
 
 impl FaceField {
@@ -63,6 +66,7 @@ impl FaceField {
             vel_new: vec![0.0; n],
             vel_star: vec![0.0; n],
             shift: vec![0.0; n],
+            solved: vec![false; n],
         }
     }
 

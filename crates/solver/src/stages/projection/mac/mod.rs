@@ -92,6 +92,7 @@ pub fn project(inputs: &Inputs, gravity: Vec2, affine: bool, grid: &mut Grid, s:
     }
     let material = (set.face_density == FaceDensity::Material).then_some(full_mass);
     for field in faces.fields.iter_mut() {
+        solve::mark_solved(field, s);
         solve::slave_air_faces(field, s, material);
     }
     s.stats = solve::fresh_stats(s.fluid.len());

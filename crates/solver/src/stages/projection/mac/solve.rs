@@ -127,42 +127,48 @@ pub fn apply_gradient(
     values: &mut [f64],
 ) {
     for (f, value) in values.iter_mut().enumerate() {
-        let (i, j) = field.coords(f);
-        if !solved(field, s, i, j) {
+        if !field.solved[f] {
             continue;
         }
+        let (i, j) = field.coords(f);
         let [lo, hi] = cells_beside(field, i, j);
         let jump = pressure_at(s, hi.0, hi.1) - pressure_at(s, lo.0, lo.1);
         *value -= scale * h * jump / field.operator_mass[f].max(light);
     }
-    follow_neighbours(field, s, values);
+    follow_neighbours(field, values);
     field.fill(values);
 }
 
-/// Whether in-box face (i, j) borders a fluid cell (and is not a wall's).
-fn solved(field: &FaceField, s: &Scratch, i: i64, j: i64) -> bool {
-    if !field.in_box(i, j) || field.on_wall(i, j) {
-        return false;
+/// Flags the faces this step's solve sets: in the box, not a wall's, and
+/// bordering a fluid cell (once a step, after the fluid cells are marked).
+pub fn mark_solved(field: &mut FaceField, s: &Scratch) {
+    let mut solved = std::mem::take(&mut field.solved);
+    for (f, flag) in solved.iter_mut().enumerate() {
+        let (i, j) = field.coords(f);
+        *flag = field.in_box(i, j)
+            && !field.on_wall(i, j)
+            && cells_beside(field, i, j)
+                .iter()
+                .any(|&(ci, cj)| s.cell_at(ci, cj).is_some_and(|c| s.unknown[c] != AIR));
     }
-    cells_beside(field, i, j)
-        .iter()
-        .any(|&(ci, cj)| s.cell_at(ci, cj).is_some_and(|c| s.unknown[c] != AIR))
+    field.solved = solved;
 }
 
 /// An air face's solved neighbours (same component, one face away), and
 /// how many: None for a face that is solved, a wall's, outside the box or
 /// empty.
-fn air_neighbours(field: &FaceField, s: &Scratch, f: usize) -> Option<([usize; 4], usize)> {
+fn air_neighbours(field: &FaceField, f: usize) -> Option<([usize; 4], usize)> {
     let (i, j) = field.coords(f);
-    if field.mass[f] <= 0.0 || !field.in_box(i, j) || field.on_wall(i, j) || solved(field, s, i, j)
-    {
+    if field.mass[f] <= 0.0 || !field.in_box(i, j) || field.on_wall(i, j) || field.solved[f] {
         return None;
     }
     let mut out = [0; 4];
     let mut count = 0;
     for (di, dj) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
-        if solved(field, s, i + di, j + dj) {
-            out[count] = field.index(i + di, j + dj);
+        // One face beyond the box is still inside the padding.
+        let n = field.index(i + di, j + dj);
+        if field.solved[n] {
+            out[count] = n;
             count += 1;
         }
     }
@@ -184,7 +190,7 @@ pub fn slave_air_faces(field: &mut FaceField, s: &Scratch, material: Option<f64>
         field.vel_new[f] = field.mass[f] * field.vel_star[f];
     }
     for f in 0..op.len() {
-        if let Some((neighbours, count)) = air_neighbours(field, s, f) {
+        if let Some((neighbours, count)) = air_neighbours(field, f) {
             let share = field.mass[f] / count as f64;
             for &n in &neighbours[..count] {
                 op[n] += share;
@@ -235,9 +241,9 @@ fn material_density(field: &FaceField, s: &Scratch, full: f64, op: &mut [f64]) {
 }
 
 /// Each slaved air face takes its solved neighbours' mean value.
-fn follow_neighbours(field: &FaceField, s: &Scratch, values: &mut [f64]) {
+fn follow_neighbours(field: &FaceField, values: &mut [f64]) {
     for f in 0..values.len() {
-        if let Some((neighbours, count)) = air_neighbours(field, s, f) {
+        if let Some((neighbours, count)) = air_neighbours(field, f) {
             let sum: f64 = neighbours[..count].iter().map(|&n| values[n]).sum();
             values[f] = sum / count as f64;
         }
