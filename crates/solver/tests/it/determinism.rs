@@ -111,19 +111,32 @@ fn configs() -> Vec<SolverConfig> {
         },
         perturb: vec![],
     });
-    // The staggered projection, with its packing correction.
-    out.push(SolverConfig {
-        scene: Scene::dam_break(Material::new(1.5e6)),
-        method: Method {
-            formulation: Formulation::PressureImplicit,
-            projection: ProjectionSettings {
-                scheme: ProjectionScheme::Mac,
-                ..Default::default()
+    // The staggered projection, with its packing correction; and with the
+    // material's density, the flux path, the midpoint rule and kept holes
+    // (a checkpoint then carries the last step's fluid cells).
+    let kept = ProjectionSettings {
+        scheme: ProjectionScheme::Mac,
+        face_density: FaceDensity::Material,
+        advection: Advection::Flux,
+        advection_step: AdvectionStep::Midpoint,
+        holes: Holes::Kept,
+        ..Default::default()
+    };
+    let plain = ProjectionSettings {
+        scheme: ProjectionScheme::Mac,
+        ..Default::default()
+    };
+    for projection in [plain, kept] {
+        out.push(SolverConfig {
+            scene: Scene::dam_break(Material::new(1.5e6)),
+            method: Method {
+                formulation: Formulation::PressureImplicit,
+                projection,
+                ..common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl)
             },
-            ..common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl)
-        },
-        perturb: vec![],
-    });
+            perturb: vec![],
+        });
+    }
     out
 }
 
