@@ -334,10 +334,10 @@ pub struct ProjectionSettings {
     /// How the particles' positions step through that velocity field
     /// (staggered scheme only): one Euler step, or the midpoint rule.
     pub advection_step: AdvectionStep,
-    /// A cell without particles whose four neighbours hold particles
-    /// (staggered scheme only): air, at p = 0, or fluid, with a row in the
-    /// solve, so that a hole the packing opens inside the water is not a
-    /// free surface the water falls into.
+    /// A cell without particles inside the water (staggered scheme only):
+    /// air, at p = 0, or fluid, with a row in the solve, so that a hole
+    /// the particles' sampling opens is not a free surface the water falls
+    /// into (`Holes` says which cells count).
     pub holes: Holes,
     /// Where the free surface's p = 0 sits: at the air cells' centres, or
     /// inside the cell where the grid's fluid fraction crosses a half.

@@ -208,6 +208,16 @@ pub fn unseal<'a>(bytes: &'a [u8], magic: &[u8; 8]) -> Result<&'a [u8], Checkpoi
 pub struct Reader<'a>(pub &'a [u8]);
 
 impl<'a> Reader<'a> {
+    /// Takes an optional section's tag if it comes next; false, taking
+    /// nothing, if it does not.
+    fn take_tag(&mut self, tag: u64) -> bool {
+        let tagged = self.0.get(..8).is_some_and(|b| b == tag.to_le_bytes());
+        if tagged {
+            self.0 = &self.0[8..];
+        }
+        tagged
+    }
+
     fn take<const N: usize>(&mut self) -> Result<[u8; N], CheckpointError> {
         if self.0.len() < N {
             return Err(CheckpointError::Truncated);
@@ -349,12 +359,8 @@ fn save_fluid_cells(w: &mut Writer, s: &Solver) {
 /// The last step's fluid cells, or none without the section: a restore
 /// then starts as a fresh run does, whatever the solver held before.
 fn load_fluid_cells(r: &mut Reader, s: &mut Solver) -> Result<(), CheckpointError> {
-    let tagged =
-        r.0.get(..8)
-            .is_some_and(|b| b == FLUID_CELLS_TAG.to_le_bytes());
     let mut cells = vec![];
-    if tagged {
-        r.u64()?;
+    if r.take_tag(FLUID_CELLS_TAG) {
         let n = r.u64()? as usize;
         // Each value is stored in 8 bytes.
         if n > r.0.len() / 8 {
@@ -395,13 +401,9 @@ fn save_sustained(w: &mut Writer, sustained: &[crate::Sustained]) {
 
 fn load_sustained(r: &mut Reader, out: &mut Vec<crate::Sustained>) -> Result<(), CheckpointError> {
     out.clear();
-    let tagged =
-        r.0.get(..8)
-            .is_some_and(|b| b == SUSTAINED_TAG.to_le_bytes());
-    if !tagged {
+    if !r.take_tag(SUSTAINED_TAG) {
         return Ok(());
     }
-    r.u64()?;
     for k in 0..r.u64()? {
         let entry = r.u64()? as usize;
         let mut f = [0.0; 4];

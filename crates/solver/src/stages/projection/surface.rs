@@ -356,27 +356,24 @@ pub(crate) mod tests {
     use crate::{Solver, Vec2};
 
     /// A 0.1 x 0.1 m column at rest in a 0.1 x 0.3 m box, h = 1 cm, no
-    /// gravity, incompressible, on the staggered scheme; `pocket` cells
-    /// are left empty at t = 0.
-    pub(crate) fn column(holes: Holes, pocket: &[[f64; 4]]) -> Solver {
+    /// gravity, incompressible, on the staggered scheme; a `pocket`
+    /// ([x0, y0, x1, y1]) is left empty at t = 0.
+    pub(crate) fn column(holes: Holes, pocket: Option<[f64; 4]>) -> Solver {
+        let base = Scene::dam_break(Material::new(f64::INFINITY)).bodies[0].clone();
         let body = |rect| Body {
             rect,
-            material: String::new(),
-            velocity: [0.0, 0.0],
-            fraction: 1.0,
-            phase: None,
-            flow: None,
+            ..base.clone()
         };
-        let mut bodies = vec![body([0.0, 0.0, 0.1, 0.1])];
-        for &[x0, y0, x1, y1] in pocket {
-            // Cut the pocket out of the first body: below, above, left, right.
-            bodies = vec![
+        let bodies = match pocket {
+            None => vec![body([0.0, 0.0, 0.1, 0.1])],
+            // The column less the pocket: below, above, left, right.
+            Some([x0, y0, x1, y1]) => vec![
                 body([0.0, 0.0, 0.1, y0]),
                 body([0.0, y1, 0.1, 0.1]),
                 body([0.0, y0, x0, y1]),
                 body([x1, y0, 0.1, y1]),
-            ];
-        }
+            ],
+        };
         let scene = Scene {
             size: [0.1, 0.3],
             cell: 0.01,
@@ -412,7 +409,7 @@ pub(crate) mod tests {
     /// One step, then the particles inside `region` ([x0, y0, x1, y1])
     /// moved by `by`, then another step.
     fn empty_after_a_step(holes: Holes, region: [f64; 4], by: Vec2) -> Solver {
-        let mut s = column(holes, &[]);
+        let mut s = column(holes, None);
         s.step().unwrap();
         assert_eq!(pocket_is_fluid(&s), [true, true], "{holes:?}");
         for x in s.particles.x.iter_mut() {
@@ -445,7 +442,7 @@ pub(crate) mod tests {
         let up = Vec2::new(0.0, 0.15);
         let s = empty_after_a_step(Holes::Kept, [0.03, 0.04, 0.07, 0.07], up);
         assert_eq!(pocket_is_fluid(&s), [false, false], "wide pocket");
-        let mut s = column(Holes::Kept, &[[0.04, 0.05, 0.06, 0.06]]);
+        let mut s = column(Holes::Kept, Some([0.04, 0.05, 0.06, 0.06]));
         s.step().unwrap();
         assert_eq!(pocket_is_fluid(&s), [false, false], "planted pocket");
     }

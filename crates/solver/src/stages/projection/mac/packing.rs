@@ -75,6 +75,11 @@ fn packing_errors(
     incompressible: bool,
 ) {
     let depth = set.drift_depth.max(SURFACE_REACH) as i64;
+    // A wall's face holds half a full face: half its volume is in the box.
+    let fill = |field: &super::FaceField, i: i64, j: i64| {
+        let full = if field.on_wall(i, j) { 0.5 } else { 1.0 } * full_mass;
+        field.mass[field.index(i, j)] / full
+    };
     let (mut sum, mut count) = (0.0, 0usize);
     for k in 0..s.fluid.len() {
         let c = s.fluid[k] as usize;
@@ -84,11 +89,6 @@ fn packing_errors(
         }
         let (ci, cj) = ((c % s.cells[0]) as i64, (c / s.cells[0]) as i64);
         let [fx, fy] = &faces.fields;
-        // A wall's face holds half a full face: half its volume is in the box.
-        let fill = |field: &super::FaceField, i: i64, j: i64| {
-            let full = if field.on_wall(i, j) { 0.5 } else { 1.0 } * full_mass;
-            field.mass[field.index(i, j)] / full
-        };
         let packing = 0.25
             * (fill(fx, ci, cj) + fill(fx, ci + 1, cj) + fill(fy, ci, cj) + fill(fy, ci, cj + 1));
         let error = if incompressible {
@@ -166,7 +166,7 @@ mod tests {
     /// doubled ones kept).
     #[test]
     fn uneven_packing_does_not_read_as_compaction() {
-        let mut s = column(Holes::Air, &[]);
+        let mut s = column(Holes::Air, None);
         s.step().unwrap();
         for x in s.particles.x.iter_mut() {
             let (ci, cj) = ((x.x / 0.01).floor() as i64, (x.y / 0.01).floor() as i64);
