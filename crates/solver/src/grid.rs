@@ -175,7 +175,12 @@ impl Grid {
     /// The node (padded index) is in this step's active set.
     #[inline]
     pub fn is_active(&self, node: usize) -> bool {
-        let (i, j) = (node % self.dims[0], node / self.dims[0]);
+        self.is_active_at(node % self.dims[0], node / self.dims[0])
+    }
+
+    /// The node at padded coordinates (i, j) is in this step's active set.
+    #[inline]
+    pub fn is_active_at(&self, i: usize, j: usize) -> bool {
         self.active_bits[j * self.row_words + (i >> 6)] >> (i & 63) & 1 == 1
     }
 

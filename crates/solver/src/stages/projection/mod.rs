@@ -38,7 +38,7 @@ use crate::grid::{Grid, PAD};
 use crate::particles::{Particles, Vec2};
 use operator::{add_checkerboard, apply_g, assemble, divergence, UNWEIGHTED};
 use pcg::{solve, Lower};
-use surface::{extrapolate, mark_fluid, reconstruct, slave_air_nodes};
+use surface::{extrapolate, mark_collocated_rows, mark_fluid, reconstruct, slave_air_nodes};
 
 /// No unknown: an air cell.
 const AIR: u32 = u32::MAX;
@@ -59,6 +59,10 @@ const CORNERS: [(usize, usize, f64, f64); 4] = [
 
 /// The hourglass pattern over the corners (in `CORNERS` order): the nodal
 /// velocity mode the centre divergence and gradient cannot see.
+/// The reach up to which `Scratch::deep` reads a per-step erosion (the
+/// packing's reading asks for 2, the material's density for 1).
+const CACHED_REACH: u8 = 2;
+
 const HOURGLASS: [f64; 4] = [1.0, -1.0, -1.0, 1.0];
 
 /// What the last solve did.
@@ -181,6 +185,10 @@ pub struct Scratch {
     partials: Vec<f64>,
     /// Per cell: fluid at the last step (what `holes = "kept"` reads).
     was_fluid: Vec<bool>,
+    /// Per cell: 1 + the largest reach r <= `CACHED_REACH` for which
+    /// `deep(c, r)` holds (0 for air), and the erosion's two buffers.
+    reach: Vec<u8>,
+    eroded: [Vec<u8>; 2],
     /// The staggered scheme's faces (empty under the collocated one).
     pub faces: mac::Faces,
     pub stats: SolveStats,
@@ -232,6 +240,8 @@ impl Scratch {
             probe_exact: (0..2).all(|a| !grid.periodic[a] || grid.cells[a].is_multiple_of(3)),
             partials: vec![0.0; crate::par::chunk_count(particles)],
             was_fluid: vec![false; n_cells],
+            reach: vec![0; n_cells],
+            eroded: [vec![0; n_cells], vec![0; n_cells]],
             faces: mac::Faces::default(),
             stats: SolveStats::default(),
         }
@@ -327,8 +337,17 @@ impl Scratch {
     }
 
     /// Whether every cell within `reach` cells of `c` (off a walled box:
-    /// the wall's image) is fluid.
+    /// the wall's image) is fluid; read from this step's erosion up to
+    /// `CACHED_REACH`.
     pub(super) fn deep(&self, c: usize, reach: i64) -> bool {
+        if reach <= CACHED_REACH as i64 {
+            return self.reach[c] as i64 > reach;
+        }
+        self.deep_by_search(c, reach)
+    }
+
+    /// `deep` read cell by cell.
+    fn deep_by_search(&self, c: usize, reach: i64) -> bool {
         let (ci, cj) = ((c % self.cells[0]) as i64, (c / self.cells[0]) as i64);
         (-reach..=reach).all(|dj| {
             (-reach..=reach).all(|di| {
@@ -392,6 +411,7 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
     );
     let full_mass = mat.rho0 * grid.h * grid.h;
     mark_fluid(ps, grid, s, set.free_surface, full_mass, Holes::Air);
+    mark_collocated_rows(s, set.free_surface);
     let light = set.light_node_share * full_mass;
     prepare_velocities(grid, s, set, light, dt);
     assemble(grid, s, mat, set, dt, full_mass);

@@ -3,7 +3,7 @@
 //! their fluid neighbours, the velocity extrapolated into the air band,
 //! and the pressure gradient the particles read.
 
-use super::{owner, Scratch, AIR, CORNERS};
+use super::{owner, Scratch, AIR, CACHED_REACH, CORNERS};
 use crate::config::{FreeSurface, Holes};
 use crate::grid::{Grid, PAD};
 use crate::particles::{Particles, Vec2};
@@ -178,7 +178,7 @@ pub(super) fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64, light: f64, mir
 /// empty cell each of whose sides is a wall or holds one, and with
 /// `"kept"` an emptied one still half full; under the ghost surface also
 /// at least half full), each particle's cell, the cells' volumes, the
-/// unknowns' corners and their ghost weights.
+/// unknowns' corners and their neighbours, and how deep each cell lies.
 pub(super) fn mark_fluid(
     ps: &Particles,
     grid: &Grid,
@@ -194,8 +194,14 @@ pub(super) fn mark_fluid(
     }
     s.orthogonal = surface == FreeSurface::GhostOrthogonal;
     mark_cells(grid, s, ghost, holes);
-    fill_ghost_weights(s, ghost);
+    fill_reach(s);
     fill_neighbour_rows(s);
+}
+
+/// The collocated pair's extra rows: the unknowns' ghost weights and the
+/// checkerboard control's quads (the staggered pair reads neither).
+pub(super) fn mark_collocated_rows(s: &mut Scratch, surface: FreeSurface) {
+    fill_ghost_weights(s, surface != FreeSurface::Cell);
     fill_full_quads(s);
 }
 
@@ -231,13 +237,14 @@ fn cell_corners(s: &Scratch, grid: &Grid, c: usize) -> [u32; 4] {
 /// cell, evenly about it, so a half marks where it is), times J for the
 /// volume.
 fn fill_levels(grid: &Grid, s: &mut Scratch, full_mass: f64) {
+    let nx = s.cells[0];
     for c in 0..s.level.len() {
-        let mass: f64 = cell_corners(s, grid, c)
+        let (i, j) = (c % nx + PAD, c / nx + PAD);
+        let mass: f64 = CORNERS
             .iter()
-            .map(|&n| {
-                let n = n as usize;
-                if grid.is_active(n) {
-                    grid.mass[n]
+            .map(|&(a, b, _, _)| {
+                if grid.is_active_at(i + a, j + b) {
+                    grid.mass[grid.index(i + a, j + b)]
                 } else {
                     0.0
                 }
@@ -268,17 +275,18 @@ fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool, holes: Holes) {
     }
     s.corners.clear();
     for c in 0..s.unknown.len() {
-        let corners = cell_corners(s, grid, c);
-        // A cell whose corners the particles' stencils do not all reach (a
-        // particle clamped into it from outside the box) has no operator row.
-        let reached = corners.iter().all(|&n| grid.is_active(n as usize));
         let held = s.vol0[c] > 0.0
             || match holes {
                 Holes::Air => false,
                 Holes::Fluid => is_hole(s, c),
                 Holes::Kept => is_hole(s, c) || s.was_fluid[c] && s.level[c] >= 0.0,
             };
-        if held && reached && (!ghost || s.level[c] >= 0.0) {
+        // A cell whose corners the particles' stencils do not all reach (a
+        // particle clamped into it from outside the box) has no operator row.
+        let corners = (held && (!ghost || s.level[c] >= 0.0))
+            .then(|| cell_corners(s, grid, c))
+            .filter(|corners| corners.iter().all(|&n| grid.is_active(n as usize)));
+        if let Some(corners) = corners {
             s.unknown[c] = s.fluid.len() as u32;
             s.fluid.push(c as u32);
             for n in corners {
@@ -290,6 +298,56 @@ fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool, holes: Holes) {
             // from outside the box) read p = 0, not a gradient left over.
             s.pressure[c] = 0.0;
             s.gradient[c] = Vec2::zeros();
+        }
+    }
+}
+
+/// Per cell, how deep inside the fluid it lies (`Scratch::reach`): the
+/// fluid mask eroded by 3 x 3 blocks `CACHED_REACH` times, a row pass then
+/// a column pass each (a rectangle's 3 x 3 block is the two passes'
+/// product), cells off a walled box passing as the wall's image.
+fn fill_reach(s: &mut Scratch) {
+    let [mut cur, mut tmp] = std::mem::take(&mut s.eroded);
+    for (c, (r, m)) in s.reach.iter_mut().zip(cur.iter_mut()).enumerate() {
+        *m = (s.unknown[c] != AIR) as u8;
+        *r = *m;
+    }
+    for _ in 0..CACHED_REACH {
+        erode(s, &cur, &mut tmp, 0);
+        erode(s, &tmp, &mut cur, 1);
+        for (r, &m) in s.reach.iter_mut().zip(&cur) {
+            *r += m;
+        }
+    }
+    s.eroded = [cur, tmp];
+}
+
+/// `to` = `from`'s minimum over each cell and its two neighbours along
+/// `axis` that are in the box (across a periodic edge, the wrapped one).
+fn erode(s: &Scratch, from: &[u8], to: &mut [u8], axis: usize) {
+    let [nx, ny] = s.cells;
+    // Lines along `axis`: their count, length and strides.
+    let (lines, len, along, across) = if axis == 0 {
+        (ny, nx, 1, nx)
+    } else {
+        (nx, ny, nx, 1)
+    };
+    let wrap = s.periodic[axis] && len > 1;
+    for line in 0..lines {
+        let at = |k: usize| line * across + k * along;
+        for k in 0..len {
+            let mut m = from[at(k)];
+            if k > 0 {
+                m = m.min(from[at(k - 1)]);
+            } else if wrap {
+                m = m.min(from[at(len - 1)]);
+            }
+            if k + 1 < len {
+                m = m.min(from[at(k + 1)]);
+            } else if wrap {
+                m = m.min(from[at(0)]);
+            }
+            to[at(k)] = m;
         }
     }
 }
@@ -399,6 +457,54 @@ pub(crate) mod tests {
             perturb: vec![],
         })
         .unwrap()
+    }
+
+    /// The erosion reads `deep` as the cell-by-cell search does, on a
+    /// ragged mask in a walled box and in boxes periodic along either axis.
+    #[test]
+    fn the_cached_depth_is_the_searched_one() {
+        for periodic in [[false, false], [true, false], [false, true], [true, true]] {
+            let cells = [12, 10];
+            let n = cells[0] * cells[1];
+            let mut s = super::Scratch {
+                cells,
+                periodic,
+                reach: vec![0; n],
+                eroded: [vec![0; n], vec![0; n]],
+                ..super::Scratch::default()
+            };
+            // Fluid but for a diagonal scatter of air cells in the upper
+            // rows and one near the floor.
+            s.unknown = (0..n as u32)
+                .map(|c| {
+                    let (i, j) = (c % 12, c / 12);
+                    let air = (i * 5 + j * 3) % 17 == 0 && j >= 4 || (i, j) == (3, 1);
+                    if air {
+                        AIR
+                    } else {
+                        c
+                    }
+                })
+                .collect();
+            super::fill_reach(&mut s);
+            let mut deep_counts = [0; 3];
+            for c in 0..n {
+                for reach in 0..=super::super::CACHED_REACH as i64 {
+                    let found = s.deep_by_search(c, reach);
+                    assert_eq!(
+                        s.deep(c, reach),
+                        found,
+                        "{periodic:?} cell {c} reach {reach}"
+                    );
+                    deep_counts[reach as usize] += found as usize;
+                }
+            }
+            // The mask exercises every reach: some cells pass each, some fail.
+            assert!(
+                deep_counts.iter().all(|&k| k > 0 && k < n),
+                "{deep_counts:?}"
+            );
+        }
     }
 
     /// Whether cells (4, 5) and (5, 5) are fluid after the last step.
