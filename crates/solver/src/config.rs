@@ -339,6 +339,13 @@ pub struct ProjectionSettings {
     /// the particles' sampling opens is not a free surface the water falls
     /// into (`Holes` says which cells count).
     pub holes: Holes,
+    /// The pressure step's weight on the new time level (staggered scheme
+    /// only), 0.5 ..= 1: the momentum takes theta p^{n+1} + (1 - theta)
+    /// p^n and J the same mix of D u. 1 is backward Euler, which damps
+    /// sound by a factor 1 / sqrt(1 + (omega dt)^2) a step; 0.5 is the
+    /// trapezoidal rule, which keeps linear sound's energy and damps no
+    /// mode at all (docs/physics.md section 8b).
+    pub theta: f64,
     /// Where the free surface's p = 0 sits: at the air cells' centres, or
     /// inside the cell where the grid's fluid fraction crosses a half.
     pub free_surface: FreeSurface,
@@ -487,6 +494,7 @@ impl Default for ProjectionSettings {
             advection: Advection::Shape,
             advection_step: AdvectionStep::Euler,
             holes: Holes::Air,
+            theta: 1.0,
             free_surface: FreeSurface::Cell,
             air_nodes: AirNodes::Slaved,
             light_node_share: 0.01,
@@ -792,6 +800,7 @@ impl SolverConfig {
         within(p.hourglass, 0.0, 0.25, "method.projection.hourglass")?;
         within(p.checkerboard, 0.0, 16.0, "method.projection.checkerboard")?;
         within(p.drift, 0.0, 1.0, "method.projection.drift")?;
+        within(p.theta, 0.5, 1.0, "method.projection.theta")?;
         within(
             p.drift_depth as f64,
             0.0,
@@ -876,20 +885,21 @@ impl SolverConfig {
             (
                 "face_density",
                 p.face_density != FaceDensity::Particles,
-                "particles",
+                "\"particles\"",
             ),
-            ("holes", p.holes != Holes::Air, "air"),
-            ("advection", p.advection == Advection::Flux, "shape"),
+            ("holes", p.holes != Holes::Air, "\"air\""),
+            ("advection", p.advection == Advection::Flux, "\"shape\""),
             (
                 "advection_step",
                 p.advection_step != AdvectionStep::Euler,
-                "euler",
+                "\"euler\"",
             ),
+            ("theta", p.theta != 1.0, "1"),
         ];
         match staggered_only.iter().find(|(_, set, _)| *set) {
             Some((key, _, default)) => Err(ConfigError {
                 key: format!("method.projection.{key}"),
-                message: format!("applies to the staggered scheme only: set method.projection.scheme = \"mac\", or use \"{default}\""),
+                message: format!("applies to the staggered scheme only: set method.projection.scheme = \"mac\", or use {default}"),
             }),
             None => Ok(()),
         }

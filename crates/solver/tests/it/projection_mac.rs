@@ -6,6 +6,7 @@
 
 use crate::common;
 
+use solver::flows::Flow;
 use solver::*;
 
 const DEPTH: f64 = 0.2;
@@ -275,6 +276,18 @@ fn what_the_staggered_scheme_cannot_do_is_refused_by_key() {
         key_of(scene(), m).as_deref(),
         Some("method.projection.advection")
     );
+    let mut m = collocated();
+    m.projection.theta = 0.5;
+    assert_eq!(
+        key_of(scene(), m).as_deref(),
+        Some("method.projection.theta")
+    );
+    let mut m = mac(TransferKind::Apic);
+    m.projection.theta = 0.4;
+    assert_eq!(
+        key_of(scene(), m).as_deref(),
+        Some("method.projection.theta")
+    );
     let mut s = scene();
     s.periodic = [true, false];
     assert_eq!(
@@ -372,4 +385,85 @@ fn a_restart_with_kept_holes_is_bit_identical() {
         b.step().unwrap();
     }
     assert_eq!(a.state_hash(), b.state_hash());
+}
+
+/// Mode 1 of a sound wave in a 0.2 x 0.04 m box the water fills (Tait,
+/// 1.5 MPa, no gravity), at a fixed 1 ms step (omega dt = 0.61), for 100
+/// steps (9.7 periods): the energy it keeps (kinetic + affine + stored),
+/// the period of its amplitude's zero crossings, and its frequency c k.
+fn sound_wave(theta: f64) -> (f64, f64, f64) {
+    let k_water = 1.5e6;
+    let tait = Material::tait(k_water);
+    let mut scene = common::box_scene([0.2, 0.04], [0.0, 0.0, 0.2, 0.04], tait, 0.0);
+    scene.bodies[0].flow = Some(Flow::SoundWave {
+        amplitude: 1e-3,
+        mode: 1,
+    });
+    let mut method = mac(TransferKind::Apic);
+    method.dt_value = Some(1e-3);
+    method.projection.face_density = FaceDensity::Material;
+    method.projection.drift = 0.0;
+    method.projection.theta = theta;
+    let mut s = common::solver(scene, method);
+    let total = |s: &Solver| {
+        let e = s.energy();
+        e.kinetic + e.affine + e.stored
+    };
+    // The velocity projected on the mode, sum m u sin(k x) / sum m sin^2.
+    let momentum = |s: &Solver| -> f64 {
+        let view = s.view();
+        let k = std::f64::consts::PI / 0.2;
+        let (mut along, mut norm) = (0.0, 0.0);
+        for ((x, v), m) in view.x.iter().zip(view.v).zip(view.mass) {
+            let shape = (k * x.x).sin();
+            along += m * v.x * shape;
+            norm += m * shape * shape;
+        }
+        along / norm
+    };
+    let e0 = total(&s);
+    let mut crossings = Vec::new();
+    let mut last = (s.time(), momentum(&s));
+    for _ in 0..100 {
+        s.step().unwrap();
+        let now = (s.time(), momentum(&s));
+        if now.1 * last.1 < 0.0 {
+            // Linear between the two steps.
+            crossings.push(last.0 + (now.0 - last.0) * last.1 / (last.1 - now.1));
+        }
+        last = now;
+    }
+    let period = match crossings.as_slice() {
+        [first, .., end] => 2.0 * (end - first) / (crossings.len() - 1) as f64,
+        _ => f64::NAN,
+    };
+    (
+        total(&s) / e0,
+        period,
+        (k_water / 1000.0).sqrt() * std::f64::consts::PI / 0.2,
+    )
+}
+
+/// Backward Euler (theta = 1) damps the sound by 1 / sqrt(1 + (omega
+/// dt)^2) a step: after 100 steps nothing is left. The trapezoidal rule
+/// (theta = 0.5) keeps it, and its period is the rule's own, 2 pi dt / (2
+/// atan(omega dt / 2)), 3 % longer than the wave's. Measured on this
+/// build: 2.9e-15 and 0.9985 of the energy kept, the period 0.10 % above
+/// the rule's.
+#[test]
+fn the_trapezoidal_pressure_step_keeps_the_sound() {
+    let (kept, _, _) = sound_wave(1.0);
+    assert!(kept < 1e-6, "backward Euler kept {kept}");
+    let (kept, period, omega) = sound_wave(0.5);
+    assert!(
+        (0.99..=1.0).contains(&kept),
+        "the trapezoidal rule kept {kept}"
+    );
+    let dt = 1e-3;
+    let rule = std::f64::consts::PI * dt / (omega * dt / 2.0).atan();
+    let wave = 2.0 * std::f64::consts::PI / omega;
+    assert!(
+        (period / rule - 1.0).abs() < 0.005,
+        "period {period} s against the rule's {rule} s (the wave's {wave} s)"
+    );
 }

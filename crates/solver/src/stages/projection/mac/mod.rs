@@ -96,10 +96,10 @@ pub fn project(inputs: &Inputs, gravity: Vec2, affine: bool, grid: &mut Grid, s:
         solve::slave_air_faces(field, s, material);
     }
     s.stats = solve::fresh_stats(s.fluid.len());
-    solve::assemble(&faces.fields, s, mat, h, dt, light);
+    solve::assemble(&faces.fields, s, mat, h, dt, light, set.theta);
     super::pcg::solve_assembled(s, set, set.tolerance);
     solve::correct(&mut faces.fields, s, h, dt, light);
-    solve::book(&faces.fields, s, h, dt);
+    solve::book(&faces.fields, s, h, dt, set.theta);
     super::surface::reconstruct(s, h, false);
     onto_nodes(&faces, grid, s, dt);
     s.faces = faces;

@@ -5,6 +5,9 @@
 //!
 //! over its four faces (a wall face: none; an air cell across: p = 0),
 //! alpha = h^2 / (K_t dt^2); then u_f = u*_f - dt h (p_hi - p_lo) / m_f.
+//! Under the theta rule p is the mix theta p^{n+1} + (1 - theta) p^n:
+//! alpha becomes alpha / theta^2 and D u* becomes D u* + (1 - theta) /
+//! theta D u^n (p^{n+1} - p^n = -K dt D u_theta, u_theta the same mix).
 //! D u is the exact flux balance of the cell's faces, so the gradient's
 //! only kernel is the constant of a closed box.
 
@@ -32,6 +35,7 @@ pub fn assemble(
     h: f64,
     dt: f64,
     light: f64,
+    theta: f64,
 ) {
     let h2 = h * h;
     let incompressible = mat.k == f64::INFINITY;
@@ -48,7 +52,7 @@ pub fn assemble(
         } else {
             let state = mat.eos(s.cell_j(c));
             (
-                h2 / (state.tangent_modulus.max(1e-300) * dt * dt),
+                h2 / (state.tangent_modulus.max(1e-300) * dt * dt * theta * theta),
                 state.pressure,
             )
         };
@@ -68,7 +72,11 @@ pub fn assemble(
         }
         s.alpha.push(alpha);
         s.target.push(0.0);
-        s.b.push(alpha * p_eos - h2 / dt * divergence(faces, ci, cj, h));
+        let mut div = divergence(faces, ci, cj, h);
+        if theta < 1.0 {
+            div += (1.0 - theta) / theta * flux_balance(faces, ci, cj, h, |f| &f.vel);
+        }
+        s.b.push(alpha * p_eos - h2 / dt * div);
         s.diag.push(row[4]);
         s.matrix.push(row);
         s.x.push(s.pressure[c]);
@@ -78,8 +86,19 @@ pub fn assemble(
 /// D u of cell (ci, cj): its faces' net outflow over h, of `vel_new` (u*
 /// with the air faces' shares before the correction, u^{n+1} after it).
 pub fn divergence(faces: &[FaceField; 2], ci: i64, cj: i64, h: f64) -> f64 {
+    flux_balance(faces, ci, cj, h, |f| &f.vel_new)
+}
+
+/// D of the face values `velocity` picks (`vel`: the P2G u^n) at cell (ci, cj).
+fn flux_balance(
+    faces: &[FaceField; 2],
+    ci: i64,
+    cj: i64,
+    h: f64,
+    velocity: fn(&FaceField) -> &[f64],
+) -> f64 {
     let [fx, fy] = faces;
-    let u = |field: &FaceField, i: i64, j: i64| field.vel_new[field.index(i, j)];
+    let u = |field: &FaceField, i: i64, j: i64| velocity(field)[field.index(i, j)];
     (u(fx, ci + 1, cj) - u(fx, ci, cj) + u(fy, ci, cj + 1) - u(fy, ci, cj)) / h
 }
 
@@ -250,20 +269,27 @@ fn follow_neighbours(field: &FaceField, values: &mut [f64]) {
     }
 }
 
-/// The cells' J rate e = D u^{n+1}, and the energy the projection removed:
-/// minus the pressure's work on the faces at the time-centred velocity,
-/// plus what it put into the stored energy (the mean pressure's work, the
-/// backward-Euler loss counted).
-pub fn book(faces: &[FaceField; 2], s: &mut Scratch, h: f64, dt: f64) {
+/// The cells' J rate e = D u_theta (D u^{n+1} under backward Euler), and
+/// the energy the projection removed: minus the pressure's work on the
+/// faces at the time-centred velocity, plus what it put into the stored
+/// energy: the solved pressure's work and, at the mean of p^n and
+/// p^{n+1}, (2 theta - 1) K dt^2 e^2 / 2 a unit volume (the backward-Euler
+/// loss at theta = 1, none under the trapezoidal rule).
+pub fn book(faces: &[FaceField; 2], s: &mut Scratch, h: f64, dt: f64, theta: f64) {
     let (mut pressure_work, mut compression_loss) = (0.0, 0.0);
     for (k, &c) in s.fluid.iter().enumerate() {
         let c = c as usize;
         let (ci, cj) = ((c % s.cells[0]) as i64, (c / s.cells[0]) as i64);
-        let e = divergence(faces, ci, cj, h);
+        let mut e = divergence(faces, ci, cj, h);
+        if theta < 1.0 {
+            e = theta * e + (1.0 - theta) * flux_balance(faces, ci, cj, h, |f| &f.vel);
+        }
         s.rate[c] = e;
         pressure_work += s.x[k] * s.vol[c] * dt * e;
         if s.alpha[k] > 0.0 {
-            compression_loss += h * h * s.vol[c] * e * e / (2.0 * s.alpha[k]);
+            // s.alpha holds h^2 / (K dt^2 theta^2).
+            compression_loss += (2.0 * theta - 1.0) * (h * h * s.vol[c] * e * e)
+                / (2.0 * s.alpha[k] * theta * theta);
         }
     }
     let mut work = 0.0;
