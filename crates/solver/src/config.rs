@@ -344,7 +344,8 @@ pub struct ProjectionSettings {
     /// p^n and J the same mix of D u. 1 is backward Euler, which damps
     /// sound by a factor 1 / sqrt(1 + (omega dt)^2) a step; 0.5 is the
     /// trapezoidal rule, which keeps linear sound's energy and damps no
-    /// mode at all (docs/physics.md section 8b).
+    /// mode at all (docs/physics.md section 8b). At K = inf there is no
+    /// sound and the step is backward Euler whatever theta.
     pub theta: f64,
     /// Where the free surface's p = 0 sits: at the air cells' centres, or
     /// inside the cell where the grid's fluid fraction crosses a half.

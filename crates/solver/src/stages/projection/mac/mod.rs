@@ -96,10 +96,17 @@ pub fn project(inputs: &Inputs, gravity: Vec2, affine: bool, grid: &mut Grid, s:
         solve::slave_air_faces(field, s, material);
     }
     s.stats = solve::fresh_stats(s.fluid.len());
-    solve::assemble(&faces.fields, s, mat, h, dt, light, set.theta);
+    // Incompressible, p is the constraint's multiplier: D u^{n+1} = 0
+    // (theta < 1 would ask D u_theta = 0, and u^{n+1} would take -D u^n).
+    let theta = if mat.k == f64::INFINITY {
+        1.0
+    } else {
+        set.theta
+    };
+    solve::assemble(&faces.fields, s, mat, h, dt, light, theta);
     super::pcg::solve_assembled(s, set, set.tolerance);
     solve::correct(&mut faces.fields, s, h, dt, light);
-    solve::book(&faces.fields, s, h, dt, set.theta);
+    solve::book(&faces.fields, s, h, dt, theta);
     super::surface::reconstruct(s, h, false);
     onto_nodes(&faces, grid, s, dt);
     s.faces = faces;
