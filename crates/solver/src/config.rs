@@ -347,6 +347,13 @@ pub struct ProjectionSettings {
     /// mode at all (docs/physics.md section 8b). At K = inf there is no
     /// sound and the step is backward Euler whatever theta.
     pub theta: f64,
+    /// The step's gravity limit dt <= gravity_cfl sqrt(h / g), where the
+    /// flow is slow (a slosh, a column settling); None: the method's cfl.
+    /// Its own knob because the gravity waves' time error drifts the
+    /// packing where the flow's limit does not bind (docs/findings/
+    /// projection_mac.md, "The gravity limit of the step").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gravity_cfl: Option<f64>,
     /// Where the free surface's p = 0 sits: at the air cells' centres, or
     /// inside the cell where the grid's fluid fraction crosses a half.
     pub free_surface: FreeSurface,
@@ -496,6 +503,7 @@ impl Default for ProjectionSettings {
             advection_step: AdvectionStep::Euler,
             holes: Holes::Air,
             theta: 1.0,
+            gravity_cfl: None,
             free_surface: FreeSurface::Cell,
             air_nodes: AirNodes::Slaved,
             light_node_share: 0.01,
@@ -802,6 +810,9 @@ impl SolverConfig {
         within(p.checkerboard, 0.0, 16.0, "method.projection.checkerboard")?;
         within(p.drift, 0.0, 1.0, "method.projection.drift")?;
         within(p.theta, 0.5, 1.0, "method.projection.theta")?;
+        if let Some(c) = p.gravity_cfl {
+            within(c, 1e-3, 1.0, "method.projection.gravity_cfl")?;
+        }
         within(
             p.drift_depth as f64,
             0.0,

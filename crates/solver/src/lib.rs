@@ -368,8 +368,10 @@ impl Solver {
             // The wave speeds are zero: the signal speed is max |v|.
             let s = &self.cfg.scene;
             let m = &s.materials[0];
+            let cfl = self.cfg.method.cfl;
+            let gravity_cfl = self.cfg.method.projection.gravity_cfl.unwrap_or(cfl);
             return stages::projection::flow_dt(
-                self.cfg.method.cfl,
+                [cfl, gravity_cfl],
                 s.cell,
                 self.signal_speed,
                 s.gravity,

@@ -736,3 +736,33 @@ fn grows_an_intra_cell_vertical_shear(transfer: TransferKind) {
         "{transfer:?}: {rate} a step: {speeds:?}"
     );
 }
+
+/// At rest the step is the gravity limit, cfl sqrt(h / g), or
+/// gravity_cfl sqrt(h / g) when that is set; outside (0, 1] it is
+/// refused by key.
+#[test]
+fn the_gravity_limit_of_the_step_takes_its_own_cfl() {
+    let method = implicit(ShapeKind::Bspline2, TransferKind::Apic);
+    let cfl = method.cfl;
+    let s = column(incompressible(), method.clone());
+    let limit = (H / 9.81).sqrt();
+    assert!((s.next_dt() - cfl * limit).abs() < 1e-15, "{}", s.next_dt());
+    let mut own = method.clone();
+    own.projection.gravity_cfl = Some(0.05);
+    let s = column(incompressible(), own);
+    assert!(
+        (s.next_dt() - 0.05 * limit).abs() < 1e-15,
+        "{}",
+        s.next_dt()
+    );
+    for bad in [0.0, 1.5, f64::NAN] {
+        let mut m = method.clone();
+        m.projection.gravity_cfl = Some(bad);
+        let scene = common::box_scene([0.2, 0.3], [0.0, 0.0, 0.2, DEPTH], incompressible(), 9.81);
+        assert_eq!(
+            common::refusal(scene, m).map(|e| e.key).as_deref(),
+            Some("method.projection.gravity_cfl"),
+            "{bad}"
+        );
+    }
+}

@@ -579,15 +579,15 @@ fn owner(grid: &Grid, n: usize) -> usize {
     grid.index(wrap(i, 0), wrap(j, 1))
 }
 
-/// The flow's time step: CFL h / max |v|, the gravity-wave limit CFL
-/// sqrt(h / g) and the explicit viscous limit h^2 / (4 nu).
-pub fn flow_dt(cfl: f64, h: f64, max_speed: f64, gravity: f64, nu: f64) -> f64 {
+/// The flow's time step: CFL h / max |v|, the gravity-wave limit
+/// gravity_cfl sqrt(h / g) and the explicit viscous limit h^2 / (4 nu).
+pub fn flow_dt([cfl, gravity_cfl]: [f64; 2], h: f64, max_speed: f64, gravity: f64, nu: f64) -> f64 {
     let mut dt = f64::INFINITY;
     if max_speed > 0.0 {
         dt = dt.min(cfl * h / max_speed);
     }
     if gravity > 0.0 {
-        dt = dt.min(cfl * (h / gravity).sqrt());
+        dt = dt.min(gravity_cfl * (h / gravity).sqrt());
     }
     if nu > 0.0 {
         dt = dt.min(0.25 * h * h / nu);
