@@ -529,6 +529,43 @@ pub struct SolverConfig {
     pub perturb: Vec<Perturb>,
 }
 
+/// The `[method.projection]` numbers' ranges.
+fn validate_projection_ranges(p: &ProjectionSettings) -> Result<(), ConfigError> {
+    within(p.hourglass, 0.0, 0.25, "method.projection.hourglass")?;
+    within(p.checkerboard, 0.0, 16.0, "method.projection.checkerboard")?;
+    within(p.drift, 0.0, 1.0, "method.projection.drift")?;
+    within(p.theta, 0.5, 1.0, "method.projection.theta")?;
+    if let Some(c) = p.gravity_cfl {
+        within(c, 1e-3, 1.0, "method.projection.gravity_cfl")?;
+    }
+    within(
+        p.drift_depth as f64,
+        0.0,
+        8.0,
+        "method.projection.drift_depth",
+    )?;
+    within(
+        p.light_node_share,
+        1e-6,
+        1.0,
+        "method.projection.light_node_share",
+    )?;
+    within(p.tolerance, 1e-14, 1e-2, "method.projection.tolerance")?;
+    within(
+        p.drift_tolerance,
+        1e-14,
+        1e-2,
+        "method.projection.drift_tolerance",
+    )?;
+    within(
+        p.max_iterations as f64,
+        1.0,
+        1e6,
+        "method.projection.max_iterations",
+    )?;
+    Ok(())
+}
+
 impl SolverConfig {
     /// rho0 of the first material: what a "full" node or cell is measured by.
     pub fn first_rho0(&self) -> f64 {
@@ -805,39 +842,7 @@ impl SolverConfig {
     /// its own controls in `[method.projection]`).
     fn validate_pressure_implicit(&self) -> Result<(), ConfigError> {
         let (m, s) = (&self.method, &self.scene);
-        let p = &m.projection;
-        within(p.hourglass, 0.0, 0.25, "method.projection.hourglass")?;
-        within(p.checkerboard, 0.0, 16.0, "method.projection.checkerboard")?;
-        within(p.drift, 0.0, 1.0, "method.projection.drift")?;
-        within(p.theta, 0.5, 1.0, "method.projection.theta")?;
-        if let Some(c) = p.gravity_cfl {
-            within(c, 1e-3, 1.0, "method.projection.gravity_cfl")?;
-        }
-        within(
-            p.drift_depth as f64,
-            0.0,
-            8.0,
-            "method.projection.drift_depth",
-        )?;
-        within(
-            p.light_node_share,
-            1e-6,
-            1.0,
-            "method.projection.light_node_share",
-        )?;
-        within(p.tolerance, 1e-14, 1e-2, "method.projection.tolerance")?;
-        within(
-            p.drift_tolerance,
-            1e-14,
-            1e-2,
-            "method.projection.drift_tolerance",
-        )?;
-        within(
-            p.max_iterations as f64,
-            1.0,
-            1e6,
-            "method.projection.max_iterations",
-        )?;
+        validate_projection_ranges(&m.projection)?;
         let needs = |key: &str, what: &str| ConfigError {
             key: key.into(),
             message: format!("method.formulation = \"pressure_implicit\" {what}"),
