@@ -348,7 +348,8 @@ pub struct ProjectionSettings {
     /// sound and the step is backward Euler whatever theta.
     pub theta: f64,
     /// The step's gravity limit dt <= gravity_cfl sqrt(h / g), where the
-    /// flow is slow (a slosh, a column settling); None: the method's cfl.
+    /// flow is slow (a slosh, a column settling), 1e-3 ..= 1; None: the
+    /// method's cfl.
     /// Its own knob because the gravity waves' time error drifts the
     /// packing where the flow's limit does not bind (docs/findings/
     /// projection_mac.md, "The gravity limit of the step").

@@ -738,7 +738,7 @@ fn grows_an_intra_cell_vertical_shear(transfer: TransferKind) {
 }
 
 /// At rest the step is the gravity limit, cfl sqrt(h / g), or
-/// gravity_cfl sqrt(h / g) when that is set; outside (0, 1] it is
+/// gravity_cfl sqrt(h / g) when that is set; outside 1e-3 ..= 1 it is
 /// refused by key.
 #[test]
 fn the_gravity_limit_of_the_step_takes_its_own_cfl() {

@@ -470,8 +470,8 @@ fn the_trapezoidal_pressure_step_keeps_the_sound() {
 
 /// Incompressible water has no sound to keep: the step stays backward
 /// Euler (D u^{n+1} = 0) whatever theta, bit for bit, where theta < 1
-/// would ask D u_theta = 0 and hand u^{n+1} minus the P2G field's
-/// divergence.
+/// would ask D u_theta = 0 and hand u^{n+1} the P2G field's divergence
+/// times -(1 - theta) / theta.
 #[test]
 fn at_k_infinity_theta_changes_nothing() {
     let run = |theta: f64| {

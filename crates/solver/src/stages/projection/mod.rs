@@ -57,12 +57,12 @@ const CORNERS: [(usize, usize, f64, f64); 4] = [
     (1, 1, 1.0, 1.0),
 ];
 
-/// The hourglass pattern over the corners (in `CORNERS` order): the nodal
-/// velocity mode the centre divergence and gradient cannot see.
 /// The reach up to which `Scratch::deep` reads a per-step erosion (the
 /// packing's reading asks for 2, the material's density for 1).
 const CACHED_REACH: u8 = 2;
 
+/// The hourglass pattern over the corners (in `CORNERS` order): the nodal
+/// velocity mode the centre divergence and gradient cannot see.
 const HOURGLASS: [f64; 4] = [1.0, -1.0, -1.0, 1.0];
 
 /// What the last solve did.
@@ -75,8 +75,9 @@ pub struct SolveStats {
     pub converged: bool,
     /// Energy the projection removed: minus its velocity change's work at
     /// the time-centred velocity, less what the step's mean pressure put
-    /// into the stored energy (the compression's backward-Euler loss
-    /// counted), plus the gravitational energy the drift correction by
+    /// into the stored energy (the compression's loss counted: backward
+    /// Euler's, or (2 theta - 1) times it under the staggered scheme's
+    /// theta), plus the gravitational energy the drift correction by
     /// position took out (J/m).
     pub dissipated_projection: f64,
     /// Of `dissipated_projection`, the gravitational energy the drift
@@ -135,7 +136,8 @@ pub struct Scratch {
     ghost: Vec<[f64; 4]>,
     /// Whether the divergence takes the ghost weights too (`ghost_orthogonal`).
     orthogonal: bool,
-    /// Per unknown: h^2 / (K_t dt^2) (0 at K = infinity), and the drift target r.
+    /// Per unknown: h^2 / (K_t dt^2) (over theta^2 under the staggered
+    /// scheme's theta; 0 at K = infinity), and the drift target r.
     alpha: Vec<f64>,
     target: Vec<f64>,
     /// Per unknown: the drift rate the positions are corrected by (under

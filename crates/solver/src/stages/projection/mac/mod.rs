@@ -97,7 +97,8 @@ pub fn project(inputs: &Inputs, gravity: Vec2, affine: bool, grid: &mut Grid, s:
     }
     s.stats = solve::fresh_stats(s.fluid.len());
     // Incompressible, p is the constraint's multiplier: D u^{n+1} = 0
-    // (theta < 1 would ask D u_theta = 0, and u^{n+1} would take -D u^n).
+    // (theta < 1 would ask D u_theta = 0: D u^{n+1} = -(1 - theta) /
+    // theta D u^n).
     let theta = if mat.k == f64::INFINITY {
         1.0
     } else {

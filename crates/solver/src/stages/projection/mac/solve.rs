@@ -271,10 +271,11 @@ fn follow_neighbours(field: &FaceField, values: &mut [f64]) {
 
 /// The cells' J rate e = D u_theta (D u^{n+1} under backward Euler), and
 /// the energy the projection removed: minus the pressure's work on the
-/// faces at the time-centred velocity, plus what it put into the stored
-/// energy: the solved pressure's work and, at the mean of p^n and
-/// p^{n+1}, (2 theta - 1) K dt^2 e^2 / 2 a unit volume (the backward-Euler
-/// loss at theta = 1, none under the trapezoidal rule).
+/// faces at the time-centred velocity, plus what the stored energy lost
+/// (minus its change, at the mean of p^n and p^{n+1}): the solved
+/// pressure's work on e and (2 theta - 1) K dt^2 e^2 / 2 a unit volume
+/// (the backward-Euler loss at theta = 1, none under the trapezoidal
+/// rule).
 pub fn book(faces: &[FaceField; 2], s: &mut Scratch, h: f64, dt: f64, theta: f64) {
     let (mut pressure_work, mut compression_loss) = (0.0, 0.0);
     for (k, &c) in s.fluid.iter().enumerate() {
