@@ -25,7 +25,7 @@ DEFAULT_X = (0.07, 0.61, 1.0, 3.0, 10.0)
 def theta_damping(theta, x):
     """-ln|g| with |g|^2 = (1 + (1 - theta)^2 x^2) / (1 + theta^2 x^2)."""
     g2 = (1.0 + (1.0 - theta) ** 2 * x * x) / (1.0 + theta * theta * x * x)
-    return -0.5 * math.log(g2)
+    return -0.5 * math.log(g2) + 0.0  # + 0.0: theta = 0.5 prints 0, not -0
 
 
 def alpha_damping(rho_inf, x):
