@@ -53,13 +53,16 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--x", type=float, nargs="+", default=list(DEFAULT_X))
     xs = ap.parse_args().x
-    print("| step | " + " | ".join(f"x = {x:g}" for x in xs) + " |")
+
+    def row(label, cells):
+        print(f"| {label} | " + " | ".join(cells) + " |")
+
+    row("step", [f"x = {x:g}" for x in xs])
     print("|---|" + "---|" * len(xs))
     for theta in THETAS:
-        print(f"| theta = {theta:g} | " + " | ".join(f"{theta_damping(theta, x):.3g}" for x in xs) + " |")
+        row(f"theta = {theta:g}", [f"{theta_damping(theta, x):.3g}" for x in xs])
     for rho in RHO_INFINITY:
-        print(f"| generalised-alpha, rho_inf = {rho:g} | "
-              + " | ".join(f"{alpha_damping(rho, x):.3g}" for x in xs) + " |")
+        row(f"generalised-alpha, rho_inf = {rho:g}", [f"{alpha_damping(rho, x):.3g}" for x in xs])
 
 
 if __name__ == "__main__":
