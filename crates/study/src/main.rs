@@ -238,6 +238,11 @@ struct ReportArgs {
     /// (default: the most common value of each varying method key).
     #[arg(long, value_name = "CASE")]
     baseline: Option<String>,
+    /// Behaviour records of earlier matrices (report/behaviour_runs.jsonl):
+    /// their runs join the four-behaviour table where this matrix lacks the
+    /// case (repeatable; the written record then holds them too).
+    #[arg(long = "behaviour-runs", value_name = "FILE")]
+    behaviour_runs: Vec<PathBuf>,
 }
 
 #[derive(Args)]
@@ -755,6 +760,7 @@ fn report_command(args: ReportArgs) -> ExitCode {
         dir,
         yardsticks,
         baseline,
+        behaviour_runs,
     } = args;
     for d in std::iter::once(&dir).chain(&yardsticks) {
         if !d.is_dir() {
@@ -786,7 +792,21 @@ fn report_command(args: ReportArgs) -> ExitCode {
             return bad_input(&format!("--baseline {name}: {p}"));
         }
     }
-    match report::report(&dir, &yardsticks, baseline.as_deref()) {
+    let mut recorded = vec![];
+    for file in &behaviour_runs {
+        if !dir.join("summary.parquet").exists() {
+            return bad_input(&format!(
+                "--behaviour-runs {}: {} is not a matrix folder (no summary.parquet)",
+                file.display(),
+                dir.display()
+            ));
+        }
+        match report::data::read_recorded_runs(file) {
+            Ok(runs) => recorded.extend(runs),
+            Err(e) => return bad_input(&format!("--behaviour-runs: {e}")),
+        }
+    }
+    match report::report(&dir, &yardsticks, baseline.as_deref(), recorded) {
         Ok(index) => {
             println!("report: {}", index.display());
             ExitCode::SUCCESS

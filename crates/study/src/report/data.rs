@@ -9,9 +9,10 @@ use crate::report::plot::{short, Res};
 pub use monitor::stats::{median, spread};
 use monitor::Cause;
 use polars::prelude::*;
+use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
-use study::output::summary::{Status, Summary};
+use study::output::summary::{Status, Summary, SCHEMA_VERSION};
 use study::study_file::ENSEMBLE_KEYS;
 
 pub fn read_parquet(path: &Path) -> Res<DataFrame> {
@@ -255,6 +256,62 @@ pub struct Matrix {
     /// The case whose method is the Methods table's baseline (`kick report
     /// --baseline`; None: the most common value of each method key).
     pub baseline_case: Option<String>,
+    /// Runs of earlier matrices kept as records (`kick report
+    /// --behaviour-runs`): only the four-behaviour table reads them.
+    pub recorded_runs: Vec<RecordedRun>,
+}
+
+/// What the four-behaviour table reads of a run's timeseries, kept so
+/// that a run folder need not survive for its run to be scored.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BehaviourFigures {
+    /// Steps from the kick that began the blow-out to half of the
+    /// particles gone (None: no such kick, or half never gone).
+    pub blow_out_steps: Option<f64>,
+    /// Time at which the run had lost the survival share of its mass, else its end (s).
+    pub survived: f64,
+    /// Ran to the matrix's t_end without losing that share.
+    pub survived_to_end: bool,
+    /// Largest cell-means checkerboard index over the bug report's window.
+    pub early_checkerboard: Option<f64>,
+}
+
+/// One line of a behaviour record (`report/behaviour_runs.jsonl`): the
+/// run's summary without its events, and its timeseries' figures.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RecordedRun {
+    pub summary: Summary,
+    pub figures: BehaviourFigures,
+}
+
+/// The runs of a behaviour record, one JSON object a line; errors name
+/// the file and the line.
+pub fn read_recorded_runs(path: &Path) -> Res<Vec<RecordedRun>> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut runs = vec![];
+    for (i, line) in text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+    {
+        let run: RecordedRun = serde_json::from_str(line).map_err(|e| {
+            format!(
+                "{}: line {}: not a recorded run: {e}",
+                path.display(),
+                i + 1
+            )
+        })?;
+        if run.summary.schema_version != SCHEMA_VERSION {
+            return Err(format!(
+                "{}: line {}: schema_version {} is not {SCHEMA_VERSION} (written by another kick version: run the case again)",
+                path.display(),
+                i + 1,
+                run.summary.schema_version
+            ));
+        }
+        runs.push(run);
+    }
+    Ok(runs)
 }
 
 /// A study parameter's dotted key (`materials.water.K`, `method.j_bar.blend`,
@@ -345,6 +402,12 @@ impl Matrix {
                 Summary::read(&case_dir).map(|s| (case_dir, s))
             })
             .collect::<Res<_>>()?;
+        Ok(Matrix::of(summaries))
+    }
+
+    /// The matrix of these cases (each with its folder), sorted by the
+    /// parameters that vary between them.
+    pub fn of(summaries: Vec<(PathBuf, Summary)>) -> Self {
         let defaults = method_defaults();
         let text = |s: &Summary, k: &String| axis_text(&s.params, k, &defaults);
         let keys = Matrix::axes_of(&summaries, &text);
@@ -366,12 +429,13 @@ impl Matrix {
                 .unwrap_or(std::cmp::Ordering::Equal)
         });
         let axes = keys.iter().map(|k| ParamKey::parse(k)).collect();
-        Ok(Matrix {
+        Matrix {
             axes,
             rows,
             reference_rows: vec![],
             baseline_case: None,
-        })
+            recorded_runs: vec![],
+        }
     }
 
     /// The keys whose text (`text`) differs between the summaries, but the

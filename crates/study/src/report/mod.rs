@@ -15,6 +15,7 @@ pub mod plot;
 pub mod yardsticks;
 
 use crate::report::case::case_report;
+use crate::report::data::RecordedRun;
 use crate::report::matrix::matrix_report;
 use crate::report::plot::Res;
 use std::path::{Path, PathBuf};
@@ -22,10 +23,16 @@ use std::path::{Path, PathBuf};
 /// Writes the report of `dir` (a case or a matrix) and returns the page's
 /// path. A matrix's Methods table also reads the viscous-decay, slosh and surge-front
 /// matrix folders `yardsticks` (`yardsticks`), and takes the method of
-/// the case `baseline` as its baseline (None: the most common one).
-pub fn report(dir: &Path, yardsticks: &[PathBuf], baseline: Option<&str>) -> Res<PathBuf> {
+/// the case `baseline` as its baseline (None: the most common one); its
+/// four-behaviour table adds the `recorded_runs` of earlier matrices.
+pub fn report(
+    dir: &Path,
+    yardsticks: &[PathBuf],
+    baseline: Option<&str>,
+    recorded_runs: Vec<RecordedRun>,
+) -> Res<PathBuf> {
     if dir.join("summary.parquet").exists() {
-        matrix_report(dir, yardsticks, baseline)
+        matrix_report(dir, yardsticks, baseline, recorded_runs)
     } else if dir.join("summary.json").exists() {
         case_report(dir)
     } else {

@@ -538,6 +538,24 @@ fn report_yardsticks_must_be_matrix_folders() {
 }
 
 #[test]
+fn report_behaviour_runs_must_be_records_beside_a_matrix() {
+    let dir = scratch("behaviour_runs");
+    let d = dir.to_str().unwrap();
+    let o = kick(&["report", d, "--behaviour-runs", "no/such.jsonl"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not a matrix folder"), "{}", stderr(&o));
+    std::fs::write(dir.join("summary.parquet"), b"").unwrap();
+    let o = kick(&["report", d, "--behaviour-runs", "no/such.jsonl"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no/such.jsonl"), "{}", stderr(&o));
+    let bad = dir.join("bad.jsonl");
+    std::fs::write(&bad, "{\"summary\": 1}\n").unwrap();
+    let o = kick(&["report", d, "--behaviour-runs", bad.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("line 1"), "{}", stderr(&o));
+}
+
+#[test]
 fn report_baseline_must_be_a_case_of_the_matrix() {
     let dir = scratch("baseline");
     let d = dir.to_str().unwrap();

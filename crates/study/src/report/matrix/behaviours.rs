@@ -2,12 +2,20 @@
 //! (docs/physics.md section 3), each stated with the numbers of this matrix
 //! that show or refute it. Survival counts a completed run as t_end.
 
-use crate::report::data::{f64_column, median, read_parquet, Matrix, ParamKey, Row};
+use crate::report::data::{
+    f64_column, median, read_parquet, BehaviourFigures, Matrix, ParamKey, RecordedRun, Row,
+};
 use crate::report::html::{Cell, Page};
-use crate::report::plot::{short, Res};
+use crate::report::plot::{err, short, Res};
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use study::output::files::write_atomic;
 use study::output::summary::Status;
+
+/// The behaviour record a matrix report writes (in its `report` folder):
+/// every run the per-configuration table scored, one JSON line each, for
+/// `kick report --behaviour-runs` once the run folders are gone.
+pub const BEHAVIOUR_RECORD: &str = "behaviour_runs.jsonl";
 
 /// The window in which the bug report saw the checkerboard appear (s).
 pub const CHECKERBOARD_WINDOW: (f64, f64) = (0.01, 0.1);
@@ -100,19 +108,83 @@ impl<'a> ByK<'a> {
 /// The four behaviours, each with its numbers and whether this matrix
 /// reproduces it (a matrix section: `matrix::MATRIX_SECTIONS`);
 /// nothing unless K takes at least two values.
-pub fn behaviours(m: &Matrix, _out: &Path, page: &mut Page) -> Res {
-    let Some(by_k) = ByK::of(m) else {
+pub fn behaviours(m: &Matrix, out: &Path, page: &mut Page) -> Res {
+    let scored = ScoredRuns::of(m);
+    write_record(&scored, &out.join(BEHAVIOUR_RECORD))?;
+    let by_k = ByK::of(m);
+    if by_k.is_none() && ByK::of(&scored.matrix).is_none() {
         return Ok(());
-    };
-    page.h2("The four behaviours of the bug report");
-    page.p(&small_k_blows_up(&by_k));
-    page.p(&large_k_far_from_hydrostatic(&by_k));
-    page.p(&large_k_checkerboards(&by_k));
-    if let Some(text) = less_viscosity_less_stable(m) {
-        page.p(&text);
     }
-    behaviours_by_configuration(m, page);
+    page.h2("The four behaviours of the bug report");
+    if let Some(by_k) = by_k {
+        page.p(&small_k_blows_up(&by_k));
+        page.p(&large_k_far_from_hydrostatic(&by_k));
+        page.p(&large_k_checkerboards(&by_k));
+        if let Some(text) = less_viscosity_less_stable(m) {
+            page.p(&text);
+        }
+    }
+    behaviours_by_configuration(&scored, page);
     Ok(())
+}
+
+/// The runs the per-configuration table scores: this matrix's, and the
+/// recorded runs of earlier matrices whose case it does not hold (its own
+/// folder wins), with each run's timeseries figures by case.
+pub struct ScoredRuns {
+    pub matrix: Matrix,
+    pub figures: BTreeMap<String, BehaviourFigures>,
+    /// How many of them came from a record.
+    pub recorded: usize,
+}
+
+impl ScoredRuns {
+    pub fn of(m: &Matrix) -> Self {
+        let t_end = m.rows.iter().map(|r| r.summary.t_end).fold(0.0, f64::max);
+        let mut figures = BTreeMap::new();
+        let mut summaries = vec![];
+        for r in &m.rows {
+            if let Some(f) = measured_figures(r, t_end) {
+                figures.insert(r.case().to_string(), f);
+                summaries.push((r.dir.clone(), r.summary.clone()));
+            }
+        }
+        let mut recorded = 0;
+        for run in &m.recorded_runs {
+            if !figures.contains_key(&run.summary.case) {
+                figures.insert(run.summary.case.clone(), run.figures.clone());
+                summaries.push((PathBuf::new(), run.summary.clone()));
+                recorded += 1;
+            }
+        }
+        ScoredRuns {
+            matrix: Matrix::of(summaries),
+            figures,
+            recorded,
+        }
+    }
+}
+
+/// Writes `path`: one `RecordedRun` a line (events left out), by case.
+fn write_record(scored: &ScoredRuns, path: &Path) -> Res {
+    let mut text = String::new();
+    for (case, figures) in &scored.figures {
+        let Some(r) = scored.matrix.rows.iter().find(|r| r.case() == case) else {
+            continue;
+        };
+        let mut summary = r.summary.clone();
+        summary.events.clear();
+        let run = RecordedRun {
+            summary,
+            figures: figures.clone(),
+        };
+        text.push_str(&serde_json::to_string(&run).map_err(err)?);
+        text.push('\n');
+    }
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(err)?;
+    }
+    write_atomic(path, text.as_bytes()).map_err(err)
 }
 
 /// Behaviour 1, small K: a kick that blows most particles out within a few steps.
@@ -313,31 +385,41 @@ struct RunFigures {
     early_checkerboard: Option<f64>,
 }
 
+/// What the table reads of a run's timeseries (None without one); the
+/// survival is judged against the matrix's `t_end`.
+fn measured_figures(r: &Row, t_end: f64) -> Option<BehaviourFigures> {
+    let df = read_parquet(&r.dir.join("timeseries.parquet")).ok()?;
+    let t = f64_column(&df, "t")?;
+    let dt = f64_column(&df, "dt")?;
+    let lost = f64_column(&df, "particles_lost")?;
+    let mass_lost = f64_column(&df, "mass_lost_fraction")?;
+    let loss_at = t
+        .iter()
+        .zip(&mass_lost)
+        .find(|(_, m)| **m >= SURVIVAL_LOSS)
+        .map(|(t, _)| *t);
+    let end = r.summary.t_end;
+    Some(BehaviourFigures {
+        blow_out_steps: blow_out_steps(r, &t, &dt, &lost),
+        survived: loss_at.unwrap_or(end),
+        survived_to_end: loss_at.is_none()
+            && r.summary.status == Status::Completed
+            && end >= t_end * (1.0 - 1e-9),
+        early_checkerboard: early_checkerboard_of(&df),
+    })
+}
+
 impl RunFigures {
-    fn of(r: &Row, t_end: f64) -> Option<Self> {
-        let df = read_parquet(&r.dir.join("timeseries.parquet")).ok()?;
-        let t = f64_column(&df, "t")?;
-        let dt = f64_column(&df, "dt")?;
-        let lost = f64_column(&df, "particles_lost")?;
-        let steps = blow_out_steps(r, &t, &dt, &lost);
-        let mass_lost = f64_column(&df, "mass_lost_fraction")?;
-        let loss_at = t
-            .iter()
-            .zip(&mass_lost)
-            .find(|(_, m)| **m >= SURVIVAL_LOSS)
-            .map(|(t, _)| *t);
-        let end = r.summary.t_end;
+    fn of(r: &Row, f: &BehaviourFigures) -> Option<Self> {
         Some(RunFigures {
             k: param(r, ParamKey::is_bulk_modulus)?,
             viscous: param(r, ParamKey::is_viscosity).is_some_and(|mu| mu > 0.0),
-            blown_out: steps.is_some_and(|s| s <= BLOW_OUT_STEPS),
-            blow_out_steps: steps,
-            survived: loss_at.unwrap_or(end),
-            survived_to_end: loss_at.is_none()
-                && r.summary.status == Status::Completed
-                && end >= t_end * (1.0 - 1e-9),
+            blown_out: f.blow_out_steps.is_some_and(|s| s <= BLOW_OUT_STEPS),
+            blow_out_steps: f.blow_out_steps,
+            survived: f.survived,
+            survived_to_end: f.survived_to_end,
             hydro_late: r.hydro_late(),
-            early_checkerboard: early_checkerboard_of(&df),
+            early_checkerboard: f.early_checkerboard,
         })
     }
 }
@@ -383,14 +465,15 @@ impl Score {
 /// and below 0.1 at the smallest K; (4) the inviscid run survives a
 /// shorter time than its viscous twin in most pairs. A behaviour holds in
 /// a configuration when most of the runs it concerns show it.
-pub fn behaviours_by_configuration(m: &Matrix, page: &mut Page) {
+pub fn behaviours_by_configuration(scored: &ScoredRuns, page: &mut Page) {
+    let m = &scored.matrix;
     let (Some(kx), Some(mux)) = (
         m.axis(ParamKey::is_bulk_modulus),
         m.axis(ParamKey::is_viscosity),
     ) else {
         return;
     };
-    let Some((by_config, k_min)) = configurations(m, kx, mux) else {
+    let Some((by_config, k_min)) = configurations(scored, kx, mux) else {
         return;
     };
     let mut rows = vec![];
@@ -416,8 +499,10 @@ pub fn behaviours_by_configuration(m: &Matrix, page: &mut Page) {
     .map(String::from)
     .to_vec();
     page.p(&format!(
-        "Per configuration (every axis but K and the viscosity; runs pooled). Survival: until {:.0} % of the mass is deleted. A behaviour is shown when most of the runs it concerns show it.",
-        100.0 * SURVIVAL_LOSS
+        "Per configuration (every axis but K and the viscosity; runs pooled). Survival: until {:.0} % of the mass is deleted. A behaviour is shown when most of the runs it concerns show it. {} of its {} runs are from behaviour records (<code>--behaviour-runs</code>), scored from their recorded figures; every run it scored is in <code>{BEHAVIOUR_RECORD}</code> beside this page.",
+        100.0 * SURVIVAL_LOSS,
+        scored.recorded,
+        scored.figures.len()
     ));
     page.table("behaviours_by_configuration", &headers, &rows);
     if let Some((held, _, name)) = best {
@@ -432,15 +517,15 @@ pub fn behaviours_by_configuration(m: &Matrix, page: &mut Page) {
 /// labelled by the axes that name it), and the smallest K; None without
 /// another axis.
 fn configurations(
-    m: &Matrix,
+    scored: &ScoredRuns,
     kx: usize,
     mux: usize,
 ) -> Option<(BTreeMap<Vec<String>, Configuration<'_>>, f64)> {
+    let m = &scored.matrix;
     let others: Vec<usize> = (0..m.axes.len()).filter(|&a| a != kx && a != mux).collect();
     if others.is_empty() {
         return None;
     }
-    let t_end = m.rows.iter().map(|r| r.summary.t_end).fold(0.0, f64::max);
     let k_min = m
         .rows
         .iter()
@@ -475,7 +560,11 @@ fn configurations(
     let full = |r: &Row| -> Vec<String> { others.iter().map(|&a| r.params[a].clone()).collect() };
     let mut by_config: BTreeMap<Vec<String>, Configuration> = BTreeMap::new();
     for r in &m.rows {
-        if let Some(f) = RunFigures::of(r, t_end) {
+        if let Some(f) = scored
+            .figures
+            .get(r.case())
+            .and_then(|f| RunFigures::of(r, f))
+        {
             by_config
                 .entry(full(r))
                 .or_insert_with(|| (config(r), vec![]))
@@ -603,6 +692,113 @@ mod tests {
             phases: vec![],
         };
         Row::for_test(summary, vec![])
+    }
+
+    /// A recorded run of configuration `scheme` at (K, viscosity), member
+    /// `seed`, that survived until `survived` (to the end when 5 s) with
+    /// the early checkerboard `cb` and late departure 30.
+    fn recorded(scheme: &str, k: f64, mu: f64, seed: u64, survived: f64, cb: f64) -> RecordedRun {
+        let mut summary = run_with_kicks(&[]).summary;
+        let k_text = if k < 1e6 { "K15kPa" } else { "K1.5MPa" };
+        summary.case = format!("{k_text}_mu{mu}_{scheme}_e{seed}");
+        summary.params = [
+            ("materials.water.K", serde_json::json!(k)),
+            ("materials.water.viscosity", serde_json::json!(mu)),
+            ("method.scheme", serde_json::json!(scheme)),
+            ("scene.seed", serde_json::json!(seed)),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect();
+        let completed = survived >= 5.0;
+        summary.status = if completed {
+            Status::Completed
+        } else {
+            Status::BlewUp
+        };
+        summary.t_end = survived;
+        let late = completed.then_some(30.0);
+        summary
+            .metrics
+            .figures
+            .insert("hydro_rel_rms_late".into(), late);
+        RecordedRun {
+            summary,
+            figures: BehaviourFigures {
+                blow_out_steps: None,
+                survived,
+                survived_to_end: completed,
+                early_checkerboard: Some(cb),
+            },
+        }
+    }
+
+    /// Two configurations over 2 K x 2 viscosities x 2 members: `musl`'s
+    /// inviscid runs fail first and it checkerboards at 1.5 MPa (behaviours
+    /// 3 and 4), `usl` survives far from hydrostatic at 1.5 MPa (2).
+    fn recorded_matrix() -> Vec<RecordedRun> {
+        let mut runs = vec![];
+        for seed in 0..2 {
+            for (k, mu) in [(1.5e4, 0.0), (1.5e4, 0.5), (1.5e6, 0.0), (1.5e6, 0.5)] {
+                let high = k > 1e6;
+                let musl_end = if mu > 0.0 { 3.0 } else { 1.0 + seed as f64 };
+                let musl_cb = if high { 0.5 } else { 0.05 };
+                runs.push(recorded("musl", k, mu, seed, musl_end, musl_cb));
+                runs.push(recorded("usl", k, mu, seed, 5.0, 0.05));
+            }
+        }
+        runs
+    }
+
+    /// The table scores recorded runs (no run folder left) by their
+    /// figures, and the record it writes reads back as the same runs.
+    #[test]
+    fn recorded_runs_are_scored_without_their_folders_and_round_trip() {
+        let runs = recorded_matrix();
+        let m = Matrix {
+            recorded_runs: runs.clone(),
+            ..Matrix::of(vec![])
+        };
+        let scored = ScoredRuns::of(&m);
+        assert_eq!((scored.recorded, scored.figures.len()), (16, 16));
+        let mut page = Page::default();
+        behaviours_by_configuration(&scored, &mut page);
+        let html = page.finish("t");
+        assert!(
+            html.contains("Closest to the bug report: <b>scheme=musl</b> (2 of 4"),
+            "{html}"
+        );
+        assert!(
+            html.contains("yes (4 of 4)"),
+            "usl survives at 1.5 MPa: {html}"
+        );
+        assert!(
+            html.contains("16 runs are from behaviour records"),
+            "{html}"
+        );
+        let path = std::env::temp_dir().join(format!("kick-record-{}.jsonl", std::process::id()));
+        write_record(&scored, &path).unwrap();
+        let mut back = crate::report::data::read_recorded_runs(&path).unwrap();
+        let _ = std::fs::remove_file(&path);
+        let mut expected = runs;
+        expected.sort_by(|a, b| a.summary.case.cmp(&b.summary.case));
+        back.sort_by(|a, b| a.summary.case.cmp(&b.summary.case));
+        assert_eq!(back, expected);
+    }
+
+    /// A record line that is not a run names the file and the line.
+    #[test]
+    fn a_bad_record_line_names_its_file_and_line() {
+        let path =
+            std::env::temp_dir().join(format!("kick-bad-record-{}.jsonl", std::process::id()));
+        let good = serde_json::to_string(&recorded("usl", 1.5e4, 0.0, 0, 5.0, 0.05)).unwrap();
+        std::fs::write(&path, format!("{good}\n{{\"summary\": 1}}\n")).unwrap();
+        let e = crate::report::data::read_recorded_runs(&path).unwrap_err();
+        let _ = std::fs::remove_file(&path);
+        assert!(
+            e.contains(&path.display().to_string()) && e.contains("line 2"),
+            "{e}"
+        );
     }
 
     /// Rows every 0.01 s at dt = 1e-3 s (10 steps a row): one particle

@@ -375,6 +375,7 @@ mod tests {
         let mut m = Matrix {
             reference_rows: reference,
             baseline_case: None,
+            recorded_runs: vec![],
             axes: vec![ParamKey::Method("transfer".into())],
             rows,
         };
@@ -480,6 +481,7 @@ mod tests {
         let m = Matrix {
             reference_rows: vec![],
             baseline_case: None,
+            recorded_runs: vec![],
             axes: vec![
                 ParamKey::Method("transfer".into()),
                 ParamKey::Material {
@@ -510,6 +512,7 @@ mod tests {
         let mut m = Matrix {
             reference_rows: vec![],
             baseline_case: None,
+            recorded_runs: vec![],
             axes: vec![ParamKey::Method("transfer".into())],
             rows: vec![
                 run("apic", Some((0.2, 0.3)), vec![]),
@@ -536,6 +539,7 @@ mod tests {
         let m = Matrix {
             reference_rows: vec![],
             baseline_case: None,
+            recorded_runs: vec![],
             axes: vec![ParamKey::Method("transfer".into())],
             rows: vec![
                 run("pic", Some((0.05, 0.01)), vec![event(Cause::Impact)]),

@@ -23,7 +23,7 @@ pub mod stability;
 pub mod verdict;
 
 use crate::report::case::case_report;
-use crate::report::data::Matrix;
+use crate::report::data::{Matrix, RecordedRun};
 use crate::report::html::Page;
 use crate::report::plot::{err, Res};
 use std::path::{Path, PathBuf};
@@ -109,9 +109,15 @@ pub const MATRIX_SECTIONS: &[Section] = &[
 ];
 
 /// The matrix page (and every case's page); returns its path.
-pub fn matrix_report(dir: &Path, yardsticks: &[PathBuf], baseline: Option<&str>) -> Res<PathBuf> {
+pub fn matrix_report(
+    dir: &Path,
+    yardsticks: &[PathBuf],
+    baseline: Option<&str>,
+    recorded_runs: Vec<RecordedRun>,
+) -> Res<PathBuf> {
     let out = dir.join("report");
     let mut m = Matrix::read(dir)?;
+    m.recorded_runs = recorded_runs;
     if let Some(name) = baseline {
         if !m.rows.iter().any(|r| r.case() == name) {
             return Err(format!("--baseline {name}: no such case in the matrix"));
