@@ -10,6 +10,7 @@ pub const METHOD_KEYS: &[&str] = &[
     "shape",
     "transfer",
     "flip_alpha",
+    "gradient_enhanced",
     "scheme",
     "cfl",
     "dt",

@@ -231,6 +231,11 @@ pub struct Method {
     pub transfer: TransferKind,
     /// FLIP fraction of the FLIP/PIC blend (1 = pure FLIP).
     pub flip_alpha: f64,
+    /// Uintah's gradient-enhanced velocity projection
+    /// (`UseGradientEnhancedVelocityProjection`): FLIP's P2G carries
+    /// m (v_p + L_p (x_i - x_p)), with L_p the velocity gradient of the
+    /// particle's last G2P; the G2P stays FLIP. FLIP and explicit only.
+    pub gradient_enhanced: bool,
     pub scheme: SchemeKind,
     /// Courant number of the time step.
     pub cfl: f64,
@@ -269,6 +274,7 @@ impl Default for Method {
             shape: ShapeKind::Linear,
             transfer: TransferKind::Flip,
             flip_alpha: 1.0,
+            gradient_enhanced: false,
             scheme: SchemeKind::Usf,
             cfl: 0.2,
             dt: DtMode::Fixed,
@@ -612,6 +618,16 @@ impl SolverConfig {
         self.validate_scene()?;
         let m = &self.method;
         within(m.flip_alpha, 0.0, 1.0, "method.flip_alpha")?;
+        if m.gradient_enhanced {
+            check(
+                m.transfer == TransferKind::Flip && m.formulation == Formulation::Explicit,
+                "method.gradient_enhanced",
+                format!(
+                    "true needs method.transfer = \"flip\" and the explicit formulation (got {:?}, {:?})",
+                    m.transfer, m.formulation
+                ),
+            )?;
+        }
         within(m.cfl, 1e-4, 1.0, "method.cfl")?;
         if let Some(dt) = m.dt_value {
             within(dt, 1e-12, 1.0, "method.dt_value")?;

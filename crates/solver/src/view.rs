@@ -47,6 +47,9 @@ pub struct StateView<'a> {
     /// Force-driven acceleration of the last step (FLIP's exact increment over
     /// dt, walls applied, plus `[[perturb]]` impulses over dt).
     pub accel: &'a [Vec2],
+    /// APIC's affine velocity C, or a gradient-enhanced FLIP's last L
+    /// (zero otherwise).
+    pub affine: &'a [Mat2],
     pub mass: &'a [f64],
     pub volume: &'a [f64],
     pub volume0: &'a [f64],
@@ -128,6 +131,7 @@ pub fn make(s: &Solver) -> StateView<'_> {
         v: &ps.v,
         v_prev: &ps.v_prev,
         accel: &ps.accel,
+        affine: &ps.affine,
         mass: &ps.mass,
         volume: &ps.vol,
         volume0: &ps.vol0,

@@ -17,6 +17,9 @@ pub struct Transfer {
     /// Move the particles with the bilinear element's velocity (the
     /// pressure-implicit step's `advection = "bilinear"`), not the shapes'.
     pub bilinear_advection: bool,
+    /// FLIP keeps the velocity gradient sum v_i grad N_i^T in `affine`
+    /// for the next P2G (`Method::gradient_enhanced`).
+    pub gradient_enhanced: bool,
 }
 
 /// How G2P sets particle velocities, fixed per run so the loop carries no branches.
@@ -26,6 +29,8 @@ const FLIP: u8 = 1;
 const APIC_SPLINE: u8 = 2;
 /// APIC with multilinear/GIMP: C = sum v grad N^T (= B D^-1 for linear).
 const APIC_GRADIENT: u8 = 3;
+/// FLIP that keeps L = sum v grad N^T for a gradient-enhanced P2G.
+const FLIP_GRADIENT: u8 = 4;
 
 pub fn g2p(
     particles: &mut Particles,
@@ -37,6 +42,7 @@ pub fn g2p(
 ) {
     let mode = match transfer.kind {
         TransferKind::Pic => PIC,
+        TransferKind::Flip if transfer.gradient_enhanced => FLIP_GRADIENT,
         TransferKind::Flip if transfer.flip_alpha > 0.0 => FLIP,
         TransferKind::Flip => PIC,
         // The particle velocity is S v* already: FLIP's increment on top.
@@ -47,6 +53,7 @@ pub fn g2p(
     crate::shapes::with_width!(shape, W => match mode {
         PIC => run::<W, PIC>(particles, stencils, grid, shape, transfer, dt),
         FLIP => run::<W, FLIP>(particles, stencils, grid, shape, transfer, dt),
+        FLIP_GRADIENT => run::<W, FLIP_GRADIENT>(particles, stencils, grid, shape, transfer, dt),
         APIC_SPLINE => run::<W, APIC_SPLINE>(particles, stencils, grid, shape, transfer, dt),
         _ => run::<W, APIC_GRADIENT>(particles, stencils, grid, shape, transfer, dt),
     })
@@ -81,13 +88,15 @@ fn run<const W: usize, const MODE: u8>(
         .for_each(|(x, v, affine, accel, st)| {
             let Gathered { v_pic, dv, b0, b1 } = gather::<W, MODE>(shape, st, vel, vel_new, nx);
             *accel = dv * inv_dt;
-            *v = if MODE == FLIP {
+            *v = if MODE == FLIP || MODE == FLIP_GRADIENT {
                 alpha * (*v + dv) + (1.0 - alpha) * v_pic
             } else {
                 v_pic
             };
             if MODE == APIC_SPLINE || MODE == APIC_GRADIENT {
                 *affine = Mat2::from_columns(&[b0, b1]) * c_scale;
+            } else if MODE == FLIP_GRADIENT {
+                *affine = Mat2::from_columns(&[b0, b1]) * inv_h;
             }
             *x += dt
                 * if transfer.bilinear_advection {
@@ -138,7 +147,7 @@ fn gather<const W: usize, const MODE: u8>(
             sd += wx[a] * (vn - vel[row + a]);
             match MODE {
                 APIC_SPLINE => s1 += (wx[a] * a as f64) * vn,
-                APIC_GRADIENT => s1 += dwx[a] * vn,
+                APIC_GRADIENT | FLIP_GRADIENT => s1 += dwx[a] * vn,
                 _ => {}
             }
         }
@@ -149,7 +158,7 @@ fn gather<const W: usize, const MODE: u8>(
                 b0 += wy[c] * (s1 - fx * s0);
                 b1 += (wy[c] * (c as f64 - fy)) * s0;
             }
-            APIC_GRADIENT => {
+            APIC_GRADIENT | FLIP_GRADIENT => {
                 b0 += wy[c] * s1;
                 b1 += dwy[c] * s0;
             }

@@ -212,7 +212,7 @@ fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
         stencils: &s.stencils,
         shape: &s.shape,
         bins: &s.bins,
-        affine: s.cfg.method.transfer == TransferKind::Apic,
+        affine: s.cfg.method.transfer == TransferKind::Apic || s.cfg.method.gradient_enhanced,
         mls: match s.cfg.method.force {
             ForceKind::Mls => s.shape.apic_inverse_inertia(),
             ForceKind::Gradient => None,
@@ -297,6 +297,7 @@ fn g2p(s: &mut Solver, clock: &mut Instant) {
         },
         bilinear_advection: s.implicit()
             && s.cfg.method.projection.advection == crate::config::Advection::Bilinear,
+        gradient_enhanced: s.cfg.method.gradient_enhanced,
     };
     g2p::g2p(
         &mut s.particles,

@@ -1,8 +1,9 @@
 //! The details of Uintah's explicit MPM that the faithful replica
 //! (studies/faithful.toml, docs/physics.md section 5b) switches on: the
 //! per-axis time step from the step-start velocity (the first step from
-//! sqrt(K / rho0)), the substepped F update, and the deletion of particles
-//! whose J passes `scene.max_j`.
+//! sqrt(K / rho0)), the substepped F update, the deletion of particles
+//! whose J passes `scene.max_j`, and the gradient-enhanced velocity
+//! projection.
 
 use crate::common;
 
@@ -255,4 +256,104 @@ fn a_thin_slab_sets_the_per_axis_step_through_its_z_axis() {
     let mut bad = column(uintah_method(), [0.0, 0.0]).config().clone();
     bad.scene.slab = Some(0.0);
     assert_eq!(Solver::new(bad).err().unwrap().key, "scene.slab");
+}
+
+/// A block of particles, 2 x 2 a cell at the sub-cell centres, carrying
+/// v = A x + b and, as a G2P of that field leaves it, L = A; no stress
+/// and no gravity, so the grid keeps the projected velocity.
+fn affine_block(shape: ShapeKind, gradient_enhanced: bool, a: Mat2, b: Vec2) -> Solver {
+    let scene = common::box_scene([0.3, 0.3], [0.1, 0.1, 0.2, 0.2], Material::new(1.5e5), 0.0);
+    let method = Method {
+        gradient_enhanced,
+        dt_value: Some(1e-5),
+        ..common::method(shape, TransferKind::Flip, SchemeKind::Usl)
+    };
+    let mut ps = particles::Particles::default();
+    let q = 0.005;
+    for i in 0..20 {
+        for j in 0..20 {
+            let x = Vec2::new(0.1 + q * (i as f64 + 0.5), 0.1 + q * (j as f64 + 0.5));
+            ps.push(x, a * x + b, 0.025, q * q, 0);
+            ps.affine[i * 20 + j] = a;
+        }
+    }
+    let cfg = SolverConfig {
+        scene,
+        method,
+        perturb: vec![],
+    };
+    Solver::with_particles(cfg, ps)
+}
+
+/// Uintah's `UseGradientEnhancedVelocityProjection`: P2G of
+/// m (v_p + L_p (x_i - x_p)) gives every node the affine field's own
+/// velocity A x_i + b, where the plain FLIP projection of the same field
+/// misses it at the block's edge; the FLIP G2P then keeps v and recovers
+/// L = A at every particle (sum x_i grad N_i^T = I).
+#[test]
+fn the_gradient_enhanced_projection_carries_an_affine_field_exactly() {
+    let (a, b) = (Mat2::new(0.7, -1.3, 2.1, -0.4), Vec2::new(0.25, -0.6));
+    for shape in [ShapeKind::Linear, ShapeKind::Gimp] {
+        let mut errors = [0.0; 2];
+        for (k, enhanced) in [false, true].into_iter().enumerate() {
+            let mut s = affine_block(shape, enhanced, a, b);
+            for stage in [Stage::Sort, Stage::P2g, Stage::Grid] {
+                s.run_stage(stage).unwrap();
+            }
+            let view = s.view();
+            let g = view.grid;
+            // GIMP's stencil marks nodes its particle does not reach: no mass, no velocity.
+            for n in g
+                .active
+                .iter()
+                .map(|&n| n as usize)
+                .filter(|&n| g.mass[n] > 0.0)
+            {
+                let x_i = g.padded_origin
+                    + g.h * Vec2::new((n % g.dims[0]) as f64, (n / g.dims[0]) as f64);
+                errors[k] = f64::max(errors[k], (g.velocity[n] - (a * x_i + b)).norm());
+            }
+        }
+        let scale = a.norm() * 0.3 + b.norm();
+        assert!(
+            errors[1] <= 1e-12 * scale,
+            "{shape:?}: enhanced error {}",
+            errors[1]
+        );
+        assert!(
+            errors[0] >= 1e-3 * scale,
+            "{shape:?}: plain FLIP error {}",
+            errors[0]
+        );
+        let mut s = affine_block(shape, true, a, b);
+        let v0 = s.view().v.to_vec();
+        for stage in [Stage::Sort, Stage::P2g, Stage::Grid, Stage::G2p] {
+            s.run_stage(stage).unwrap();
+        }
+        let view = s.view();
+        for p in 0..view.x.len() {
+            assert!(
+                (view.affine[p] - a).norm() <= 1e-11 * a.norm(),
+                "{shape:?} p {p}: L {}",
+                view.affine[p]
+            );
+            assert!(
+                (view.v[p] - v0[p]).norm() <= 1e-12 * scale,
+                "{shape:?} p {p}"
+            );
+        }
+    }
+}
+
+/// The switch belongs to FLIP's explicit projection: refused with APIC.
+#[test]
+fn the_gradient_enhanced_projection_is_refused_with_apic() {
+    let mut cfg = SolverConfig {
+        scene: common::box_scene([0.3, 0.3], [0.1, 0.1, 0.2, 0.2], Material::new(1.5e5), 0.0),
+        method: common::method(ShapeKind::Gimp, TransferKind::Apic, SchemeKind::Usl),
+        perturb: vec![],
+    };
+    cfg.method.gradient_enhanced = true;
+    let e = cfg.validate().unwrap_err().to_string();
+    assert!(e.contains("method.gradient_enhanced"), "{e}");
 }
