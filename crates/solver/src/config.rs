@@ -234,7 +234,10 @@ pub struct Method {
     /// Uintah's gradient-enhanced velocity projection
     /// (`UseGradientEnhancedVelocityProjection`): FLIP's P2G carries
     /// m (v_p + L_p (x_i - x_p)), with L_p the velocity gradient of the
-    /// particle's last G2P; the G2P stays FLIP. FLIP and explicit only.
+    /// particle's last G2P; the G2P stays FLIP. FLIP, USL and explicit
+    /// only. Left out of the serialisation when off, so that the methods
+    /// written before it keep their identity.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub gradient_enhanced: bool,
     pub scheme: SchemeKind,
     /// Courant number of the time step.
@@ -289,6 +292,24 @@ impl Default for Method {
             remedies: RemedySettings::default(),
         }
     }
+}
+
+/// The gradient-enhanced projection as Uintah runs it: FLIP, USL (its L
+/// is the one the F update used only there), explicit.
+fn validate_gradient_enhanced(m: &Method) -> Result<(), ConfigError> {
+    if !m.gradient_enhanced {
+        return Ok(());
+    }
+    check(
+        m.transfer == TransferKind::Flip
+            && m.scheme == SchemeKind::Usl
+            && m.formulation == Formulation::Explicit,
+        "method.gradient_enhanced",
+        format!(
+            "true needs method.transfer = \"flip\", method.scheme = \"usl\" and the explicit formulation (got {:?}, {:?}, {:?})",
+            m.transfer, m.scheme, m.formulation
+        ),
+    )
 }
 
 fn is_explicit(f: &Formulation) -> bool {
@@ -618,16 +639,7 @@ impl SolverConfig {
         self.validate_scene()?;
         let m = &self.method;
         within(m.flip_alpha, 0.0, 1.0, "method.flip_alpha")?;
-        if m.gradient_enhanced {
-            check(
-                m.transfer == TransferKind::Flip && m.formulation == Formulation::Explicit,
-                "method.gradient_enhanced",
-                format!(
-                    "true needs method.transfer = \"flip\" and the explicit formulation (got {:?}, {:?})",
-                    m.transfer, m.formulation
-                ),
-            )?;
-        }
+        validate_gradient_enhanced(m)?;
         within(m.cfl, 1e-4, 1.0, "method.cfl")?;
         if let Some(dt) = m.dt_value {
             within(dt, 1e-12, 1.0, "method.dt_value")?;

@@ -47,8 +47,8 @@ pub struct StateView<'a> {
     /// Force-driven acceleration of the last step (FLIP's exact increment over
     /// dt, walls applied, plus `[[perturb]]` impulses over dt).
     pub accel: &'a [Vec2],
-    /// APIC's affine velocity C, or a gradient-enhanced FLIP's last L
-    /// (zero otherwise).
+    /// APIC's affine velocity C, or a gradient-enhanced FLIP's last L (an
+    /// initial flow's gradient before the first step; else zero).
     pub affine: &'a [Mat2],
     pub mass: &'a [f64],
     pub volume: &'a [f64],

@@ -212,7 +212,11 @@ fn p2g(s: &mut Solver, terms: Terms, clock: &mut Instant) {
         stencils: &s.stencils,
         shape: &s.shape,
         bins: &s.bins,
-        affine: s.cfg.method.transfer == TransferKind::Apic || s.cfg.method.gradient_enhanced,
+        affine: match s.cfg.method.transfer {
+            TransferKind::Apic => true,
+            TransferKind::Flip => s.cfg.method.gradient_enhanced,
+            _ => false,
+        },
         mls: match s.cfg.method.force {
             ForceKind::Mls => s.shape.apic_inverse_inertia(),
             ForceKind::Gradient => None,

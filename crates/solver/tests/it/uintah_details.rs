@@ -331,29 +331,33 @@ fn the_gradient_enhanced_projection_carries_an_affine_field_exactly() {
             s.run_stage(stage).unwrap();
         }
         let view = s.view();
-        for p in 0..view.x.len() {
-            assert!(
-                (view.affine[p] - a).norm() <= 1e-11 * a.norm(),
-                "{shape:?} p {p}: L {}",
-                view.affine[p]
-            );
-            assert!(
-                (view.v[p] - v0[p]).norm() <= 1e-12 * scale,
-                "{shape:?} p {p}"
-            );
+        assert_eq!(view.affine.len(), v0.len());
+        for (p, (l, (v, v0))) in view.affine.iter().zip(view.v.iter().zip(&v0)).enumerate() {
+            assert!((l - a).norm() <= 1e-11 * a.norm(), "{shape:?} p {p}: L {l}");
+            assert!((v - v0).norm() <= 1e-12 * scale, "{shape:?} p {p}");
         }
     }
 }
 
-/// The switch belongs to FLIP's explicit projection: refused with APIC.
+/// The switch belongs to FLIP's explicit USL step: refused with APIC and
+/// with MUSL (whose second P2G would carry the new L too).
 #[test]
-fn the_gradient_enhanced_projection_is_refused_with_apic() {
-    let mut cfg = SolverConfig {
-        scene: common::box_scene([0.3, 0.3], [0.1, 0.1, 0.2, 0.2], Material::new(1.5e5), 0.0),
-        method: common::method(ShapeKind::Gimp, TransferKind::Apic, SchemeKind::Usl),
-        perturb: vec![],
-    };
-    cfg.method.gradient_enhanced = true;
-    let e = cfg.validate().unwrap_err().to_string();
-    assert!(e.contains("method.gradient_enhanced"), "{e}");
+fn the_gradient_enhanced_projection_is_refused_off_flips_usl() {
+    for (transfer, scheme) in [
+        (TransferKind::Apic, SchemeKind::Usl),
+        (TransferKind::Flip, SchemeKind::Musl),
+    ] {
+        let mut cfg = SolverConfig {
+            scene: common::box_scene([0.3, 0.3], [0.1, 0.1, 0.2, 0.2], Material::new(1.5e5), 0.0),
+            method: common::method(ShapeKind::Gimp, transfer, scheme),
+            perturb: vec![],
+        };
+        assert!(
+            cfg.validate().is_ok(),
+            "{transfer:?} {scheme:?} without the switch"
+        );
+        cfg.method.gradient_enhanced = true;
+        let e = cfg.validate().unwrap_err().to_string();
+        assert!(e.contains("method.gradient_enhanced"), "{e}");
+    }
 }

@@ -289,26 +289,34 @@ pub struct RecordedRun {
 pub fn read_recorded_runs(path: &Path) -> Res<Vec<RecordedRun>> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let mut runs = vec![];
+    // The version first, so that an older record says so rather than
+    // naming the field it lacks.
+    #[derive(Deserialize)]
+    struct Version {
+        schema_version: Option<u32>,
+    }
+    #[derive(Deserialize)]
+    struct Versioned {
+        summary: Version,
+    }
     for (i, line) in text
         .lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())
     {
-        let run: RecordedRun = serde_json::from_str(line).map_err(|e| {
-            format!(
-                "{}: line {}: not a recorded run: {e}",
-                path.display(),
-                i + 1
-            )
-        })?;
-        if run.summary.schema_version != SCHEMA_VERSION {
+        let at = format!("{}: line {}", path.display(), i + 1);
+        let version = serde_json::from_str::<Versioned>(line)
+            .map_err(|e| format!("{at}: not a recorded run: {e}"))?
+            .summary
+            .schema_version;
+        if version != Some(SCHEMA_VERSION) {
             return Err(format!(
-                "{}: line {}: schema_version {} is not {SCHEMA_VERSION} (written by another kick version: run the case again)",
-                path.display(),
-                i + 1,
-                run.summary.schema_version
+                "{at}: schema_version {} is not {SCHEMA_VERSION} (written by another kick version: run the case again)",
+                version.map_or("missing".into(), |v| v.to_string())
             ));
         }
+        let run: RecordedRun =
+            serde_json::from_str(line).map_err(|e| format!("{at}: not a recorded run: {e}"))?;
         runs.push(run);
     }
     Ok(runs)

@@ -185,7 +185,11 @@ fn changes(method: &Method) -> Vec<(String, Change)> {
     } else {
         (
             "xpic on",
-            overrides(&["method.transfer=\"xpic\"", "method.xpic_order=5"]),
+            overrides(&[
+                "method.transfer=\"xpic\"",
+                "method.xpic_order=5",
+                "method.gradient_enhanced=false",
+            ]),
         )
     };
     let remedies = remedy_keys(method);
@@ -197,7 +201,10 @@ fn changes(method: &Method) -> Vec<(String, Change)> {
     };
     vec![
         ("unchanged".into(), Change::Overrides(vec![])),
-        ("pic".into(), overrides(&["method.transfer=\"pic\""])),
+        (
+            "pic".into(),
+            overrides(&["method.transfer=\"pic\"", "method.gradient_enhanced=false"]),
+        ),
         (
             "flip 0.99".into(),
             overrides(&["method.transfer=\"flip\"", "method.flip_alpha=0.99"]),
@@ -248,6 +255,7 @@ fn pressure_implicit(method: &Method) -> Method {
         remedies: Default::default(),
         dt_value: None,
         dt_min: None,
+        gradient_enhanced: false,
         ..method.clone()
     }
 }

@@ -10,7 +10,7 @@ use crate::report::plot::{err, short, Res};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use study::output::files::write_atomic;
-use study::output::summary::Status;
+use study::output::summary::{Status, Summary};
 
 /// The behaviour record a matrix report writes (in its `report` folder):
 /// every run the per-configuration table scored, one JSON line each, for
@@ -136,6 +136,9 @@ pub struct ScoredRuns {
     pub figures: BTreeMap<String, BehaviourFigures>,
     /// How many of them came from a record.
     pub recorded: usize,
+    /// What may make the grouping wrong: recorded cases whose name a live
+    /// case has with other parameters, keys only some runs carry.
+    pub warnings: Vec<String>,
 }
 
 impl ScoredRuns {
@@ -149,20 +152,61 @@ impl ScoredRuns {
                 summaries.push((r.dir.clone(), r.summary.clone()));
             }
         }
-        let mut recorded = 0;
+        let (mut recorded, mut clashes) = (0, vec![]);
         for run in &m.recorded_runs {
-            if !figures.contains_key(&run.summary.case) {
-                figures.insert(run.summary.case.clone(), run.figures.clone());
+            let case = &run.summary.case;
+            if let Some((_, live)) = summaries.iter().find(|(_, s)| &s.case == case) {
+                if live.params != run.summary.params {
+                    clashes.push(case.clone());
+                }
+            } else {
+                figures.insert(case.clone(), run.figures.clone());
                 summaries.push((PathBuf::new(), run.summary.clone()));
                 recorded += 1;
             }
+        }
+        let mut warnings = vec![];
+        if !clashes.is_empty() {
+            warnings.push(format!(
+                "{} recorded runs were left out for a live case of the same name with other parameters: {}.",
+                clashes.len(),
+                clashes.join(", ")
+            ));
+        }
+        if let Some(w) = keys_some_lack(&summaries) {
+            warnings.push(w);
         }
         ScoredRuns {
             matrix: Matrix::of(summaries),
             figures,
             recorded,
+            warnings,
         }
     }
+}
+
+/// The parameters (other than the method's, which read as their default
+/// when absent) that some runs carry and others lack, as a warning: an
+/// older build did not write them, they read as empty there, and a
+/// configuration may split in two rows.
+fn keys_some_lack(summaries: &[(PathBuf, Summary)]) -> Option<String> {
+    let mut seen: BTreeMap<&str, usize> = BTreeMap::new();
+    for (_, s) in summaries {
+        for k in s.params.keys() {
+            *seen.entry(k.as_str()).or_default() += 1;
+        }
+    }
+    let partial: Vec<&str> = seen
+        .into_iter()
+        .filter(|(k, n)| *n < summaries.len() && !k.starts_with("method."))
+        .map(|(k, _)| k)
+        .collect();
+    (!partial.is_empty()).then(|| {
+        format!(
+            "Only some of the runs carry {} (written by builds apart): where absent it reads as empty, which may split a configuration into two rows.",
+            partial.join(", ")
+        )
+    })
 }
 
 /// Writes `path`: one `RecordedRun` a line (events left out), by case.
@@ -172,6 +216,9 @@ fn write_record(scored: &ScoredRuns, path: &Path) -> Res {
         let Some(r) = scored.matrix.rows.iter().find(|r| r.case() == case) else {
             continue;
         };
+        if !figures.survived.is_finite() {
+            continue;
+        }
         let mut summary = r.summary.clone();
         summary.events.clear();
         let run = RecordedRun {
@@ -181,10 +228,11 @@ fn write_record(scored: &ScoredRuns, path: &Path) -> Res {
         text.push_str(&serde_json::to_string(&run).map_err(err)?);
         text.push('\n');
     }
+    let named = |e: std::io::Error| format!("{}: {e}", path.display());
     if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).map_err(err)?;
+        std::fs::create_dir_all(dir).map_err(named)?;
     }
-    write_atomic(path, text.as_bytes()).map_err(err)
+    write_atomic(path, text.as_bytes()).map_err(named)
 }
 
 /// Behaviour 1, small K: a kick that blows most particles out within a few steps.
@@ -504,6 +552,12 @@ pub fn behaviours_by_configuration(scored: &ScoredRuns, page: &mut Page) {
         scored.recorded,
         scored.figures.len()
     ));
+    for w in &scored.warnings {
+        page.p(&format!(
+            "<b>Warning:</b> {}",
+            crate::report::html::escape(w)
+        ));
+    }
     page.table("behaviours_by_configuration", &headers, &rows);
     if let Some((held, _, name)) = best {
         page.p(&format!(
@@ -784,6 +838,41 @@ mod tests {
         expected.sort_by(|a, b| a.summary.case.cmp(&b.summary.case));
         back.sort_by(|a, b| a.summary.case.cmp(&b.summary.case));
         assert_eq!(back, expected);
+    }
+
+    /// A case recorded twice counts once; with other parameters the second
+    /// is left out with a warning, and a key only some runs carry is named.
+    #[test]
+    fn a_case_recorded_twice_counts_once_and_mismatches_are_named() {
+        let mut runs = recorded_matrix();
+        runs.push(runs[0].clone());
+        let mut other = runs[1].clone();
+        other
+            .summary
+            .params
+            .insert("method.cfl".into(), serde_json::json!(0.4));
+        runs.push(other);
+        runs[2]
+            .summary
+            .params
+            .insert("scene.on_nonfinite".into(), serde_json::json!("stop"));
+        let m = Matrix {
+            recorded_runs: runs,
+            ..Matrix::of(vec![])
+        };
+        let scored = ScoredRuns::of(&m);
+        assert_eq!((scored.recorded, scored.matrix.rows.len()), (16, 16));
+        assert_eq!(scored.warnings.len(), 2, "{:?}", scored.warnings);
+        assert!(
+            scored.warnings[0].starts_with("1 recorded runs"),
+            "{:?}",
+            scored.warnings
+        );
+        assert!(
+            scored.warnings[1].contains("scene.on_nonfinite"),
+            "{:?}",
+            scored.warnings
+        );
     }
 
     /// A record line that is not a run names the file and the line.
