@@ -369,8 +369,8 @@ pub const BLOW_OUT_ONSET: f64 = 0.01;
 /// the first row where `BLOW_OUT_ONSET` of the particles are gone. Not
 /// the first kick: under the calibrated detector a surge meeting the far
 /// wall opens one at 0.2-0.3 s in runs that fail seconds later, and the
-/// bug report's run "ends in" its kick.
-fn blow_out_kick(r: &Row, t: &[f64], lost: &[f64]) -> Option<f64> {
+/// bug report's run "ends in" its kick. Its time and first step.
+fn blow_out_kick(r: &Row, t: &[f64], lost: &[f64]) -> Option<(f64, u64)> {
     let n = r.summary.particles as f64;
     let onset = t
         .iter()
@@ -381,33 +381,31 @@ fn blow_out_kick(r: &Row, t: &[f64], lost: &[f64]) -> Option<f64> {
         .events
         .iter()
         .filter(|e| e.is_kick() && e.t <= onset)
-        .map(|e| e.t)
-        .reduce(f64::max)
+        .max_by(|a, b| a.t.total_cmp(&b.t))
+        .map(|e| (e.t, e.first_step))
 }
 
 /// Steps from the kick that began the blow-out to the first row where
-/// half of the particles are gone (each row's span over its time step);
-/// None without that kick or without losing half.
-fn blow_out_steps(r: &Row, t: &[f64], dt: &[f64], lost: &[f64]) -> Option<f64> {
-    let tk = blow_out_kick(r, t, lost)?;
+/// half of the particles are gone, counted by the rows' step numbers
+/// (not each row's span over its last step, which a step collapsing
+/// within the row inflated without bound); None without that kick or
+/// without losing half.
+fn blow_out_steps(r: &Row, t: &[f64], step: &[f64], lost: &[f64]) -> Option<f64> {
+    let (tk, kick_step) = blow_out_kick(r, t, lost)?;
     let n = r.summary.particles as f64;
-    let mut steps = 0.0;
-    for i in 1..t.len() {
-        if t[i] > tk {
-            steps += (t[i] - t[i - 1].max(tk)) / dt[i].max(1e-300);
-        }
-        if lost[i] >= 0.5 * n {
-            return Some(steps);
-        }
-    }
-    None
+    let i = (0..t.len()).find(|&i| lost[i] >= 0.5 * n)?;
+    Some(if t[i] > tk {
+        (step[i] - kick_step as f64).max(0.0)
+    } else {
+        0.0
+    })
 }
 
 /// `blow_out_steps` from the case's timeseries.
 fn blow_out_steps_of(r: &Row) -> Option<f64> {
     let df = read_parquet(&r.dir.join("timeseries.parquet")).ok()?;
-    let (t, dt) = (f64_column(&df, "t")?, f64_column(&df, "dt")?);
-    blow_out_steps(r, &t, &dt, &f64_column(&df, "particles_lost")?)
+    let (t, step) = (f64_column(&df, "t")?, f64_column(&df, "step")?);
+    blow_out_steps(r, &t, &step, &f64_column(&df, "particles_lost")?)
 }
 /// Behaviour 2 per run: a late hydrostatic departure of at least this.
 pub const LATE_DEPARTURE: f64 = 1.0;
@@ -438,7 +436,7 @@ struct RunFigures {
 fn measured_figures(r: &Row, t_end: f64) -> Option<BehaviourFigures> {
     let df = read_parquet(&r.dir.join("timeseries.parquet")).ok()?;
     let t = f64_column(&df, "t")?;
-    let dt = f64_column(&df, "dt")?;
+    let step = f64_column(&df, "step")?;
     let lost = f64_column(&df, "particles_lost")?;
     let mass_lost = f64_column(&df, "mass_lost_fraction")?;
     let loss_at = t
@@ -448,7 +446,7 @@ fn measured_figures(r: &Row, t_end: f64) -> Option<BehaviourFigures> {
         .map(|(t, _)| *t);
     let end = r.summary.t_end;
     Some(BehaviourFigures {
-        blow_out_steps: blow_out_steps(r, &t, &dt, &lost),
+        blow_out_steps: blow_out_steps(r, &t, &step, &lost),
         survived: loss_at.unwrap_or(end),
         survived_to_end: loss_at.is_none()
             && r.summary.status == Status::Completed
@@ -726,6 +724,8 @@ mod tests {
             .map(|&(t, cause)| {
                 let mut e = sample_event();
                 (e.t, e.cause) = (t, cause);
+                // The rows' step: 1e-3 s a step.
+                e.first_step = (t * 1e3).round() as u64;
                 e
             })
             .collect();
@@ -890,8 +890,9 @@ mod tests {
         );
     }
 
-    /// Rows every 0.01 s at dt = 1e-3 s (10 steps a row): one particle
-    /// deleted at 0.3 s (a lone splash), 50 by 0.6 s, 600 by 0.65 s.
+    /// Rows every 0.01 s at dt = 1e-3 s (10 steps a row; the rows' step
+    /// numbers): one particle deleted at 0.3 s (a lone splash), 50 by
+    /// 0.6 s, 600 by 0.65 s.
     fn blow_out_rows() -> (Vec<f64>, Vec<f64>, Vec<f64>) {
         let t: Vec<f64> = (0..=70).map(|i| 0.01 * i as f64).collect();
         let lost = t
@@ -903,7 +904,8 @@ mod tests {
                 _ => 0.0,
             })
             .collect();
-        (t.clone(), vec![1e-3; t.len()], lost)
+        let step = t.iter().map(|t| (t * 1e3).round()).collect();
+        (t, step, lost)
     }
 
     /// The blow-out is timed from the last kick before 1 % of the particles
@@ -911,14 +913,14 @@ mod tests {
     /// 450 steps before half are gone, the kick at 0.58 s 70.
     #[test]
     fn the_blow_out_is_timed_from_the_last_kick_before_it_began() {
-        let (t, dt, lost) = blow_out_rows();
+        let (t, step, lost) = blow_out_rows();
         let early_and_late = run_with_kicks(&[(0.2, Cause::Jump), (0.58, Cause::Injection)]);
-        assert_eq!(blow_out_kick(&early_and_late, &t, &lost), Some(0.58));
-        let steps = blow_out_steps(&early_and_late, &t, &dt, &lost).unwrap();
+        assert_eq!(blow_out_kick(&early_and_late, &t, &lost), Some((0.58, 580)));
+        let steps = blow_out_steps(&early_and_late, &t, &step, &lost).unwrap();
         assert!((steps - 70.0).abs() < 1e-6, "{steps}");
         // Only the early kick: the same loss is 450 steps after it.
         let early = run_with_kicks(&[(0.2, Cause::Jump)]);
-        let steps = blow_out_steps(&early, &t, &dt, &lost).unwrap();
+        let steps = blow_out_steps(&early, &t, &step, &lost).unwrap();
         assert!((steps - 450.0).abs() < 1e-6, "{steps}");
         assert!(steps > BLOW_OUT_STEPS);
         // A kick after the blow-out began, or an event that is not a kick,
@@ -926,7 +928,18 @@ mod tests {
         let after = run_with_kicks(&[(0.62, Cause::Jump), (0.5, Cause::Impact)]);
         assert_eq!(blow_out_kick(&after, &t, &lost), None);
         // A run that never loses half has no blow-out time.
-        let (t, dt) = (&t[..65], &dt[..65]);
-        assert_eq!(blow_out_steps(&early_and_late, t, dt, &lost[..65]), None);
+        let (t65, step65) = (&t[..65], &step[..65]);
+        assert_eq!(
+            blow_out_steps(&early_and_late, t65, step65, &lost[..65]),
+            None
+        );
+        // The step collapsing within the last row (12 steps in it, not 10)
+        // counts those steps, whatever the step it ended on.
+        let mut collapsed = step.clone();
+        for s in collapsed.iter_mut().skip(65) {
+            *s += 2.0;
+        }
+        let steps = blow_out_steps(&early_and_late, &t, &collapsed, &lost).unwrap();
+        assert!((steps - 72.0).abs() < 1e-6, "{steps}");
     }
 }
