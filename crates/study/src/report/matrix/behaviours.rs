@@ -106,8 +106,9 @@ impl<'a> ByK<'a> {
 }
 
 /// The four behaviours, each with its numbers and whether this matrix
-/// reproduces it (a matrix section: `matrix::MATRIX_SECTIONS`);
-/// nothing unless K takes at least two values.
+/// reproduces it (a matrix section: `matrix::MATRIX_SECTIONS`); nothing
+/// on the page unless K takes at least two values (with the recorded
+/// runs), but the record of the scored runs is written always.
 pub fn behaviours(m: &Matrix, out: &Path, page: &mut Page) -> Res {
     let scored = ScoredRuns::of(m);
     write_record(&scored, &out.join(BEHAVIOUR_RECORD))?;
