@@ -792,8 +792,7 @@ fn report_command(args: ReportArgs) -> ExitCode {
             return bad_input(&format!("--baseline {name}: {p}"));
         }
     }
-    let mut recorded = vec![];
-    for file in &behaviour_runs {
+    if let Some(file) = behaviour_runs.first() {
         if !dir.join("summary.parquet").exists() {
             return bad_input(&format!(
                 "--behaviour-runs {}: {} is not a matrix folder (no summary.parquet)",
@@ -801,6 +800,9 @@ fn report_command(args: ReportArgs) -> ExitCode {
                 dir.display()
             ));
         }
+    }
+    let mut recorded = vec![];
+    for file in &behaviour_runs {
         match report::data::read_recorded_runs(file) {
             Ok(runs) => recorded.extend(runs),
             Err(e) => return bad_input(&format!("--behaviour-runs: {e}")),

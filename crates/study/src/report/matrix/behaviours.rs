@@ -33,13 +33,7 @@ fn param(r: &Row, is: fn(&ParamKey) -> bool) -> Option<f64> {
         .and_then(|(_, v)| v.as_f64())
 }
 
-/// Largest checkerboard index over `CHECKERBOARD_WINDOW`, from the case's timeseries.
-pub fn early_checkerboard(r: &Row) -> Option<f64> {
-    let df = read_parquet(&r.dir.join("timeseries.parquet")).ok()?;
-    early_checkerboard_of(&df)
-}
-
-/// `early_checkerboard` of a timeseries already read.
+/// Largest checkerboard index over `CHECKERBOARD_WINDOW`, of a case's timeseries.
 fn early_checkerboard_of(df: &polars::prelude::DataFrame) -> Option<f64> {
     let (t, cb) = (f64_column(df, "t")?, f64_column(df, "checkerboard_means")?);
     let (lo, hi) = CHECKERBOARD_WINDOW;
@@ -118,9 +112,9 @@ pub fn behaviours(m: &Matrix, out: &Path, page: &mut Page) -> Res {
     }
     page.h2("The four behaviours of the bug report");
     if let Some(by_k) = by_k {
-        page.p(&small_k_blows_up(&by_k));
+        page.p(&small_k_blows_up(&by_k, &scored.figures));
         page.p(&large_k_far_from_hydrostatic(&by_k));
-        page.p(&large_k_checkerboards(&by_k));
+        page.p(&large_k_checkerboards(&by_k, &scored.figures));
         if let Some(text) = less_viscosity_less_stable(m) {
             page.p(&text);
         }
@@ -210,11 +204,12 @@ fn keys_some_lack(summaries: &[(PathBuf, Summary)]) -> Option<String> {
     })
 }
 
-/// Writes `path`: one `RecordedRun` a line (events left out), by case.
+/// Writes `path`: one `RecordedRun` a line (events left out), in the
+/// matrix's row order.
 fn write_record(scored: &ScoredRuns, path: &Path) -> Res {
     let mut text = String::new();
-    for (case, figures) in &scored.figures {
-        let Some(r) = scored.matrix.rows.iter().find(|r| r.case() == case) else {
+    for r in &scored.matrix.rows {
+        let Some(figures) = scored.figures.get(r.case()) else {
             continue;
         };
         if !figures.survived.is_finite() {
@@ -237,14 +232,17 @@ fn write_record(scored: &ScoredRuns, path: &Path) -> Res {
 }
 
 /// Behaviour 1, small K: a kick that blows most particles out within a few steps.
-fn small_k_blows_up(by_k: &ByK) -> String {
+fn small_k_blows_up(by_k: &ByK, figures: &BTreeMap<String, BehaviourFigures>) -> String {
     let ByK { k_min, small, .. } = by_k;
     let blown: Vec<&Row> = small
         .iter()
         .copied()
         .filter(|r| r.summary.status == Status::BlewUp)
         .collect();
-    let steps: Vec<f64> = small.iter().filter_map(|r| blow_out_steps_of(r)).collect();
+    let steps: Vec<f64> = small
+        .iter()
+        .filter_map(|r| figures.get(r.case())?.blow_out_steps)
+        .collect();
     let quick = steps.iter().filter(|s| **s <= BLOW_OUT_STEPS).count();
     let dropped = count(small, |r| r.summary.metrics.events_dropped > 0);
     format!(
@@ -300,9 +298,12 @@ fn large_k_far_from_hydrostatic(by_k: &ByK) -> String {
 }
 
 /// Behaviour 3: larger K checkerboards immediately; the smallest K does not.
-fn large_k_checkerboards(by_k: &ByK) -> String {
-    let early =
-        |rows: &[&Row]| -> Vec<f64> { rows.iter().filter_map(|r| early_checkerboard(r)).collect() };
+fn large_k_checkerboards(by_k: &ByK, figures: &BTreeMap<String, BehaviourFigures>) -> String {
+    let early = |rows: &[&Row]| -> Vec<f64> {
+        rows.iter()
+            .filter_map(|r| figures.get(r.case())?.early_checkerboard)
+            .collect()
+    };
     let (cb_large, cb_small) = (early(&by_k.large), early(&by_k.small));
     let high = cb_large.iter().filter(|c| **c > CHECKERBOARD_HIGH).count();
     let low = cb_small.iter().filter(|c| **c < CHECKERBOARD_LOW).count();
@@ -402,12 +403,6 @@ fn blow_out_steps(r: &Row, t: &[f64], step: &[f64], lost: &[f64]) -> Option<f64>
     })
 }
 
-/// `blow_out_steps` from the case's timeseries.
-fn blow_out_steps_of(r: &Row) -> Option<f64> {
-    let df = read_parquet(&r.dir.join("timeseries.parquet")).ok()?;
-    let (t, step) = (f64_column(&df, "t")?, f64_column(&df, "step")?);
-    blow_out_steps(r, &t, &step, &f64_column(&df, "particles_lost")?)
-}
 /// Behaviour 2 per run: a late hydrostatic departure of at least this.
 pub const LATE_DEPARTURE: f64 = 1.0;
 /// A run survives while it has lost less than this share of its mass (the
