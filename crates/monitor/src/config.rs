@@ -23,6 +23,19 @@ pub struct MonitorConfig {
     /// where the particle was slower than `quiet_speed` at the window's
     /// start and moved at most 2 cells over it.
     pub windowed_jumps: bool,
+    /// Judge every particle over the window, moving or not, against the
+    /// ring of the cell it started the window in, in the window's start
+    /// configuration (its material neighbours, followed by id): the same
+    /// instrument in physical time in moving flow. Off by default: it is
+    /// not yet calibrated in a splashing flow.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub moving_window: bool,
+    /// Judge each step's velocity change too (the per-step rule). Off, the
+    /// jumps are judged over the window alone (`windowed_jumps`,
+    /// `moving_window`): one instrument in physical time at every step,
+    /// whose events are timed to the half window.
+    #[serde(skip_serializing_if = "is_true")]
+    pub step_jumps: bool,
     /// Hallmark, quiescent before: over `quiet_seconds` before onset the
     /// particle was never faster than `quiet_speed` (m/s; 0.05 sqrt(g H) at
     /// H = 0.4 m) nor deformed faster than `quiet_rate` (in-plane |dev D|, 1/s).
@@ -74,6 +87,8 @@ impl Default for MonitorConfig {
             calm_seconds: 0.03,
             calm_change: 0.5,
             windowed_jumps: true,
+            moving_window: false,
+            step_jumps: true,
             quiet_seconds: 0.05,
             quiet_speed: 0.1,
             quiet_rate: 2.0,
@@ -90,6 +105,10 @@ impl Default for MonitorConfig {
             hallmark_log: false,
         }
     }
+}
+
+fn is_true(b: &bool) -> bool {
+    *b
 }
 
 impl MonitorConfig {
@@ -139,6 +158,12 @@ impl MonitorConfig {
                     ));
                 }
             )*};
+        }
+        if !self.step_jumps && !self.windowed_jumps {
+            return Err((
+                "step_jumps".to_string(),
+                "false needs windowed_jumps = true (else no velocity jump is judged)".to_string(),
+            ));
         }
         count_within!(
             jump_ring_cells: 2, 100;

@@ -27,6 +27,14 @@
 //! physical time at every step size. It judges the particles that were
 //! quiet at the span's start and stayed within 2 cells: in moving flow a
 //! particle's change along its path holds gradients no ring describes.
+//!
+//! With `moving`, the windowed rule judges every particle present at the
+//! span's start, moving or not, in the Lagrangian frame: its change over
+//! the span against the ring of the cell it started the span in, whose
+//! changes are those of the particles that started there (binned by their
+//! positions at the span's start). Those are its material neighbours, and
+//! a smooth flow's change over a span is a smooth function of where the
+//! particles started, however fast they move.
 
 use crate::geometry::Geometry;
 use crate::stats::lower_median;
@@ -44,12 +52,15 @@ pub struct Jump {
     pub calm: bool,
 }
 
-/// The particles' velocities at a time (ids ascending, as the solver keeps them).
+/// The particles' velocities and positions at a time (ids ascending, as
+/// the solver keeps them).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Snapshot {
     pub t: f64,
     pub ids: Vec<u32>,
     pub v: Vec<Vec2>,
+    /// The positions, read by the moving rule only (checkpointed with it).
+    pub x: Vec<Vec2>,
 }
 
 /// The rule's thresholds (`MonitorConfig`'s `jump_*`).
@@ -69,6 +80,11 @@ pub struct JumpRule {
     /// the particles slower than `quiet_speed` at its start (m/s).
     pub windowed: bool,
     pub quiet_speed: f64,
+    /// The windowed rule judges every particle in its span's start
+    /// configuration (`MonitorConfig::moving_window`).
+    pub moving: bool,
+    /// Judge each step's change too (`MonitorConfig::step_jumps`).
+    pub per_step: bool,
 }
 
 /// Where a particle stands against the rule in the step last observed:
@@ -119,7 +135,10 @@ pub struct Jumps {
     /// snapshot a calm window old (NaN: it is newer); per cell, the mass
     /// that snapshot holds and its mean change; and the ring's median
     /// change and spread of each cell it judged (NaN spread: unjudged).
+    /// Each particle's cell its span is binned by: where it is now, or
+    /// under the moving rule where it started the span.
     span_dv: Vec<Vec2>,
+    span_cell: Vec<usize>,
     span_mass: Vec<f64>,
     span_change: Vec<Vec2>,
     span_local: Vec<Option<(Vec2, f64)>>,
@@ -151,7 +170,8 @@ impl Jumps {
         self.judged.resize(cells, false);
         self.local.resize(cells, Local::default());
         self.found.clear();
-        for p in 0..v.x.len() {
+        let judged_per_step = if rule.per_step { v.x.len() } else { 0 };
+        for p in 0..judged_per_step {
             let dv = v.v[p] - v.v_prev[p];
             let c = geom.cell_index(v.x[p]);
             // The local flow is read only where a particle departs from its
@@ -186,7 +206,7 @@ impl Jumps {
     /// the gain test as per step). A particle this step already flagged
     /// keeps its step's verdict.
     fn judge_span(&mut self, geom: &Geometry, v: &StateView, rule: &JumpRule) {
-        self.span_sums(geom, v);
+        self.span_sums(geom, v, rule.moving);
         // Judged: a particle quiet at the span's start (in moving flow the
         // change along its path holds the flow's own gradients, which no
         // ring describes), which stayed inside the ring's inner edge.
@@ -201,11 +221,12 @@ impl Jumps {
             }
             let dv = self.span_dv[p];
             let (now, before) = (v.v[p].norm_squared(), (v.v[p] - dv).norm_squared());
-            let judged = !dv.x.is_nan() && before <= quiet2 && now.max(before) <= reach2;
+            let judged =
+                !dv.x.is_nan() && (rule.moving || (before <= quiet2 && now.max(before) <= reach2));
             if !judged || (k < stepped && self.found[k].p as usize == p) {
                 continue;
             }
-            let c = geom.cell_index(v.x[p]);
+            let c = self.span_cell[p];
             let Some((change, spread)) = self.span_local(geom, c, rule.ring) else {
                 continue;
             };
@@ -222,8 +243,9 @@ impl Jumps {
     }
 
     /// Per particle, its change since the oldest snapshot (matched by id),
-    /// and per cell the mass-weighted mean of those changes.
-    fn span_sums(&mut self, geom: &Geometry, v: &StateView) {
+    /// and per cell (where the particle is, or with `moving` where it
+    /// started the span) the mass-weighted mean of those changes.
+    fn span_sums(&mut self, geom: &Geometry, v: &StateView, moving: bool) {
         let n = geom.cell_count();
         self.span_mass.clear();
         self.span_mass.resize(n, 0.0);
@@ -232,6 +254,7 @@ impl Jumps {
         self.span_local.clear();
         self.span_local.resize(n, None);
         self.span_dv.clear();
+        self.span_cell.clear();
         let s = &self.snaps[self.snaps.len() - 1];
         let mut k = 0;
         for p in 0..v.x.len() {
@@ -240,12 +263,15 @@ impl Jumps {
             }
             if k < s.ids.len() && s.ids[k] == v.id[p] {
                 let dv = v.v[p] - s.v[k];
-                let (c, m) = (geom.cell_index(v.x[p]), v.mass[p]);
+                let at = if moving { s.x[k] } else { v.x[p] };
+                let (c, m) = (geom.cell_index(at), v.mass[p]);
                 self.span_mass[c] += m;
                 self.span_change[c] += m * dv;
                 self.span_dv.push(dv);
+                self.span_cell.push(c);
             } else {
                 self.span_dv.push(Vec2::repeat(f64::NAN));
+                self.span_cell.push(usize::MAX);
             }
         }
         for c in 0..n {
@@ -314,6 +340,8 @@ impl Jumps {
             s.ids.extend_from_slice(v.id);
             s.v.clear();
             s.v.extend_from_slice(v.v);
+            s.x.clear();
+            s.x.extend_from_slice(v.x);
             self.snaps.insert(0, s);
         }
         due

@@ -269,6 +269,8 @@ impl Monitor {
             calm_change: self.cfg.calm_change,
             windowed: self.cfg.windowed_jumps,
             quiet_speed: self.cfg.quiet_speed,
+            moving: self.cfg.windowed_jumps && self.cfg.moving_window,
+            per_step: self.cfg.step_jumps,
         }
     }
 

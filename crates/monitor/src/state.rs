@@ -39,8 +39,12 @@ fn decode_events(bytes: &[u8]) -> Result<Vec<Event>, CheckpointError> {
     })
 }
 
-/// The velocity-jump rule's snapshots (at most three).
-fn read_snapshots(r: &mut Reader) -> Result<Vec<crate::jump::Snapshot>, CheckpointError> {
+/// The velocity-jump rule's snapshots (at most three), with their
+/// positions when the moving rule wrote them.
+fn read_snapshots(
+    r: &mut Reader,
+    positions: bool,
+) -> Result<Vec<crate::jump::Snapshot>, CheckpointError> {
     let count = r.u64()?;
     if count > 3 {
         return Err(CheckpointError::Truncated);
@@ -56,7 +60,12 @@ fn read_snapshots(r: &mut Reader) -> Result<Vec<crate::jump::Snapshot>, Checkpoi
         r.u32s(&mut ids)?;
         let mut v = vec![solver::Vec2::zeros(); n];
         r.vec2s(&mut v)?;
-        out.push(crate::jump::Snapshot { t, ids, v });
+        let mut x = vec![];
+        if positions {
+            x.resize(n, solver::Vec2::zeros());
+            r.vec2s(&mut x)?;
+        }
+        out.push(crate::jump::Snapshot { t, ids, v, x });
     }
     Ok(out)
 }
@@ -101,6 +110,9 @@ impl Monitor {
             w.u64(snap.ids.len() as u64);
             w.u32s(&snap.ids);
             w.vec2s(&snap.v);
+            if self.cfg.moving_window {
+                w.vec2s(&snap.x);
+            }
         }
         w.seal()
     }
@@ -169,7 +181,7 @@ impl Monitor {
         if self.cfg.hallmark_log {
             self.hallmark_rows = decode(r.bytes()?)?;
         }
-        self.jumps.snaps = read_snapshots(&mut r)?;
+        self.jumps.snaps = read_snapshots(&mut r, self.cfg.moving_window)?;
         r.finish()?;
         self.events = events;
         Ok(())

@@ -10,6 +10,7 @@ mod events_clean_physics;
 mod events_column;
 mod events_dam_break;
 mod events_merge;
+mod events_moving_window;
 mod events_real_kick;
 mod events_sustained;
 mod front;

@@ -141,6 +141,23 @@ fn the_hallmark_log_restarts_exactly_after_deletions_with_an_event_open() {
 }
 
 #[test]
+fn the_moving_window_restarts_exactly_in_a_moving_flow() {
+    // The snapshots' positions are the moving rule's memory: a dam break's
+    // surge, restarted between two judgings, reads the same events.
+    let mcfg = monitor::MonitorConfig {
+        moving_window: true,
+        ..monitor::MonitorConfig::default()
+    };
+    let cfg = SolverConfig {
+        scene: Scene::dam_break(Material::tait(1.5e5)),
+        method: Method::baseline(),
+        perturb: vec![],
+    };
+    let m = restart_is_exact_under(mcfg, cfg, None, 150, 400);
+    assert_eq!(m.report().step, 400);
+}
+
+#[test]
 fn real_kick_restarts_with_deformed_events_up_to_the_blow_out() {
     let mut mat = Material::new(1.5e4);
     mat.eos = EosKind::Power;
