@@ -95,8 +95,14 @@ struct MatrixArgs {
     /// Skip cases whose summary.json is already in OUT.
     #[arg(long)]
     resume: bool,
+    /// Skip the cases a behaviour record (a report's behaviour_runs.jsonl,
+    /// `kick report --behaviour-runs`) holds with the same parameters
+    /// (repeatable): a shard run on several machines goes on where its
+    /// record stopped.
+    #[arg(long = "skip-recorded", value_name = "FILE")]
+    skip_recorded: Vec<PathBuf>,
     /// Join the case folders of these matrix outputs into OUT's tables.
-    #[arg(long, num_args = 1.., value_name = "DIR", conflicts_with_all = ["study", "shard", "resume", "only"])]
+    #[arg(long, num_args = 1.., value_name = "DIR", conflicts_with_all = ["study", "shard", "resume", "only", "skip_recorded"])]
     merge: Vec<PathBuf>,
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -398,6 +404,7 @@ fn matrix_command(args: MatrixArgs) -> ExitCode {
         shard,
         only,
         resume,
+        skip_recorded,
         merge,
         set,
         csv,
@@ -434,6 +441,10 @@ fn matrix_command(args: MatrixArgs) -> ExitCode {
             only.join(" --only ")
         ));
     }
+    let recorded = match recorded_cases(&study, &skip_recorded) {
+        Ok(names) => names,
+        Err(e) => return bad_input(&format!("--skip-recorded: {e}")),
+    };
     let opts = matrix::MatrixOptions {
         out: out.clone(),
         jobs,
@@ -444,6 +455,7 @@ fn matrix_command(args: MatrixArgs) -> ExitCode {
         threads_per_case: threads.unwrap_or((cores / jobs).max(1)),
         progress: true,
         plant_checkpoint: None,
+        recorded,
     };
     match matrix::run_matrix(&study, &opts) {
         Ok(r) => {
@@ -462,6 +474,38 @@ fn matrix_command(args: MatrixArgs) -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// The cases the behaviour records `files` hold with the parameters the
+/// study gives them, sorted; a case recorded with other parameters is
+/// named and runs again.
+fn recorded_cases(study: &study_file::Study, files: &[PathBuf]) -> Result<Vec<String>, String> {
+    let mut names = vec![];
+    for file in files {
+        for run in report::data::read_recorded_runs(file)? {
+            let s = &run.summary;
+            let Some(live) = study.cases.iter().find(|c| c.name == s.case) else {
+                continue;
+            };
+            let same = live.params.len() == s.params.len()
+                && live
+                    .params
+                    .iter()
+                    .all(|(k, v)| s.params.get(k) == Some(&case::toml_to_json(v)));
+            if same {
+                names.push(s.case.clone());
+            } else {
+                eprintln!(
+                    "kick matrix: {}: {} is recorded with other parameters; it runs again",
+                    file.display(),
+                    s.case
+                );
+            }
+        }
+    }
+    names.sort();
+    names.dedup();
+    Ok(names)
 }
 
 fn calibrate_command(args: CalibrateArgs) -> ExitCode {

@@ -131,6 +131,7 @@ pub fn calibrate(study: &Study, opts: &CalibrateOptions) -> std::io::Result<Dete
         threads_per_case: opts.threads_per_case,
         progress: opts.progress,
         plant_checkpoint: Some(spec.plant_t),
+        recorded: vec![],
     };
     if spec.common_state.is_some() {
         common_state::run_twins(study, &spec, opts)?;

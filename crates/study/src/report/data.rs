@@ -40,7 +40,10 @@ pub fn text_column(df: &DataFrame, name: &str) -> Option<Vec<String>> {
     Some(
         (0..c.len())
             .map(|i| match c.get(i) {
+                // A one-row column reads back as an owned string, which
+                // Display would quote.
                 Ok(AnyValue::String(s)) => s.to_string(),
+                Ok(AnyValue::StringOwned(s)) => s.to_string(),
                 Ok(AnyValue::Null) => String::new(),
                 Ok(AnyValue::Float64(f)) => short(f),
                 Ok(other) => other.to_string(),

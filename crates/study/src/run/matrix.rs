@@ -31,6 +31,9 @@ pub struct MatrixOptions {
     pub progress: bool,
     /// Each case writes `plant.ckpt` at this time (`kick calibrate`).
     pub plant_checkpoint: Option<f64>,
+    /// Cases not to run: a behaviour record from an earlier run holds them
+    /// (`kick matrix --skip-recorded`), sorted.
+    pub recorded: Vec<String>,
 }
 
 /// `I/N` with 0 <= I < N.
@@ -107,6 +110,7 @@ pub fn run_matrix(study: &Study, opts: &MatrixOptions) -> std::io::Result<Matrix
         .iter()
         .copied()
         .filter(|c| !(opts.resume && finished_summary(&opts.out.join(&c.name)).is_some()))
+        .filter(|c| opts.recorded.binary_search(&c.name).is_err())
         .collect();
     let skipped = selected.len() - todo.len();
     todo.sort_by(|a, b| estimated_cost(b).total_cmp(&estimated_cost(a)));

@@ -743,6 +743,102 @@ fn matrix_runs_cases_in_parallel_and_writes_the_tables() {
 }
 
 #[test]
+fn report_of_a_one_case_shard_reads_its_case() {
+    // A one-row summary's case_dir reads back as an owned string, which
+    // the report once quoted into the path.
+    let out = scratch("one_case");
+    let study = out.join("small.toml");
+    std::fs::write(&study, SMALL_MATRIX).unwrap();
+    let d = out.to_str().unwrap();
+    let o = kick(&[
+        "matrix",
+        study.to_str().unwrap(),
+        "--out",
+        d,
+        "--shard",
+        "0/2",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = kick(&["report", d]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("report").join("index.html").exists());
+}
+
+#[test]
+fn matrix_skips_the_cases_a_behaviour_record_holds_with_the_same_parameters() {
+    let out = scratch("skip_recorded");
+    let study = out.join("small.toml");
+    std::fs::write(&study, SMALL_MATRIX).unwrap();
+    let (st, first) = (study.to_str().unwrap(), out.join("first"));
+    let f = first.to_str().unwrap();
+    let o = kick(&["matrix", st, "--out", f, "--jobs", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = kick(&["report", f]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let lines = std::fs::read_to_string(first.join("report").join("behaviour_runs.jsonl")).unwrap();
+    assert_eq!(lines.lines().count(), 2, "{lines}");
+    // A record of one of the two cases.
+    let record = out.join("one.jsonl");
+    std::fs::write(&record, format!("{}\n", lines.lines().next().unwrap())).unwrap();
+    let r = record.to_str().unwrap();
+    // The recorded case is skipped, the other runs.
+    let second = out.join("second");
+    let s = second.to_str().unwrap();
+    let o = kick(&[
+        "matrix",
+        st,
+        "--out",
+        s,
+        "--skip-recorded",
+        r,
+        "--jobs",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("ran 1 cases (1 already done)"), "{text}");
+    // Recorded with other parameters, it runs again, and says why.
+    let third = out.join("third");
+    let t = third.to_str().unwrap();
+    let o = kick(&[
+        "matrix",
+        st,
+        "--out",
+        t,
+        "--skip-recorded",
+        r,
+        "--jobs",
+        "1",
+        "--set",
+        "scene.t_end=0.04",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("ran 2 cases (0 already done)"));
+    assert!(
+        stderr(&o).contains("recorded with other parameters"),
+        "{}",
+        stderr(&o)
+    );
+    // A record that is not one is bad input, named by file and line.
+    let bad = out.join("bad.jsonl");
+    std::fs::write(&bad, "{\"summary\": 1}\n").unwrap();
+    let o = kick(&[
+        "matrix",
+        st,
+        "--out",
+        t,
+        "--skip-recorded",
+        bad.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--skip-recorded") && stderr(&o).contains("line 1"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
 fn matrix_resumes_after_sigkill_without_redoing_finished_cases() {
     let out = scratch("resume");
     let study = out.join("three.toml");
