@@ -487,12 +487,7 @@ fn recorded_cases(study: &study_file::Study, files: &[PathBuf]) -> Result<Vec<St
             let Some(live) = study.cases.iter().find(|c| c.name == s.case) else {
                 continue;
             };
-            let same = live.params.len() == s.params.len()
-                && live
-                    .params
-                    .iter()
-                    .all(|(k, v)| s.params.get(k) == Some(&case::toml_to_json(v)));
-            if same {
+            if case::json_params(live) == s.params {
                 names.push(s.case.clone());
             } else {
                 eprintln!(

@@ -82,6 +82,50 @@ pub fn run_window(
     (m, s)
 }
 
+/// Observes `view` with `push(t)` m/s added upward to the velocities of
+/// the particles `pushed` marks (a test-only ramp on the read-only view,
+/// the solver untouched; a particle past its end is not pushed), `v` and
+/// `v_prev` its scratch; asserts no blow-out.
+pub fn observe_pushed(
+    m: &mut Monitor,
+    view: StateView,
+    pushed: &[bool],
+    push: impl Fn(f64) -> f64,
+    v: &mut Vec<Vec2>,
+    v_prev: &mut Vec<Vec2>,
+) {
+    v.clear();
+    v_prev.clear();
+    for p in 0..view.x.len() {
+        let (now, before) = if pushed.get(p).copied().unwrap_or(false) {
+            (push(view.time), push(view.time - view.dt))
+        } else {
+            (0.0, 0.0)
+        };
+        v.push(view.v[p] + Vec2::new(0.0, now));
+        v_prev.push(view.v_prev[p] + Vec2::new(0.0, before));
+    }
+    let mut ramped = view;
+    (ramped.v, ramped.v_prev) = (v, v_prev);
+    let r = m.observe(&ramped);
+    assert!(r.blow_out.is_none(), "{:?}", r.blow_out);
+}
+
+/// Asserts that the first of `kicks` came within one judging interval
+/// (half the 30 ms window) of a push's end at `push_end` and read the
+/// push's 0.06 m/s.
+pub fn assert_first_kick_by(kicks: &[Event], push_end: f64, dt: f64, tag: &str) {
+    let first = kicks
+        .first()
+        .unwrap_or_else(|| panic!("{tag} (dt {dt}): missed"));
+    let latest = push_end + 0.015 + 2.0 * dt;
+    assert!(first.t <= latest, "{tag}: {first:?}");
+    assert!(
+        (0.02..=0.0601).contains(&first.jump_speed),
+        "{tag}: {first:?}"
+    );
+}
+
 pub fn fresh_monitor(s: &Solver) -> Monitor {
     Monitor::new(MonitorConfig::default(), &s.view())
 }

@@ -39,21 +39,7 @@ fn ramped_water(formulation: Formulation, windowed: bool, ramp: f64) -> (Vec<Eve
         s.step().unwrap();
         let view = s.view();
         dt_max = dt_max.max(view.dt);
-        v.clear();
-        v_prev.clear();
-        for (p, &inside) in in_patch.iter().enumerate() {
-            let (now, before) = if inside {
-                (added(view.time), added(view.time - view.dt))
-            } else {
-                (0.0, 0.0)
-            };
-            v.push(view.v[p] + Vec2::new(0.0, now));
-            v_prev.push(view.v_prev[p] + Vec2::new(0.0, before));
-        }
-        let mut ramped = view;
-        (ramped.v, ramped.v_prev) = (&v, &v_prev);
-        let r = m.observe(&ramped);
-        assert!(r.blow_out.is_none(), "{:?}", r.blow_out);
+        observe_pushed(&mut m, view, &in_patch, added, &mut v, &mut v_prev);
     }
     (m.events().to_vec(), dt_max)
 }
@@ -83,16 +69,7 @@ fn a_ramp_over_30_ms_is_found_over_the_window_at_both_step_sizes() {
     for (formulation, tag) in STEPS {
         let (events, dt) = ramped_water(formulation, true, 0.06);
         let kicks = kicks_at_the_patch(&events, tag);
-        let first = kicks
-            .first()
-            .unwrap_or_else(|| panic!("{tag} (dt {dt}): missed"));
-        // Within the ramp and one judging interval (half a window) after it.
-        let latest = PLANT_T + RAMP_SECONDS + 0.015 + 2.0 * dt;
-        assert!(first.t <= latest, "{tag}: {first:?}");
-        assert!(
-            (0.02..=0.0601).contains(&first.jump_speed),
-            "{tag}: {first:?}"
-        );
+        assert_first_kick_by(&kicks, PLANT_T + RAMP_SECONDS, dt, tag);
     }
 }
 

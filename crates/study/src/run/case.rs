@@ -23,6 +23,7 @@ use crate::study_file::Case;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::{json, Value};
 use solver::Solver;
+use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
@@ -68,16 +69,20 @@ pub(crate) fn write_case_table(case: &Case, dir: &Path) -> std::io::Result<()> {
     )
 }
 
+/// The case's parameters as its summary records them.
+pub fn json_params(case: &Case) -> BTreeMap<String, Value> {
+    case.params
+        .iter()
+        .map(|(k, v)| (k.clone(), toml_to_json(v)))
+        .collect()
+}
+
 pub(crate) fn summary(case: &Case, run: Simulated, wall_s: f64) -> Summary {
     let particle_steps = run.particles as f64 * run.steps as f64;
     Summary {
         schema_version: SCHEMA_VERSION,
         case: case.name.clone(),
-        params: case
-            .params
-            .iter()
-            .map(|(k, v)| (k.clone(), toml_to_json(v)))
-            .collect(),
+        params: json_params(case),
         status: run.status,
         reason: run.reason,
         steps: run.steps,
