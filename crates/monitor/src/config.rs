@@ -26,8 +26,9 @@ pub struct MonitorConfig {
     /// Judge every particle over the window, moving or not, against the
     /// ring of the cell it started the window in, in the window's start
     /// configuration (its material neighbours, followed by id): the same
-    /// instrument in physical time in moving flow. Off by default: it is
-    /// not yet calibrated in a splashing flow.
+    /// instrument in physical time in moving flow. Off by default: in a
+    /// splashing flow the water shares a push over the window, so it finds
+    /// none the per-step rule misses (docs/findings/detector_calibration.md).
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub moving_window: bool,
     /// Judge each step's velocity change too (the per-step rule). Off, the
@@ -112,6 +113,12 @@ fn is_true(b: &bool) -> bool {
 }
 
 impl MonitorConfig {
+    /// Whether the windowed rule bins each span by where it started (and so
+    /// keeps the snapshots' positions).
+    pub(crate) fn moving_rule(&self) -> bool {
+        self.windowed_jumps && self.moving_window
+    }
+
     /// Range check of every threshold: (key, message) for the first bad one.
     pub fn validate(&self) -> Result<(), (String, String)> {
         macro_rules! non_negative {

@@ -162,7 +162,7 @@ impl Jumps {
     /// This step's jumps: the particles whose velocity change departs from
     /// the local flow's.
     pub fn observe(&mut self, geom: &Geometry, v: &StateView, rule: &JumpRule) -> &[Jump] {
-        let snapped = self.snapshot(v, rule.calm_seconds);
+        let snapped = self.snapshot(v, rule);
         self.cell_sums(geom, v, rule.calm_seconds);
         self.block_means(geom);
         let cells = geom.cell_count();
@@ -321,13 +321,12 @@ impl Jumps {
         })
     }
 
-    /// Keeps the velocities every half calm window (the three newest);
+    /// Keeps the velocities every half calm window (the three newest),
+    /// and the positions only for the moving rule, which bins by them;
     /// true when it took one this step.
-    fn snapshot(&mut self, v: &StateView, window: f64) -> bool {
-        let due = self
-            .snaps
-            .first()
-            .is_none_or(|s| v.time - s.t >= 0.5 * window * (1.0 - 1e-9));
+    fn snapshot(&mut self, v: &StateView, rule: &JumpRule) -> bool {
+        let half = 0.5 * rule.calm_seconds * (1.0 - 1e-9);
+        let due = self.snaps.first().is_none_or(|s| v.time - s.t >= half);
         if due {
             // The oldest's buffers are reused once there are three.
             let mut s = if self.snaps.len() >= 3 {
@@ -341,7 +340,9 @@ impl Jumps {
             s.v.clear();
             s.v.extend_from_slice(v.v);
             s.x.clear();
-            s.x.extend_from_slice(v.x);
+            if rule.moving {
+                s.x.extend_from_slice(v.x);
+            }
             self.snaps.insert(0, s);
         }
         due

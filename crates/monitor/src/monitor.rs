@@ -269,7 +269,7 @@ impl Monitor {
             calm_change: self.cfg.calm_change,
             windowed: self.cfg.windowed_jumps,
             quiet_speed: self.cfg.quiet_speed,
-            moving: self.cfg.windowed_jumps && self.cfg.moving_window,
+            moving: self.cfg.moving_rule(),
             per_step: self.cfg.step_jumps,
         }
     }

@@ -110,7 +110,7 @@ impl Monitor {
             w.u64(snap.ids.len() as u64);
             w.u32s(&snap.ids);
             w.vec2s(&snap.v);
-            if self.cfg.moving_window {
+            if self.cfg.moving_rule() {
                 w.vec2s(&snap.x);
             }
         }
@@ -181,7 +181,7 @@ impl Monitor {
         if self.cfg.hallmark_log {
             self.hallmark_rows = decode(r.bytes()?)?;
         }
-        self.jumps.snaps = read_snapshots(&mut r, self.cfg.moving_window)?;
+        self.jumps.snaps = read_snapshots(&mut r, self.cfg.moving_rule())?;
         r.finish()?;
         self.events = events;
         Ok(())
@@ -305,5 +305,36 @@ mod tests {
                 code: 9
             }
         );
+    }
+
+    #[test]
+    fn snapshots_keep_positions_only_under_the_moving_rule() {
+        // The positions are the moving rule's memory alone: without it a
+        // snapshot copies none, and the saved state holds none.
+        let snaps_of = |moving_window: bool| {
+            let cfg = solver::SolverConfig {
+                scene: solver::Scene::dam_break(solver::Material::tait(1.5e5)),
+                method: solver::Method::baseline(),
+                perturb: vec![],
+            };
+            let mut s = solver::Solver::new(cfg).unwrap();
+            let mcfg = crate::MonitorConfig {
+                moving_window,
+                ..crate::MonitorConfig::default()
+            };
+            let mut m = Monitor::new(mcfg, &s.view());
+            for _ in 0..150 {
+                s.step().unwrap();
+                m.observe(&s.view());
+            }
+            (m.jumps.snaps.clone(), m.save_state().len())
+        };
+        let (plain, plain_bytes) = snaps_of(false);
+        let (moving, moving_bytes) = snaps_of(true);
+        assert!(plain.len() >= 2, "{} snapshots", plain.len());
+        assert!(plain.iter().all(|s| s.x.is_empty() && !s.ids.is_empty()));
+        assert!(moving.iter().all(|s| s.x.len() == s.ids.len()));
+        let positions: usize = moving.iter().map(|s| 16 * s.x.len()).sum();
+        assert_eq!(moving_bytes, plain_bytes + positions);
     }
 }
