@@ -172,6 +172,12 @@ impl MonitorConfig {
                 "false needs windowed_jumps = true (else no velocity jump is judged)".to_string(),
             ));
         }
+        if self.moving_window && !self.windowed_jumps {
+            return Err((
+                "moving_window".to_string(),
+                "true needs windowed_jumps = true (it is a rule of the window)".to_string(),
+            ));
+        }
         count_within!(
             jump_ring_cells: 2, 100;
             min_cluster_particles: 0, 1_000_000_000;

@@ -174,3 +174,16 @@ fn no_jump_rule_at_all_is_refused() {
     assert!(message.contains("windowed_jumps"), "{message}");
     assert!(moving_rule(true, false).validate().is_ok());
 }
+
+#[test]
+fn a_moving_window_without_the_window_is_refused() {
+    // It is a rule of the window: alone it would judge nothing more.
+    let moving_alone = MonitorConfig {
+        moving_window: true,
+        windowed_jumps: false,
+        ..MonitorConfig::default()
+    };
+    let (key, message) = moving_alone.validate().unwrap_err();
+    assert_eq!(key, "moving_window");
+    assert!(message.contains("windowed_jumps"), "{message}");
+}

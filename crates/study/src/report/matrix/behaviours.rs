@@ -113,9 +113,9 @@ pub fn behaviours(m: &Matrix, out: &Path, page: &mut Page) -> Res {
     page.h2("The four behaviours of the bug report");
     if let Some(by_k) = by_k {
         page.p(&small_k_blows_up(&by_k, &scored.figures));
-        page.p(&large_k_far_from_hydrostatic(&by_k));
+        page.p(&large_k_far_from_hydrostatic(&by_k, &scored.figures));
         page.p(&large_k_checkerboards(&by_k, &scored.figures));
-        if let Some(text) = less_viscosity_less_stable(m) {
+        if let Some(text) = less_viscosity_less_stable(m, &scored.figures) {
             page.p(&text);
         }
     }
@@ -271,23 +271,44 @@ fn small_k_blows_up(by_k: &ByK, figures: &BTreeMap<String, BehaviourFigures>) ->
     )
 }
 
+/// Whether a run survived to its end, as the per-configuration table
+/// reads it (without losing `SURVIVAL_LOSS` of its mass: a run that does
+/// not stop on lost mass completes emptied); without a timeseries, by its
+/// status.
+fn survived_to_end(r: &Row, figures: &BTreeMap<String, BehaviourFigures>) -> bool {
+    figures
+        .get(r.case())
+        .map_or(r.summary.status == Status::Completed, |f| f.survived_to_end)
+}
+
+/// How long a run survived, as the per-configuration table reads it.
+fn survived(r: &Row, figures: &BTreeMap<String, BehaviourFigures>) -> f64 {
+    figures
+        .get(r.case())
+        .map_or(r.summary.t_end, |f| f.survived)
+}
+
 /// Behaviour 2: larger K survives but is far from hydrostatic.
-fn large_k_far_from_hydrostatic(by_k: &ByK) -> String {
+fn large_k_far_from_hydrostatic(
+    by_k: &ByK,
+    figures: &BTreeMap<String, BehaviourFigures>,
+) -> String {
     let large = &by_k.large;
     let completed: Vec<&Row> = large
         .iter()
         .copied()
-        .filter(|r| r.summary.status == Status::Completed)
+        .filter(|r| survived_to_end(r, figures))
         .collect();
     let late: Vec<f64> = completed.iter().map(|r| r.hydro_late()).collect();
     let far = count(&completed, |r| r.hydro_late() >= 10.0);
     format!(
         "2. Larger K (K &ge; {} Pa) survives to t_end with a pressure orders of magnitude off hydrostatic. \
-         {} of {} runs completed; their late hydrostatic departure (relative RMS over the last second): \
-         median {}, {} of them &ge; 10. {}",
+         {} of {} runs survived to t_end (completed, with less than {} % of the mass lost); their late \
+         hydrostatic departure (relative RMS over the last second): median {}, {} of them &ge; 10. {}",
         short(large.iter().filter_map(|r| param(r, ParamKey::is_bulk_modulus)).fold(f64::INFINITY, f64::min)),
         completed.len(),
         large.len(),
+        100.0 * SURVIVAL_LOSS,
         median_of(late.iter().copied()),
         far,
         verdict(
@@ -327,7 +348,10 @@ fn large_k_checkerboards(by_k: &ByK, figures: &BTreeMap<String, BehaviourFigures
 
 /// Behaviour 4: less viscosity, less stable; every case paired with its
 /// viscous twin (None without a viscosity axis).
-fn less_viscosity_less_stable(m: &Matrix) -> Option<String> {
+fn less_viscosity_less_stable(
+    m: &Matrix,
+    figures: &BTreeMap<String, BehaviourFigures>,
+) -> Option<String> {
     let mu_axis = m.axis(ParamKey::is_viscosity)?;
     let mut pairs: BTreeMap<Vec<String>, [Vec<f64>; 2]> = BTreeMap::new();
     for r in &m.rows {
@@ -336,7 +360,7 @@ fn less_viscosity_less_stable(m: &Matrix) -> Option<String> {
         };
         let mut key = r.params.clone();
         key.remove(mu_axis);
-        pairs.entry(key).or_default()[usize::from(mu > 0.0)].push(r.summary.t_end);
+        pairs.entry(key).or_default()[usize::from(mu > 0.0)].push(survived(r, figures));
     }
     let (mut shorter, mut longer, mut same) = (0, 0, 0);
     for [inviscid, viscous] in pairs.values() {
@@ -354,8 +378,9 @@ fn less_viscosity_less_stable(m: &Matrix) -> Option<String> {
     let total = shorter + longer + same;
     Some(format!(
         "4. Less viscosity, less stable. Of {total} cases paired by everything but the viscosity, the \
-         inviscid one survived a shorter time (median over its runs, 1 % margin) in {shorter}, longer in \
-         {longer}, as long in {same}. {}",
+         inviscid one survived a shorter time (until it lost {} % of its mass, else to its end; median \
+         over its runs, 1 % margin) in {shorter}, longer in {longer}, as long in {same}. {}",
+        100.0 * SURVIVAL_LOSS,
         verdict(2 * shorter > total, shorter > longer)
     ))
 }
@@ -840,6 +865,39 @@ mod tests {
         expected.sort_by(|a, b| a.summary.case.cmp(&b.summary.case));
         back.sort_by(|a, b| a.summary.case.cmp(&b.summary.case));
         assert_eq!(back, expected);
+    }
+
+    /// Runs that complete emptied (a run that does not stop on lost mass)
+    /// neither survive for behaviour 2 nor tie for behaviour 4: the
+    /// paragraphs read survival as the per-configuration table does.
+    #[test]
+    fn runs_that_complete_emptied_are_read_by_their_loss() {
+        let mut figures = BTreeMap::new();
+        let summaries: Vec<(PathBuf, Summary)> = recorded_matrix()
+            .into_iter()
+            .filter(|r| r.summary.case.contains("_usl_"))
+            .map(|mut r| {
+                let inviscid = r.summary.case.contains("mu0_");
+                r.figures.survived = if inviscid { 1.0 } else { 2.0 };
+                r.figures.survived_to_end = false;
+                figures.insert(r.summary.case.clone(), r.figures);
+                (PathBuf::new(), r.summary)
+            })
+            .collect();
+        let m = Matrix::of(summaries);
+        assert!(m.rows.iter().all(|r| r.summary.status == Status::Completed));
+        let by_k = ByK::of(&m).unwrap();
+        let two = large_k_far_from_hydrostatic(&by_k, &figures);
+        assert!(two.contains("0 of 4 runs survived to t_end"), "{two}");
+        let four = less_viscosity_less_stable(&m, &figures).unwrap();
+        assert!(four.contains("shorter time"), "{four}");
+        assert!(four.contains(") in 2, longer in 0, as long in 0"), "{four}");
+        // Without their figures, the statuses decide, as before.
+        let none = BTreeMap::new();
+        let two = large_k_far_from_hydrostatic(&by_k, &none);
+        assert!(two.contains("4 of 4 runs survived to t_end"), "{two}");
+        let four = less_viscosity_less_stable(&m, &none).unwrap();
+        assert!(four.contains("as long in 2"), "{four}");
     }
 
     /// A case recorded twice counts once; with other parameters the second
