@@ -163,27 +163,22 @@ fn judged_over_the_window_alone_ramps_and_impulses_are_found_at_both_step_sizes(
 }
 
 #[test]
-fn no_jump_rule_at_all_is_refused() {
-    let cfg = MonitorConfig {
-        step_jumps: false,
+fn rules_without_the_window_they_need_are_refused() {
+    // No jump rule at all; and a moving window, a rule of the window,
+    // without it (alone it would judge nothing more).
+    let without_window = |step_jumps: bool, moving_window: bool| MonitorConfig {
+        step_jumps,
+        moving_window,
         windowed_jumps: false,
         ..MonitorConfig::default()
     };
-    let (key, message) = cfg.validate().unwrap_err();
-    assert_eq!(key, "step_jumps");
-    assert!(message.contains("windowed_jumps"), "{message}");
+    for (cfg, refused_key) in [
+        (without_window(false, false), "step_jumps"),
+        (without_window(true, true), "moving_window"),
+    ] {
+        let (key, message) = cfg.validate().unwrap_err();
+        assert_eq!(key, refused_key);
+        assert!(message.contains("windowed_jumps"), "{message}");
+    }
     assert!(moving_rule(true, false).validate().is_ok());
-}
-
-#[test]
-fn a_moving_window_without_the_window_is_refused() {
-    // It is a rule of the window: alone it would judge nothing more.
-    let moving_alone = MonitorConfig {
-        moving_window: true,
-        windowed_jumps: false,
-        ..MonitorConfig::default()
-    };
-    let (key, message) = moving_alone.validate().unwrap_err();
-    assert_eq!(key, "moving_window");
-    assert!(message.contains("windowed_jumps"), "{message}");
 }
