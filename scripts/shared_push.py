@@ -20,22 +20,20 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from check_vtu import read_vtu  # noqa: E402
+from fixed_span_jumps import particles  # noqa: E402
 
-H, RING, Z, FLOOR = 0.01, 4, 5.0, 0.02
+# The monitor's rule (crates/monitor/src/jump.rs): h, the ring's outer
+# radius, jump_z, jump_speed and MIN_RING_CELLS.
+H, RING, Z, FLOOR, MIN_RING_CELLS = 0.01, 4, 5.0, 0.02, 6
 
 
 def load(folder):
     """{time: {id: (x, y, vx, vy)}} of every .vtu in the folder."""
     out = {}
     for name in sorted(os.listdir(folder)):
-        if not name.endswith(".vtu"):
-            continue
-        t, _, n, a = read_vtu(os.path.join(folder, name))
-        ids, pts = a["id"][1], a["Points"][1]
-        vc, vel = a["velocity"]
-        out[round(t, 6)] = {ids[i]: (pts[3 * i], pts[3 * i + 1], vel[vc * i], vel[vc * i + 1])
-                            for i in range(n)}
+        if name.endswith(".vtu"):
+            t, by_id = particles(os.path.join(folder, name))
+            out[round(t, 6)] = by_id
     return out
 
 
@@ -99,7 +97,7 @@ def thresholds(clean, t0, t1):
     out = []
     for (ci, cj) in mean:
         pts = ring_of(mean, ci, cj, nx)
-        if len(pts) >= 8:
+        if len(pts) >= MIN_RING_CELLS:
             out.append(max(FLOOR, Z * spread_of(pts)))
     return sorted(out)
 

@@ -294,26 +294,26 @@ fn large_k_far_from_hydrostatic(
     figures: &BTreeMap<String, BehaviourFigures>,
 ) -> String {
     let large = &by_k.large;
-    let completed: Vec<&Row> = large
+    let survivors: Vec<&Row> = large
         .iter()
         .copied()
         .filter(|r| survived_to_end(r, figures))
         .collect();
-    let late: Vec<f64> = completed.iter().map(|r| r.hydro_late()).collect();
-    let far = count(&completed, |r| r.hydro_late() >= 10.0);
+    let late: Vec<f64> = survivors.iter().map(|r| r.hydro_late()).collect();
+    let far = count(&survivors, |r| r.hydro_late() >= 10.0);
     format!(
         "2. Larger K (K &ge; {} Pa) survives to t_end with a pressure orders of magnitude off hydrostatic. \
          {} of {} runs survived to t_end (completed, with less than {} % of the mass lost); their late \
          hydrostatic departure (relative RMS over the last second): median {}, {} of them &ge; 10. {}",
         short(large.iter().filter_map(|r| param(r, ParamKey::is_bulk_modulus)).fold(f64::INFINITY, f64::min)),
-        completed.len(),
+        survivors.len(),
         large.len(),
         100.0 * SURVIVAL_LOSS,
         median_of(late.iter().copied()),
         far,
         verdict(
-            !completed.is_empty() && 2 * far > completed.len(),
-            !completed.is_empty() && median(&late).is_some_and(|h| h >= 1.0)
+            !survivors.is_empty() && 2 * far > survivors.len(),
+            !survivors.is_empty() && median(&late).is_some_and(|h| h >= 1.0)
         )
     )
 }
