@@ -327,8 +327,9 @@ fn is_default_projection(p: &ProjectionSettings) -> bool {
 pub struct ProjectionSettings {
     /// Where the velocities live: on the nodes with cell pressures (Q1-P0,
     /// held by the controls below) or on the cell faces (MAC, inf-sup
-    /// stable; it reads none of hourglass, checkerboard, free_surface and
-    /// air_nodes, and its drift correction is by position).
+    /// stable; it reads none of hourglass, checkerboard and air_nodes, its
+    /// free surface is "cell" or "ghost", and its drift correction is by
+    /// position).
     pub scheme: ProjectionScheme,
     /// Share of each fluid cell's hourglass velocity (the nodal mode the
     /// cell divergence cannot see) removed per step, 0 ..= 0.25.
@@ -383,7 +384,9 @@ pub struct ProjectionSettings {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gravity_cfl: Option<f64>,
     /// Where the free surface's p = 0 sits: at the air cells' centres, or
-    /// inside the cell where the grid's fluid fraction crosses a half.
+    /// inside the cell where the grid's fluid fraction crosses a half (on
+    /// the staggered scheme the surface then moves with the water instead
+    /// of jumping a cell when a particle crosses a cell's edge).
     pub free_surface: FreeSurface,
     /// What the nodes beyond the fluid cells (which take their fluid
     /// neighbours' velocity after the solve) bring to it.
@@ -975,6 +978,12 @@ impl SolverConfig {
             return Err(needs(
                 "scene.periodic",
                 "needs walls on every side (both must be false)",
+            ));
+        }
+        if m.projection.free_surface == FreeSurface::GhostOrthogonal {
+            return Err(needs(
+                "method.projection.free_surface",
+                "takes \"cell\" or \"ghost\" (its divergence is each cell's flux balance, unweighted)",
             ));
         }
         if m.projection.drift_correction != DriftCorrection::Position {

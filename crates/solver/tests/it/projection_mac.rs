@@ -247,6 +247,15 @@ fn what_the_staggered_scheme_cannot_do_is_refused_by_key() {
     let mut m = mac(TransferKind::Apic);
     m.projection.advection = Advection::Flux;
     assert_eq!(key_of(scene(), m), None);
+    let mut m = mac(TransferKind::Apic);
+    m.projection.free_surface = FreeSurface::Ghost;
+    assert_eq!(key_of(scene(), m), None);
+    let mut m = mac(TransferKind::Apic);
+    m.projection.free_surface = FreeSurface::GhostOrthogonal;
+    assert_eq!(
+        key_of(scene(), m).as_deref(),
+        Some("method.projection.free_surface")
+    );
     let collocated = || {
         let mut m = common::method(ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Usl);
         m.formulation = Formulation::PressureImplicit;

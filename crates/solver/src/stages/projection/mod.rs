@@ -136,6 +136,9 @@ pub struct Scratch {
     ghost: Vec<[f64; 4]>,
     /// Whether the divergence takes the ghost weights too (`ghost_orthogonal`).
     orthogonal: bool,
+    /// Whether p = 0 sits where the fluid fraction crosses a half (either
+    /// ghost surface) rather than at the air cells' centres.
+    ghost_surface: bool,
     /// Per unknown: h^2 / (K_t dt^2) (over theta^2 under the staggered
     /// scheme's theta; 0 at K = infinity), and the drift target r.
     alpha: Vec<f64>,
@@ -215,6 +218,7 @@ impl Scratch {
             level: vec![0.0; n_cells],
             ghost: Vec::with_capacity(n_cells),
             orthogonal: false,
+            ghost_surface: false,
             alpha: Vec::with_capacity(n_cells),
             target: Vec::with_capacity(n_cells),
             shift: Vec::with_capacity(n_cells),

@@ -22,7 +22,7 @@ pub use packing::correct_packing;
 
 use super::surface::mark_fluid;
 use super::{Inputs, Scratch};
-use crate::config::{Advection, AdvectionStep, FaceDensity, FreeSurface, ProjectionSettings};
+use crate::config::{Advection, AdvectionStep, FaceDensity, ProjectionSettings};
 use crate::grid::Grid;
 use crate::particles::{Mat2, Particles, Vec2};
 use crate::viscosity;
@@ -78,7 +78,7 @@ pub fn project(inputs: &Inputs, gravity: Vec2, affine: bool, grid: &mut Grid, s:
     let h = grid.h;
     let full_mass = mat.rho0 * h * h;
     let light = set.light_node_share * full_mass;
-    mark_fluid(ps, grid, s, FreeSurface::Cell, full_mass, set.holes);
+    mark_fluid(ps, grid, s, set.free_surface, full_mass, set.holes);
     let mut faces = std::mem::take(&mut s.faces);
     let src = Sources {
         particles: ps,
@@ -108,7 +108,7 @@ pub fn project(inputs: &Inputs, gravity: Vec2, affine: bool, grid: &mut Grid, s:
     super::pcg::solve_assembled(s, set, set.tolerance);
     solve::correct(&mut faces.fields, s, h, dt, light);
     solve::book(&faces.fields, s, h, dt, theta);
-    super::surface::reconstruct(s, h, false);
+    super::surface::reconstruct(s, h, s.ghost_surface);
     onto_nodes(&faces, grid, s, dt);
     s.faces = faces;
 }

@@ -3,7 +3,9 @@
 //!
 //!   alpha p_c + sum_f (h^2 / m_f) (p_c - p_across) = alpha p(J^n) - (h^2 / dt) D u*
 //!
-//! over its four faces (a wall face: none; an air cell across: p = 0),
+//! over its four faces (a wall face: none; an air cell across: p = 0 at
+//! its centre, or under the ghost surface at the share theta of the way
+//! there, which scales that face's coupling by 1 / theta),
 //! alpha = h^2 / (K_t dt^2); then u_f = u*_f - dt h (p_hi - p_lo) / m_f.
 //! Under the theta rule p is the mix theta p^{n+1} + (1 - theta) p^n:
 //! alpha becomes alpha / theta^2 and D u* becomes D u* + (1 - theta) /
@@ -65,9 +67,12 @@ pub fn assemble(
                 continue;
             }
             let coupling = h2 / field.operator_mass[field.index(i, j)].max(light);
-            row[4] += coupling;
             if s.neighbours[k][slot] != AIR {
+                row[4] += coupling;
                 row[slot] = -coupling;
+            } else {
+                let (di, dj) = (slot as i64 % 3 - 1, slot as i64 / 3 - 1);
+                row[4] += coupling / surface_share(s, c, (ci + di, cj + dj));
             }
         }
         s.alpha.push(alpha);
@@ -112,12 +117,37 @@ fn cells_beside(field: &FaceField, i: i64, j: i64) -> [(i64, i64); 2] {
     }
 }
 
-/// The pressure of cell (i, j): the solved one, 0 in an air cell.
-fn pressure_at(s: &Scratch, i: i64, j: i64) -> f64 {
+/// The pressure of cell (i, j): the solved one, None in an air cell.
+fn pressure_at(s: &Scratch, (i, j): (i64, i64)) -> Option<f64> {
     let c = i as usize + j as usize * s.cells[0];
     match s.unknown[c] {
-        AIR => 0.0,
-        k => s.x[k as usize],
+        AIR => None,
+        k => Some(s.x[k as usize]),
+    }
+}
+
+/// The share theta of the way from fluid cell `c`'s centre to the centre
+/// of the air cell at (i, j) at which p = 0 sits: 1 (the air cell's centre) unless a
+/// ghost surface puts it where the fluid fraction crosses a half.
+fn surface_share(s: &Scratch, c: usize, (i, j): (i64, i64)) -> f64 {
+    if !s.ghost_surface {
+        return 1.0;
+    }
+    s.cell_at(i, j).map_or(1.0, |o| s.surface_share(c, o))
+}
+
+/// p_hi - p_lo across a face between cells `lo` and `hi`: an air cell
+/// reads p = 0 at its centre, or under a ghost surface the ghost pressure
+/// p (theta - 1) / theta of its fluid neighbour's p, so that the jump is
+/// p / theta: the surface moves through the cell with the fluid fraction
+/// instead of jumping a cell when a particle crosses a cell's edge.
+fn pressure_jump(s: &Scratch, lo: (i64, i64), hi: (i64, i64)) -> f64 {
+    let index = |(i, j): (i64, i64)| i as usize + j as usize * s.cells[0];
+    match (pressure_at(s, lo), pressure_at(s, hi)) {
+        (Some(p_lo), Some(p_hi)) => p_hi - p_lo,
+        (Some(p_lo), None) => -p_lo / surface_share(s, index(lo), hi),
+        (None, Some(p_hi)) => p_hi / surface_share(s, index(hi), lo),
+        (None, None) => 0.0,
     }
 }
 
@@ -151,7 +181,7 @@ pub fn apply_gradient(
         }
         let (i, j) = field.coords(f);
         let [lo, hi] = cells_beside(field, i, j);
-        let jump = pressure_at(s, hi.0, hi.1) - pressure_at(s, lo.0, lo.1);
+        let jump = pressure_jump(s, lo, hi);
         *value -= scale * h * jump / field.operator_mass[f].max(light);
     }
     follow_neighbours(field, values);
@@ -230,7 +260,8 @@ pub fn slave_air_faces(field: &mut FaceField, s: &Scratch, material: Option<f64>
 /// neighbours are all fluid takes the material's mass rho0 h^2 / J (J the
 /// mean of its two cells' particle volumes over their rest volumes); a
 /// face nearer the surface keeps the particles' mass (its fill), capped
-/// there. The particles' mass varies with their packing, and a projection
+/// there; under the ghost surface every face beside a fluid cell takes the
+/// material's mass, since theta places the surface. The particles' mass varies with their packing, and a projection
 /// that reads it as density lets gravity sink the denser packing and lift
 /// the looser (docs/findings/projection_mac.md, "The packing's buoyancy").
 fn material_density(field: &FaceField, s: &Scratch, full: f64, op: &mut [f64]) {
@@ -252,9 +283,15 @@ fn material_density(field: &FaceField, s: &Scratch, full: f64, op: &mut [f64]) {
             continue;
         };
         let material = full * 0.5 * (compression(lo) + compression(hi));
-        let inside = [lo, hi]
-            .iter()
-            .all(|&c| s.unknown[c] != AIR && s.deep(c, 1));
+        let inside = if s.ghost_surface {
+            // The ghost surface's theta places p = 0; a face's fill would
+            // place it a second time.
+            [lo, hi].iter().any(|&c| s.unknown[c] != AIR)
+        } else {
+            [lo, hi]
+                .iter()
+                .all(|&c| s.unknown[c] != AIR && s.deep(c, 1))
+        };
         *m = if inside { material } else { m.min(material) };
     }
 }
