@@ -416,7 +416,7 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
         inputs.dt,
     );
     let full_mass = mat.rho0 * grid.h * grid.h;
-    mark_fluid(ps, grid, s, set.free_surface, full_mass, Holes::Air);
+    mark_fluid(ps, grid, s, set.free_surface, full_mass, Holes::Air, false);
     mark_collocated_rows(s, set.free_surface);
     let light = set.light_node_share * full_mass;
     prepare_velocities(grid, s, set, light, dt);

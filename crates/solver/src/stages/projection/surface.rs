@@ -177,7 +177,7 @@ pub(super) fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64, light: f64, mir
 /// Fluid cells (those holding a particle; with `holes` other than air an
 /// empty cell each of whose sides is a wall or holds one, and with
 /// `"kept"` an emptied one still half full; under the ghost surface also
-/// at least half full), each particle's cell, the cells' volumes, the
+/// at least half full, or with `spray_fluid` spray: `is_spray`), each particle's cell, the cells' volumes, the
 /// unknowns' corners and their neighbours, and how deep each cell lies.
 pub(super) fn mark_fluid(
     ps: &Particles,
@@ -186,6 +186,7 @@ pub(super) fn mark_fluid(
     surface: FreeSurface,
     full_mass: f64,
     holes: Holes,
+    spray_fluid: bool,
 ) {
     bin_particles(ps, grid, s);
     let ghost = surface != FreeSurface::Cell;
@@ -194,7 +195,7 @@ pub(super) fn mark_fluid(
     }
     s.orthogonal = surface == FreeSurface::GhostOrthogonal;
     s.ghost_surface = ghost;
-    mark_cells(grid, s, ghost, holes);
+    mark_cells(grid, s, ghost, holes, spray_fluid);
     fill_reach(s);
     fill_neighbour_rows(s);
 }
@@ -255,6 +256,20 @@ fn fill_levels(grid: &Grid, s: &mut Scratch, full_mass: f64) {
     }
 }
 
+/// Whether cell `c` holds particles at a fluid fraction below a half with
+/// none of its four neighbours at a half or more: a drop or a thin sheet
+/// away from the water's body, which the ghost surface would leave in free
+/// flight (the staggered scheme keeps it fluid, at p = 0 around it, so
+/// that it lands with its volume).
+fn is_spray(s: &Scratch, c: usize) -> bool {
+    let (ci, cj) = ((c % s.cells[0]) as i64, (c / s.cells[0]) as i64);
+    s.vol0[c] > 0.0
+        && s.level[c] < 0.0
+        && [(-1, 0), (1, 0), (0, -1), (0, 1)]
+            .iter()
+            .all(|&(di, dj)| s.cell_at(ci + di, cj + dj).is_none_or(|d| s.level[d] < 0.0))
+}
+
 /// Whether cell `c` is empty with each of its four sides a wall or a
 /// cell holding particles (the staggered scheme's box is walled).
 fn is_hole(s: &Scratch, c: usize) -> bool {
@@ -267,7 +282,7 @@ fn is_hole(s: &Scratch, c: usize) -> bool {
 
 /// The unknowns: each fluid cell numbered, its corners kept and flagged as
 /// fluid nodes; a cell left out reads p = 0.
-fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool, holes: Holes) {
+fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool, holes: Holes, spray_fluid: bool) {
     // The flags live on the owner nodes (a periodic edge's two sides are one node).
     for c in &s.corners {
         for &n in c {
@@ -284,7 +299,8 @@ fn mark_cells(grid: &Grid, s: &mut Scratch, ghost: bool, holes: Holes) {
             };
         // A cell whose corners the particles' stencils do not all reach (a
         // particle clamped into it from outside the box) has no operator row.
-        let corners = (held && (!ghost || s.level[c] >= 0.0))
+        let surface_side = !ghost || s.level[c] >= 0.0 || spray_fluid && is_spray(s, c);
+        let corners = (held && surface_side)
             .then(|| cell_corners(s, grid, c))
             .filter(|corners| corners.iter().all(|&n| grid.is_active(n as usize)));
         if let Some(corners) = corners {
@@ -597,5 +613,34 @@ mod ghost_tests {
                 "{surface:?}: top cell {error}"
             );
         }
+    }
+
+    /// A drop of one cell's particles (fluid fraction about a quarter)
+    /// falling 10 cm above the column: the ghost surface leaves it fluid on
+    /// the staggered scheme (spray keeps its volume), while a skin of one
+    /// particle row on the column's top, beside the water's body, is air.
+    #[test]
+    fn the_ghost_surface_keeps_spray_fluid_and_thin_surface_cells_air() {
+        let mut cfg: SolverConfig = column(Holes::Kept, None).cfg.clone();
+        let drop = crate::config::Body {
+            rect: [0.04, 0.2, 0.05, 0.21],
+            ..cfg.scene.bodies[0].clone()
+        };
+        let skin = crate::config::Body {
+            rect: [0.04, 0.1, 0.05, 0.105],
+            ..cfg.scene.bodies[0].clone()
+        };
+        cfg.scene.bodies.extend([drop, skin]);
+        cfg.scene.gravity = 9.81;
+        cfg.method.projection.free_surface = FreeSurface::Ghost;
+        let mut s = Solver::new(cfg).unwrap();
+        s.step().unwrap();
+        let p = &s.projection;
+        let cell = |i: usize, j: usize| i + j * p.cells[0];
+        let (drop, skin) = (cell(4, 20), cell(4, 10));
+        assert!(p.level[drop] < 0.0, "drop level {}", p.level[drop]);
+        assert_ne!(p.unknown[drop], super::AIR, "the drop is air");
+        assert!(p.level[skin] < 0.0, "skin level {}", p.level[skin]);
+        assert_eq!(p.unknown[skin], super::AIR, "the skin is fluid");
     }
 }
