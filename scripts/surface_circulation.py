@@ -13,7 +13,7 @@ orbits. Per VTK file of each CASE (its `output.vtk_times`):
   started within D (default 0.05 m) of the water's top has moved from
   where it started (linear theory's orbit: a / tanh(k H) across, a up).
 Cell size H defaults to 0.01 m (the binning; give the run's own).
-Standard library only (the VTK reader of scripts/check_vtu.py).
+Standard library only (the particle reader of scripts/fixed_span_jumps.py).
 """
 import argparse
 import glob
@@ -21,14 +21,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from check_vtu import read_vtu  # noqa: E402
-
-
-def load(path):
-    """The file's time and id -> (x, y, vx, vy)."""
-    t, _, n, a = read_vtu(path)
-    pts, vel, ids = a["Points"][1], a["velocity"][1], a["id"][1]
-    return t, {ids[i]: (pts[3 * i], pts[3 * i + 1], vel[3 * i], vel[3 * i + 1]) for i in range(n)}
+from fixed_span_jumps import particles as load  # noqa: E402
 
 
 def cell_means(particles, h):

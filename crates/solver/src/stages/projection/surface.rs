@@ -177,8 +177,9 @@ pub(super) fn extrapolate(grid: &mut Grid, s: &Scratch, dt: f64, light: f64, mir
 /// Fluid cells (those holding a particle; with `holes` other than air an
 /// empty cell each of whose sides is a wall or holds one, and with
 /// `"kept"` an emptied one still half full; under the ghost surface also
-/// at least half full, or with `spray_fluid` spray: `is_spray`), each particle's cell, the cells' volumes, the
-/// unknowns' corners and their neighbours, and how deep each cell lies.
+/// at least half full, or with `spray_fluid` spray: `is_spray`), each
+/// particle's cell, the cells' volumes, the unknowns' corners and their
+/// neighbours, and how deep each cell lies.
 pub(super) fn mark_fluid(
     ps: &Particles,
     grid: &Grid,

@@ -117,18 +117,10 @@ fn cells_beside(field: &FaceField, i: i64, j: i64) -> [(i64, i64); 2] {
     }
 }
 
-/// The pressure of cell (i, j): the solved one, None in an air cell.
-fn pressure_at(s: &Scratch, (i, j): (i64, i64)) -> Option<f64> {
-    let c = i as usize + j as usize * s.cells[0];
-    match s.unknown[c] {
-        AIR => None,
-        k => Some(s.x[k as usize]),
-    }
-}
-
 /// The share theta of the way from fluid cell `c`'s centre to the centre
-/// of the air cell at (i, j) at which p = 0 sits: 1 (the air cell's centre) unless a
-/// ghost surface puts it where the fluid fraction crosses a half.
+/// of the air cell at (i, j) at which p = 0 sits: 1 (the air cell's
+/// centre) unless a ghost surface puts it where the fluid fraction
+/// crosses a half.
 fn surface_share(s: &Scratch, c: usize, (i, j): (i64, i64)) -> f64 {
     if !s.ghost_surface {
         return 1.0;
@@ -136,17 +128,21 @@ fn surface_share(s: &Scratch, c: usize, (i, j): (i64, i64)) -> f64 {
     s.cell_at(i, j).map_or(1.0, |o| s.surface_share(c, o))
 }
 
-/// p_hi - p_lo across a face between cells `lo` and `hi`: an air cell
-/// reads p = 0 at its centre, or under a ghost surface the ghost pressure
-/// p (theta - 1) / theta of its fluid neighbour's p, so that the jump is
-/// p / theta: the surface moves through the cell with the fluid fraction
-/// instead of jumping a cell when a particle crosses a cell's edge.
+/// p_hi - p_lo across a face between in-box cells `lo` and `hi`: an air
+/// cell reads p = 0 at its centre, or under a ghost surface the ghost
+/// pressure p (theta - 1) / theta of its fluid neighbour's p, so that the
+/// jump is p / theta: the surface moves through the cell with the fluid
+/// fraction instead of jumping a cell when a particle crosses a cell's edge.
 fn pressure_jump(s: &Scratch, lo: (i64, i64), hi: (i64, i64)) -> f64 {
-    let index = |(i, j): (i64, i64)| i as usize + j as usize * s.cells[0];
-    match (pressure_at(s, lo), pressure_at(s, hi)) {
+    let [c_lo, c_hi] = [lo, hi].map(|(i, j)| i as usize + j as usize * s.cells[0]);
+    let solved = |c: usize| match s.unknown[c] {
+        AIR => None,
+        k => Some(s.x[k as usize]),
+    };
+    match (solved(c_lo), solved(c_hi)) {
         (Some(p_lo), Some(p_hi)) => p_hi - p_lo,
-        (Some(p_lo), None) => -p_lo / surface_share(s, index(lo), hi),
-        (None, Some(p_hi)) => p_hi / surface_share(s, index(hi), lo),
+        (Some(p_lo), None) => -p_lo / surface_share(s, c_lo, hi),
+        (None, Some(p_hi)) => p_hi / surface_share(s, c_hi, lo),
         (None, None) => 0.0,
     }
 }
@@ -261,9 +257,9 @@ pub fn slave_air_faces(field: &mut FaceField, s: &Scratch, material: Option<f64>
 /// mean of its two cells' particle volumes over their rest volumes); a
 /// face nearer the surface keeps the particles' mass (its fill), capped
 /// there; under the ghost surface every face beside a fluid cell takes the
-/// material's mass, since theta places the surface. The particles' mass varies with their packing, and a projection
-/// that reads it as density lets gravity sink the denser packing and lift
-/// the looser (docs/findings/projection_mac.md, "The packing's buoyancy").
+/// material's mass, since theta places the surface. The particles' mass
+/// varies with their packing, and a projection that reads it as density
+/// lets gravity sink the denser packing and lift the looser (docs/findings/projection_mac.md, "The packing's buoyancy").
 fn material_density(field: &FaceField, s: &Scratch, full: f64, op: &mut [f64]) {
     let compression = |c: usize| {
         if s.vol[c] > 0.0 && s.vol0[c] > 0.0 {
