@@ -388,6 +388,10 @@ pub struct ProjectionSettings {
     /// the staggered scheme the surface then moves with the water instead
     /// of jumping a cell when a particle crosses a cell's edge).
     pub free_surface: FreeSurface,
+    /// How a ghost surface reads where p = 0 sits between a fluid cell and
+    /// its air neighbour from their fluid fractions.
+    #[serde(skip_serializing_if = "SurfaceLevel::is_fraction")]
+    pub surface_level: SurfaceLevel,
     /// What the nodes beyond the fluid cells (which take their fluid
     /// neighbours' velocity after the solve) bring to it.
     pub air_nodes: AirNodes,
@@ -481,6 +485,26 @@ pub enum FreeSurface {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+pub enum SurfaceLevel {
+    /// The fraction less a half, interpolated linearly between the two
+    /// centres: the fraction is a smooth step (the kernels smear the
+    /// surface), so the surface placed moves by up to 9 % less than the
+    /// water between two centres (quadratic B-splines).
+    Fraction,
+    /// Each fraction mapped to the depth at which a cell below a flat
+    /// surface reads it under the run's kernel, then interpolated: exact
+    /// for a flat surface along a grid axis at any height in its cell.
+    Distance,
+}
+
+impl SurfaceLevel {
+    fn is_fraction(&self) -> bool {
+        *self == SurfaceLevel::Fraction
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum AirNodes {
     /// Their velocity is a kinematic constraint (the mean of their fluid
     /// neighbours'), so their mass and u* momentum join those neighbours'
@@ -536,6 +560,7 @@ impl Default for ProjectionSettings {
             theta: 1.0,
             gravity_cfl: None,
             free_surface: FreeSurface::Cell,
+            surface_level: SurfaceLevel::Fraction,
             air_nodes: AirNodes::Slaved,
             light_node_share: 0.01,
             face_density: FaceDensity::Particles,
@@ -926,6 +951,11 @@ impl SolverConfig {
     /// staggered scheme's keys.
     fn validate_scheme(&self) -> Result<(), ConfigError> {
         let p = &self.method.projection;
+        check(
+            p.surface_level == SurfaceLevel::Fraction || p.free_surface != FreeSurface::Cell,
+            "method.projection.surface_level",
+            "places a ghost surface: set method.projection.free_surface = \"ghost\", or use \"fraction\"",
+        )?;
         if p.scheme == ProjectionScheme::Mac {
             return self.validate_mac();
         }

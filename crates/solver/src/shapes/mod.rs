@@ -4,7 +4,7 @@
 use crate::choices::ShapeKind;
 pub(crate) mod bspline;
 mod gimp;
-mod linear;
+pub(crate) mod linear;
 
 /// Runs `$body` with the constant `$w` set to the shape's stencil width in
 /// nodes per axis (2, 3 or 4): the one place the width is matched, so every

@@ -158,6 +158,7 @@ fn project(s: &mut Solver, clock: &mut Instant) {
         particles: &s.particles,
         material: &s.cfg.scene.materials[0],
         settings: &s.cfg.method.projection,
+        shape: s.cfg.method.shape,
         dt: s.dt,
     };
     if s.staggered() {

@@ -249,7 +249,14 @@ fn what_the_staggered_scheme_cannot_do_is_refused_by_key() {
     assert_eq!(key_of(scene(), m), None);
     let mut m = mac(TransferKind::Apic);
     m.projection.free_surface = FreeSurface::Ghost;
+    m.projection.surface_level = SurfaceLevel::Distance;
     assert_eq!(key_of(scene(), m), None);
+    let mut m = mac(TransferKind::Apic);
+    m.projection.surface_level = SurfaceLevel::Distance;
+    assert_eq!(
+        key_of(scene(), m).as_deref(),
+        Some("method.projection.surface_level")
+    );
     let mut m = mac(TransferKind::Apic);
     m.projection.free_surface = FreeSurface::GhostOrthogonal;
     assert_eq!(

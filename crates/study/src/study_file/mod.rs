@@ -383,6 +383,16 @@ mod tests {
             toml::from_str::<solver::Method>("[projection]\nfree_surface = \"level_set\"\n")
                 .is_err()
         );
+        let method: solver::Method =
+            toml::from_str("[projection]\nsurface_level = \"distance\"\n").unwrap();
+        assert_eq!(
+            method.projection.surface_level,
+            solver::SurfaceLevel::Distance
+        );
+        assert_eq!(
+            solver::Method::default().projection.surface_level,
+            solver::SurfaceLevel::Fraction
+        );
         assert_eq!(
             solver::Method::default().projection.air_nodes,
             solver::AirNodes::Slaved

@@ -30,10 +30,12 @@ pub mod mac;
 mod operator;
 mod pcg;
 mod surface;
+pub mod surface_depth;
 
 pub use advect::{shift_particles, update_particles};
 
-use crate::config::{AirNodes, FreeSurface, Holes, Material, ProjectionSettings};
+use crate::choices::ShapeKind;
+use crate::config::{AirNodes, FreeSurface, Holes, Material, ProjectionSettings, SurfaceLevel};
 use crate::grid::{Grid, PAD};
 use crate::particles::{Particles, Vec2};
 use operator::{add_checkerboard, apply_g, assemble, divergence, UNWEIGHTED};
@@ -129,6 +131,12 @@ pub struct Scratch {
     /// Per cell: the grid's fluid fraction less a half (the free surface's
     /// level; the ghost surfaces and `holes = "kept"` only).
     level: Vec<f64>,
+    /// Per cell: how deep below the surface its fraction says its centre
+    /// lies, in cells (`surface_level = "distance"` only; `surface_depth`).
+    depth: Vec<f64>,
+    /// The kernel whose response to a flat surface maps the fractions to
+    /// depths (`surface_level = "distance"`), or None (linear in them).
+    depth_basis: Option<ShapeKind>,
     /// Per unknown and corner: 1 / theta where the cell diagonally across
     /// that corner is air (theta the share of the way to its centre at
     /// which the surface lies), else 1. The corner's pressure force is
@@ -216,6 +224,8 @@ impl Scratch {
             particle_cell: vec![0; particles],
             corners: Vec::with_capacity(n_cells),
             level: vec![0.0; n_cells],
+            depth: vec![0.0; n_cells],
+            depth_basis: None,
             ghost: Vec::with_capacity(n_cells),
             orthogonal: false,
             ghost_surface: false,
@@ -320,14 +330,19 @@ impl Scratch {
 
     /// The share theta of the way from fluid cell `c`'s centre to air cell
     /// `o`'s at which the fluid fraction, interpolated linearly, crosses a
-    /// half: where the free surface's p = 0 sits (ghost fluid). Floored at
-    /// `MIN_SURFACE_SHARE`; 1 (the air centre) where `o` reads fuller than
-    /// a half (an air cell without particles).
+    /// half (or, with `depth_basis`, the depths read from the fractions
+    /// cross 0): where the free surface's p = 0 sits (ghost fluid).
+    /// Floored at `MIN_SURFACE_SHARE`; 1 (the air centre) where `o` reads
+    /// fuller than a half (an air cell without particles).
     fn surface_share(&self, c: usize, o: usize) -> f64 {
-        let (inside, outside) = (self.level[c].max(0.0), self.level[o]);
-        if outside >= 0.0 {
+        if self.level[o] >= 0.0 {
             return 1.0;
         }
+        let [inside, outside] = match self.depth_basis {
+            Some(_) => [self.depth[c], self.depth[o]],
+            None => [self.level[c], self.level[o]],
+        };
+        let inside = inside.max(0.0);
         (inside / (inside - outside)).clamp(MIN_SURFACE_SHARE, 1.0)
     }
 
@@ -402,7 +417,16 @@ pub struct Inputs<'a> {
     pub particles: &'a Particles,
     pub material: &'a Material,
     pub settings: &'a ProjectionSettings,
+    /// The run's kernels (for `surface_level = "distance"`).
+    pub shape: ShapeKind,
     pub dt: f64,
+}
+
+impl Inputs<'_> {
+    /// The kernel the ghost surface reads depths by, if it does.
+    fn depth_basis(&self) -> Option<ShapeKind> {
+        (self.settings.surface_level == SurfaceLevel::Distance).then_some(self.shape)
+    }
 }
 
 /// Marks the fluid cells, applies the hourglass control to u* and solves
@@ -416,6 +440,7 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
         inputs.dt,
     );
     let full_mass = mat.rho0 * grid.h * grid.h;
+    s.depth_basis = inputs.depth_basis();
     mark_fluid(ps, grid, s, set.free_surface, full_mass, Holes::Air, false);
     mark_collocated_rows(s, set.free_surface);
     let light = set.light_node_share * full_mass;
