@@ -392,6 +392,12 @@ pub struct ProjectionSettings {
     /// its air neighbour from their fluid fractions.
     #[serde(skip_serializing_if = "SurfaceLevel::is_fraction")]
     pub surface_level: SurfaceLevel,
+    /// The least share theta of the way to an air cell's centre at which
+    /// a ghost surface may sit, 0.001 ..= 0.5: the surface face's pressure
+    /// force takes 1 / theta, so a surface near a fluid cell's centre
+    /// (a thin sheet) multiplies it up to 1 / this.
+    #[serde(skip_serializing_if = "is_default_surface_floor")]
+    pub min_surface_share: f64,
     /// What the nodes beyond the fluid cells (which take their fluid
     /// neighbours' velocity after the solve) bring to it.
     pub air_nodes: AirNodes,
@@ -497,6 +503,13 @@ pub enum SurfaceLevel {
     Distance,
 }
 
+/// `min_surface_share`'s default.
+const DEFAULT_SURFACE_FLOOR: f64 = 0.05;
+
+fn is_default_surface_floor(floor: &f64) -> bool {
+    *floor == DEFAULT_SURFACE_FLOOR
+}
+
 impl SurfaceLevel {
     fn is_fraction(&self) -> bool {
         *self == SurfaceLevel::Fraction
@@ -561,6 +574,7 @@ impl Default for ProjectionSettings {
             gravity_cfl: None,
             free_surface: FreeSurface::Cell,
             surface_level: SurfaceLevel::Fraction,
+            min_surface_share: DEFAULT_SURFACE_FLOOR,
             air_nodes: AirNodes::Slaved,
             light_node_share: 0.01,
             face_density: FaceDensity::Particles,
@@ -591,6 +605,12 @@ fn validate_projection_ranges(p: &ProjectionSettings) -> Result<(), ConfigError>
     within(p.checkerboard, 0.0, 16.0, "method.projection.checkerboard")?;
     within(p.drift, 0.0, 1.0, "method.projection.drift")?;
     within(p.theta, 0.5, 1.0, "method.projection.theta")?;
+    within(
+        p.min_surface_share,
+        1e-3,
+        0.5,
+        "method.projection.min_surface_share",
+    )?;
     if let Some(c) = p.gravity_cfl {
         within(c, 1e-3, 1.0, "method.projection.gravity_cfl")?;
     }
@@ -955,6 +975,11 @@ impl SolverConfig {
             p.surface_level == SurfaceLevel::Fraction || p.free_surface != FreeSurface::Cell,
             "method.projection.surface_level",
             "places a ghost surface: set method.projection.free_surface = \"ghost\", or use \"fraction\"",
+        )?;
+        check(
+            is_default_surface_floor(&p.min_surface_share) || p.free_surface != FreeSurface::Cell,
+            "method.projection.min_surface_share",
+            "floors a ghost surface's theta: set method.projection.free_surface = \"ghost\", or leave it at 0.05",
         )?;
         if p.scheme == ProjectionScheme::Mac {
             return self.validate_mac();

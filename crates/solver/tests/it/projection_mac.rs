@@ -258,6 +258,19 @@ fn what_the_staggered_scheme_cannot_do_is_refused_by_key() {
         Some("method.projection.surface_level")
     );
     let mut m = mac(TransferKind::Apic);
+    m.projection.min_surface_share = 0.2;
+    assert_eq!(
+        key_of(scene(), m.clone()).as_deref(),
+        Some("method.projection.min_surface_share")
+    );
+    m.projection.free_surface = FreeSurface::Ghost;
+    assert_eq!(key_of(scene(), m.clone()), None);
+    m.projection.min_surface_share = 0.0;
+    assert_eq!(
+        key_of(scene(), m).as_deref(),
+        Some("method.projection.min_surface_share")
+    );
+    let mut m = mac(TransferKind::Apic);
     m.projection.free_surface = FreeSurface::GhostOrthogonal;
     assert_eq!(
         key_of(scene(), m).as_deref(),

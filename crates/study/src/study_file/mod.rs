@@ -384,7 +384,9 @@ mod tests {
                 .is_err()
         );
         let method: solver::Method =
-            toml::from_str("[projection]\nsurface_level = \"distance\"\n").unwrap();
+            toml::from_str("[projection]\nsurface_level = \"distance\"\nmin_surface_share = 0.2\n")
+                .unwrap();
+        assert_eq!(method.projection.min_surface_share, 0.2);
         assert_eq!(
             method.projection.surface_level,
             solver::SurfaceLevel::Distance

@@ -45,11 +45,6 @@ use surface::{extrapolate, mark_collocated_rows, mark_fluid, reconstruct, slave_
 /// No unknown: an air cell.
 const AIR: u32 = u32::MAX;
 
-/// The least share of the way to an air cell's centre at which the ghost
-/// surface may sit: 1 / theta scales a corner's pressure force, and a
-/// surface on the fluid cell's centre would make it unbounded.
-const MIN_SURFACE_SHARE: f64 = 0.05;
-
 /// The corners of a cell as (x offset, y offset, sign of x, sign of y) of
 /// the bilinear gradient at its centre: grad N = (sx, sy) / (2 h).
 const CORNERS: [(usize, usize, f64, f64); 4] = [
@@ -137,6 +132,9 @@ pub struct Scratch {
     /// The kernel whose response to a flat surface maps the fractions to
     /// depths (`surface_level = "distance"`), or None (linear in them).
     depth_basis: Option<ShapeKind>,
+    /// The least theta (`min_surface_share`): 1 / theta scales the
+    /// surface's pressure force, unbounded at the fluid cell's centre.
+    surface_floor: f64,
     /// Per unknown and corner: 1 / theta where the cell diagonally across
     /// that corner is air (theta the share of the way to its centre at
     /// which the surface lies), else 1. The corner's pressure force is
@@ -226,6 +224,7 @@ impl Scratch {
             level: vec![0.0; n_cells],
             depth: vec![0.0; n_cells],
             depth_basis: None,
+            surface_floor: ProjectionSettings::default().min_surface_share,
             ghost: Vec::with_capacity(n_cells),
             orthogonal: false,
             ghost_surface: false,
@@ -332,7 +331,7 @@ impl Scratch {
     /// `o`'s at which the fluid fraction, interpolated linearly, crosses a
     /// half (or, with `depth_basis`, the depths read from the fractions
     /// cross 0): where the free surface's p = 0 sits (ghost fluid).
-    /// Floored at `MIN_SURFACE_SHARE`; 1 (the air centre) where `o` reads
+    /// Floored at `surface_floor`; 1 (the air centre) where `o` reads
     /// fuller than a half (an air cell without particles).
     fn surface_share(&self, c: usize, o: usize) -> f64 {
         if self.level[o] >= 0.0 {
@@ -343,7 +342,7 @@ impl Scratch {
             None => [self.level[c], self.level[o]],
         };
         let inside = inside.max(0.0);
-        (inside / (inside - outside)).clamp(MIN_SURFACE_SHARE, 1.0)
+        (inside / (inside - outside)).clamp(self.surface_floor, 1.0)
     }
 
     /// Cell `c`'s particle volumes over their rest volumes; 1 in a cell
@@ -441,6 +440,7 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
     );
     let full_mass = mat.rho0 * grid.h * grid.h;
     s.depth_basis = inputs.depth_basis();
+    s.surface_floor = set.min_surface_share;
     mark_fluid(ps, grid, s, set.free_surface, full_mass, Holes::Air, false);
     mark_collocated_rows(s, set.free_surface);
     let light = set.light_node_share * full_mass;
