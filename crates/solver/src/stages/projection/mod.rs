@@ -129,6 +129,9 @@ pub struct Scratch {
     /// Per cell: how deep below the surface its fraction says its centre
     /// lies, in cells (`surface_level = "distance"` only; `surface_depth`).
     depth: Vec<f64>,
+    /// Per cell: whether this step's `depth` is read (a cell borders up
+    /// to eight fluid cells; its bisection runs once).
+    depth_read: Vec<bool>,
     /// The kernel whose response to a flat surface maps the fractions to
     /// depths (`surface_level = "distance"`), or None (linear in them).
     depth_basis: Option<ShapeKind>,
@@ -223,6 +226,7 @@ impl Scratch {
             corners: Vec::with_capacity(n_cells),
             level: vec![0.0; n_cells],
             depth: vec![0.0; n_cells],
+            depth_read: vec![false; n_cells],
             depth_basis: None,
             surface_floor: ProjectionSettings::default().min_surface_share,
             ghost: Vec::with_capacity(n_cells),

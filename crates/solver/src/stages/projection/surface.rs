@@ -266,7 +266,13 @@ fn fill_depths(s: &mut Scratch) {
     let Some(basis) = s.depth_basis else {
         return;
     };
-    let depth = |s: &Scratch, c: usize| surface_depth::depth_of(basis, s.level[c] + 0.5);
+    s.depth_read.fill(false);
+    let read = |s: &mut Scratch, c: usize| {
+        if !s.depth_read[c] {
+            s.depth[c] = surface_depth::depth_of(basis, s.level[c] + 0.5);
+            s.depth_read[c] = true;
+        }
+    };
     for k in 0..s.fluid.len() {
         let c = s.fluid[k] as usize;
         let (ci, cj) = ((c % s.cells[0]) as i64, (c / s.cells[0]) as i64);
@@ -277,12 +283,12 @@ fn fill_depths(s: &mut Scratch) {
                 continue;
             }
             if let Some(o) = s.cell_at(ci + dx, cj + dy) {
-                s.depth[o] = depth(s, o);
+                read(s, o);
                 beside_air = true;
             }
         }
         if beside_air {
-            s.depth[c] = depth(s, c);
+            read(s, c);
         }
     }
 }

@@ -20,65 +20,89 @@ pub const DEPTH_BOUND: f64 = 1.5;
 /// Halvings of the bracket [-DEPTH_BOUND, DEPTH_BOUND]: 3 / 2^44 < 1e-12.
 const BISECTIONS: u32 = 44;
 
-/// The share of a grid kernel that lies more than `s >= 0` cells beyond
-/// its node: 1/2 - (F(s) - 1/2). GIMP (uGIMP and cpGIMP) spreads the
+/// The share of the hat that lies more than `s >= 0` cells beyond its
+/// node: 1/2 - (F(s) - 1/2). GIMP (uGIMP and cpGIMP) spreads the
 /// particles' mass over their domains and integrates the hat, so a
 /// continuum of them reads the hat's.
-fn tail(basis: ShapeKind, s: f64) -> f64 {
+fn hat_tail(s: f64) -> f64 {
+    let d = (1.0 - s).max(0.0);
+    0.5 * d * d
+}
+
+/// The quadratic B-spline's tail, as `hat_tail`.
+fn quadratic_tail(s: f64) -> f64 {
+    if s < 0.5 {
+        0.5 - 0.75 * s + s * s * s / 3.0
+    } else {
+        let d = (1.5 - s).max(0.0);
+        d * d * d / 6.0
+    }
+}
+
+/// The cubic B-spline's tail, as `hat_tail`.
+fn cubic_tail(s: f64) -> f64 {
+    if s < 1.0 {
+        0.5 - 2.0 * s / 3.0 + s * s * s / 3.0 - s * s * s * s / 8.0
+    } else {
+        let d = (2.0 - s).max(0.0);
+        d * d * d * d / 24.0
+    }
+}
+
+/// The kernel's tail; matched once per call of `depth_of`, so that its
+/// bisection runs on one kernel's arithmetic.
+fn tail_of(basis: ShapeKind) -> fn(f64) -> f64 {
     match basis {
-        ShapeKind::Linear | ShapeKind::Gimp | ShapeKind::Cpgimp => {
-            let d = (1.0 - s).max(0.0);
-            0.5 * d * d
-        }
-        ShapeKind::Bspline2 => {
-            if s < 0.5 {
-                0.5 - 0.75 * s + s * s * s / 3.0
-            } else {
-                let d = (1.5 - s).max(0.0);
-                d * d * d / 6.0
-            }
-        }
-        ShapeKind::Bspline3 => {
-            if s < 1.0 {
-                0.5 - 2.0 * s / 3.0 + s * s * s / 3.0 - s * s * s * s / 8.0
-            } else {
-                let d = (2.0 - s).max(0.0);
-                d * d * d * d / 24.0
-            }
-        }
+        ShapeKind::Linear | ShapeKind::Gimp | ShapeKind::Cpgimp => hat_tail,
+        ShapeKind::Bspline2 => quadratic_tail,
+        ShapeKind::Bspline3 => cubic_tail,
     }
 }
 
 /// F(s): the share of a node's kernel below a flat surface `s` cells above
 /// the node (s < 0: the node is above the surface).
-fn node_fraction(basis: ShapeKind, s: f64) -> f64 {
+fn node_fraction(tail: impl Fn(f64) -> f64, s: f64) -> f64 {
     if s >= 0.0 {
-        1.0 - tail(basis, s)
+        1.0 - tail(s)
     } else {
-        tail(basis, -s)
+        tail(-s)
     }
+}
+
+/// G(s) under `tail`'s kernel.
+fn fraction_by(tail: impl Fn(f64) -> f64 + Copy, s: f64) -> f64 {
+    0.5 * (node_fraction(tail, s + 0.5) + node_fraction(tail, s - 0.5))
 }
 
 /// G(s): the fluid fraction of a cell whose centre lies `s` cells below a
 /// flat surface along a grid axis.
 pub fn cell_fraction(basis: ShapeKind, s: f64) -> f64 {
-    0.5 * (node_fraction(basis, s + 0.5) + node_fraction(basis, s - 0.5))
+    fraction_by(tail_of(basis), s)
 }
 
 /// G^-1: the depth in cells, within +-`DEPTH_BOUND`, at which a cell reads
 /// `fraction`, by bisection (G increases; a fixed count of halvings, so
 /// the result is the same on every machine).
 pub fn depth_of(basis: ShapeKind, fraction: f64) -> f64 {
+    match basis {
+        ShapeKind::Linear | ShapeKind::Gimp | ShapeKind::Cpgimp => depth_by(hat_tail, fraction),
+        ShapeKind::Bspline2 => depth_by(quadratic_tail, fraction),
+        ShapeKind::Bspline3 => depth_by(cubic_tail, fraction),
+    }
+}
+
+/// `depth_of` under `tail`'s kernel (one copy per kernel).
+fn depth_by(tail: impl Fn(f64) -> f64 + Copy, fraction: f64) -> f64 {
     let (mut lo, mut hi) = (-DEPTH_BOUND, DEPTH_BOUND);
-    if fraction <= cell_fraction(basis, lo) {
+    if fraction <= fraction_by(tail, lo) {
         return lo;
     }
-    if fraction >= cell_fraction(basis, hi) {
+    if fraction >= fraction_by(tail, hi) {
         return hi;
     }
     for _ in 0..BISECTIONS {
         let mid = 0.5 * (lo + hi);
-        if cell_fraction(basis, mid) < fraction {
+        if fraction_by(tail, mid) < fraction {
             lo = mid;
         } else {
             hi = mid;
@@ -107,13 +131,14 @@ mod tests {
     #[test]
     fn a_nodes_fraction_is_its_kernels_cumulative() {
         for basis in BASES {
-            assert_eq!(node_fraction(basis, -2.5), 0.0, "{basis:?}");
-            assert_eq!(node_fraction(basis, 2.5), 1.0, "{basis:?}");
-            assert!((node_fraction(basis, 0.0) - 0.5).abs() < 1e-15, "{basis:?}");
+            let tail = tail_of(basis);
+            assert_eq!(node_fraction(tail, -2.5), 0.0, "{basis:?}");
+            assert_eq!(node_fraction(tail, 2.5), 1.0, "{basis:?}");
+            assert!((node_fraction(tail, 0.0) - 0.5).abs() < 1e-15, "{basis:?}");
             let e = 1e-6;
             for k in 0..=80 {
                 let s = -2.0 + 0.05 * k as f64 + 0.013;
-                let slope = (node_fraction(basis, s + e) - node_fraction(basis, s - e)) / (2.0 * e);
+                let slope = (node_fraction(tail, s + e) - node_fraction(tail, s - e)) / (2.0 * e);
                 let n = kernel(basis, s);
                 assert!(
                     (slope - n).abs() < 1e-8,
