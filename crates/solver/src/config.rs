@@ -494,8 +494,9 @@ pub enum FreeSurface {
 pub enum SurfaceLevel {
     /// The fraction less a half, interpolated linearly between the two
     /// centres: the fraction is a smooth step (the kernels smear the
-    /// surface), so the surface placed moves by up to 9 % less than the
-    /// water between two centres (quadratic B-splines).
+    /// surface), so the surface placed moves 9 % less than the water near
+    /// a cell's edge and up to 20 % more near a centre (quadratic
+    /// B-splines).
     Fraction,
     /// Each fraction mapped to the depth at which a cell below a flat
     /// surface reads it under the run's kernel, then interpolated: exact
@@ -974,12 +975,12 @@ impl SolverConfig {
         check(
             p.surface_level == SurfaceLevel::Fraction || p.free_surface != FreeSurface::Cell,
             "method.projection.surface_level",
-            "places a ghost surface: set method.projection.free_surface = \"ghost\", or use \"fraction\"",
+            "places a ghost surface: set method.projection.free_surface to \"ghost\" or \"ghost_orthogonal\", or use \"fraction\"",
         )?;
         check(
             is_default_surface_floor(&p.min_surface_share) || p.free_surface != FreeSurface::Cell,
             "method.projection.min_surface_share",
-            "floors a ghost surface's theta: set method.projection.free_surface = \"ghost\", or leave it at 0.05",
+            "floors a ghost surface's theta: set method.projection.free_surface to \"ghost\" or \"ghost_orthogonal\", or leave it at 0.05",
         )?;
         if p.scheme == ProjectionScheme::Mac {
             return self.validate_mac();

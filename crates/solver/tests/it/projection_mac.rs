@@ -249,27 +249,7 @@ fn what_the_staggered_scheme_cannot_do_is_refused_by_key() {
     assert_eq!(key_of(scene(), m), None);
     let mut m = mac(TransferKind::Apic);
     m.projection.free_surface = FreeSurface::Ghost;
-    m.projection.surface_level = SurfaceLevel::Distance;
     assert_eq!(key_of(scene(), m), None);
-    let mut m = mac(TransferKind::Apic);
-    m.projection.surface_level = SurfaceLevel::Distance;
-    assert_eq!(
-        key_of(scene(), m).as_deref(),
-        Some("method.projection.surface_level")
-    );
-    let mut m = mac(TransferKind::Apic);
-    m.projection.min_surface_share = 0.2;
-    assert_eq!(
-        key_of(scene(), m.clone()).as_deref(),
-        Some("method.projection.min_surface_share")
-    );
-    m.projection.free_surface = FreeSurface::Ghost;
-    assert_eq!(key_of(scene(), m.clone()), None);
-    m.projection.min_surface_share = 0.0;
-    assert_eq!(
-        key_of(scene(), m).as_deref(),
-        Some("method.projection.min_surface_share")
-    );
     let mut m = mac(TransferKind::Apic);
     m.projection.free_surface = FreeSurface::GhostOrthogonal;
     assert_eq!(
@@ -322,6 +302,35 @@ fn what_the_staggered_scheme_cannot_do_is_refused_by_key() {
     assert_eq!(
         key_of(s, mac(TransferKind::Apic)).as_deref(),
         Some("scene.periodic")
+    );
+}
+
+#[test]
+fn the_ghost_surfaces_keys_are_refused_without_one() {
+    let scene = || common::box_scene([0.2, 0.3], [0.0, 0.0, 0.1, DEPTH], water(1.5e6), 9.81);
+    let key_of = |scene: Scene, method: Method| common::refusal(scene, method).map(|e| e.key);
+    let mut m = mac(TransferKind::Apic);
+    m.projection.free_surface = FreeSurface::Ghost;
+    m.projection.surface_level = SurfaceLevel::Distance;
+    assert_eq!(key_of(scene(), m), None);
+    let mut m = mac(TransferKind::Apic);
+    m.projection.surface_level = SurfaceLevel::Distance;
+    assert_eq!(
+        key_of(scene(), m).as_deref(),
+        Some("method.projection.surface_level")
+    );
+    let mut m = mac(TransferKind::Apic);
+    m.projection.min_surface_share = 0.2;
+    assert_eq!(
+        key_of(scene(), m.clone()).as_deref(),
+        Some("method.projection.min_surface_share")
+    );
+    m.projection.free_surface = FreeSurface::Ghost;
+    assert_eq!(key_of(scene(), m.clone()), None);
+    m.projection.min_surface_share = 0.0;
+    assert_eq!(
+        key_of(scene(), m).as_deref(),
+        Some("method.projection.min_surface_share")
     );
 }
 

@@ -338,6 +338,25 @@ mod tests {
     /// "inf"` (and TOML's bare inf), `[method.projection]` with its keys; a
     /// wrong key in the table is refused.
     #[test]
+    fn the_ghost_surfaces_keys_parse() {
+        let method: solver::Method =
+            toml::from_str("[projection]\nsurface_level = \"distance\"\nmin_surface_share = 0.2\n")
+                .unwrap();
+        assert_eq!(method.projection.min_surface_share, 0.2);
+        assert_eq!(
+            method.projection.surface_level,
+            solver::SurfaceLevel::Distance
+        );
+        let defaults = solver::Method::default().projection;
+        assert_eq!(defaults.surface_level, solver::SurfaceLevel::Fraction);
+        assert_eq!(defaults.min_surface_share, 0.05);
+        assert!(
+            toml::from_str::<solver::Method>("[projection]\nsurface_level = \"level_set\"\n")
+                .is_err()
+        );
+    }
+
+    #[test]
     fn the_pressure_implicit_keys_parse() {
         let method: solver::Method = toml::from_str(
             "formulation = \"pressure_implicit\"\n[projection]\ndrift = 0.2\ndrift_correction = \"position\"\npreconditioner = \"jacobi\"\n",
@@ -382,18 +401,6 @@ mod tests {
         assert!(
             toml::from_str::<solver::Method>("[projection]\nfree_surface = \"level_set\"\n")
                 .is_err()
-        );
-        let method: solver::Method =
-            toml::from_str("[projection]\nsurface_level = \"distance\"\nmin_surface_share = 0.2\n")
-                .unwrap();
-        assert_eq!(method.projection.min_surface_share, 0.2);
-        assert_eq!(
-            method.projection.surface_level,
-            solver::SurfaceLevel::Distance
-        );
-        assert_eq!(
-            solver::Method::default().projection.surface_level,
-            solver::SurfaceLevel::Fraction
         );
         assert_eq!(
             solver::Method::default().projection.air_nodes,
