@@ -259,10 +259,19 @@ fn with_the_materials_density_the_packing_carries_no_buoyancy() {
     );
 }
 
+/// The refusals' tank: a 0.1 m column in a 0.2 x 0.3 m box at 1.5 MPa.
+fn refusal_tank() -> Scene {
+    common::box_scene([0.2, 0.3], [0.0, 0.0, 0.1, DEPTH], water(1.5e6), 9.81)
+}
+
+/// The key a configuration is refused by (None: accepted).
+fn refused_key(scene: Scene, method: Method) -> Option<String> {
+    common::refusal(scene, method).map(|e| e.key)
+}
+
 #[test]
 fn what_the_staggered_scheme_cannot_do_is_refused_by_key() {
-    let scene = || common::box_scene([0.2, 0.3], [0.0, 0.0, 0.1, DEPTH], water(1.5e6), 9.81);
-    let key_of = |scene: Scene, method: Method| common::refusal(scene, method).map(|e| e.key);
+    let (scene, key_of) = (refusal_tank, refused_key);
     assert_eq!(key_of(scene(), mac(TransferKind::Apic)), None);
     let mut m = mac(TransferKind::Apic);
     m.shape = ShapeKind::Linear;
@@ -342,8 +351,7 @@ fn what_the_staggered_scheme_cannot_do_is_refused_by_key() {
 
 #[test]
 fn the_ghost_surfaces_keys_are_refused_without_one() {
-    let scene = || common::box_scene([0.2, 0.3], [0.0, 0.0, 0.1, DEPTH], water(1.5e6), 9.81);
-    let key_of = |scene: Scene, method: Method| common::refusal(scene, method).map(|e| e.key);
+    let (scene, key_of) = (refusal_tank, refused_key);
     let mut m = mac(TransferKind::Apic);
     m.projection.free_surface = FreeSurface::Ghost;
     m.projection.surface_level = SurfaceLevel::Distance;

@@ -334,9 +334,8 @@ mod tests {
             .unwrap()
     }
 
-    /// The study file's spelling: `formulation = "pressure_implicit"`, `K =
-    /// "inf"` (and TOML's bare inf), `[method.projection]` with its keys; a
-    /// wrong key in the table is refused.
+    /// The ghost surface's keys: `surface_level` and `min_surface_share`
+    /// read, their defaults, and a wrong level refused.
     #[test]
     fn the_ghost_surfaces_keys_parse() {
         let method: solver::Method =
@@ -356,6 +355,9 @@ mod tests {
         );
     }
 
+    /// The study file's spelling: `formulation = "pressure_implicit"`, `K =
+    /// "inf"` (and TOML's bare inf), `[method.projection]` with its keys; a
+    /// wrong key in the table is refused.
     #[test]
     fn the_pressure_implicit_keys_parse() {
         let method: solver::Method = toml::from_str(

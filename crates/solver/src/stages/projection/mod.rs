@@ -426,9 +426,12 @@ pub struct Inputs<'a> {
 }
 
 impl Inputs<'_> {
-    /// The kernel the ghost surface reads depths by, if it does.
-    fn depth_basis(&self) -> Option<ShapeKind> {
-        (self.settings.surface_level == SurfaceLevel::Distance).then_some(self.shape)
+    /// Hands `s` how this step's ghost surface is read: the kernel it reads
+    /// depths by, if it does, and theta's floor.
+    fn set_surface_reading(&self, s: &mut Scratch) {
+        let set = self.settings;
+        s.depth_basis = (set.surface_level == SurfaceLevel::Distance).then_some(self.shape);
+        s.surface_floor = set.min_surface_share;
     }
 }
 
@@ -443,8 +446,7 @@ pub fn project(inputs: &Inputs, grid: &mut Grid, s: &mut Scratch) {
         inputs.dt,
     );
     let full_mass = mat.rho0 * grid.h * grid.h;
-    s.depth_basis = inputs.depth_basis();
-    s.surface_floor = set.min_surface_share;
+    inputs.set_surface_reading(s);
     mark_fluid(ps, grid, s, set.free_surface, full_mass, Holes::Air, false);
     mark_collocated_rows(s, set.free_surface);
     let light = set.light_node_share * full_mass;

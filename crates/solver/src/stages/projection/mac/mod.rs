@@ -78,8 +78,7 @@ pub fn project(inputs: &Inputs, gravity: Vec2, affine: bool, grid: &mut Grid, s:
     let h = grid.h;
     let full_mass = mat.rho0 * h * h;
     let light = set.light_node_share * full_mass;
-    s.depth_basis = inputs.depth_basis();
-    s.surface_floor = set.min_surface_share;
+    inputs.set_surface_reading(s);
     mark_fluid(ps, grid, s, set.free_surface, full_mass, set.holes, true);
     let mut faces = std::mem::take(&mut s.faces);
     let src = Sources {
