@@ -398,6 +398,10 @@ pub struct ProjectionSettings {
     /// (a thin sheet) multiplies it up to 1 / this.
     #[serde(skip_serializing_if = "is_default_surface_floor")]
     pub min_surface_share: f64,
+    /// What else bounds theta from below on the staggered scheme's faces
+    /// (a ghost surface's only).
+    #[serde(skip_serializing_if = "ShareFloor::is_fixed")]
+    pub share_floor: ShareFloor,
     /// What the nodes beyond the fluid cells (which take their fluid
     /// neighbours' velocity after the solve) bring to it.
     pub air_nodes: AirNodes,
@@ -504,6 +508,28 @@ pub enum SurfaceLevel {
     Distance,
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ShareFloor {
+    /// `min_surface_share` alone. The ghost surface's projection is
+    /// orthogonal in the faces' masses theta rho0 h^2 (its gradient takes
+    /// 1 / theta, its divergence does not), so where a face carries more
+    /// of the particles' mass than that (a thin sheet, a corner) the
+    /// projection can add kinetic energy.
+    Fixed,
+    /// Also the share at which a flat surface would give the face its own
+    /// mass, less the two readings' spread on a flat surface (0.05 of a
+    /// cell): theta cannot place the surface nearer the fluid cell's
+    /// centre than the face's mass allows.
+    FaceMass,
+}
+
+impl ShareFloor {
+    fn is_fixed(&self) -> bool {
+        *self == ShareFloor::Fixed
+    }
+}
+
 /// `min_surface_share`'s default.
 const DEFAULT_SURFACE_FLOOR: f64 = 0.05;
 
@@ -576,6 +602,7 @@ impl Default for ProjectionSettings {
             free_surface: FreeSurface::Cell,
             surface_level: SurfaceLevel::Fraction,
             min_surface_share: DEFAULT_SURFACE_FLOOR,
+            share_floor: ShareFloor::Fixed,
             air_nodes: AirNodes::Slaved,
             light_node_share: 0.01,
             face_density: FaceDensity::Particles,
@@ -982,6 +1009,11 @@ impl SolverConfig {
             "method.projection.min_surface_share",
             "floors a ghost surface's theta: set method.projection.free_surface to \"ghost\" or \"ghost_orthogonal\", or leave it at 0.05",
         )?;
+        check(
+            p.share_floor == ShareFloor::Fixed || p.free_surface != FreeSurface::Cell,
+            "method.projection.share_floor",
+            "bounds a ghost surface's theta: set method.projection.free_surface to \"ghost\", or use \"fixed\"",
+        )?;
         if p.scheme == ProjectionScheme::Mac {
             return self.validate_mac();
         }
@@ -1000,6 +1032,11 @@ impl SolverConfig {
                 "\"euler\"",
             ),
             ("theta", p.theta != 1.0, "1"),
+            (
+                "share_floor",
+                p.share_floor != ShareFloor::Fixed,
+                "\"fixed\"",
+            ),
         ];
         match staggered_only.iter().find(|(_, set, _)| *set) {
             Some((key, _, default)) => Err(ConfigError {

@@ -375,6 +375,19 @@ fn the_ghost_surfaces_keys_are_refused_without_one() {
         key_of(scene(), m).as_deref(),
         Some("method.projection.min_surface_share")
     );
+    let mut m = mac(TransferKind::Apic);
+    m.projection.share_floor = ShareFloor::FaceMass;
+    assert_eq!(
+        key_of(scene(), m.clone()).as_deref(),
+        Some("method.projection.share_floor")
+    );
+    m.projection.free_surface = FreeSurface::Ghost;
+    assert_eq!(key_of(scene(), m.clone()), None);
+    m.projection.scheme = ProjectionScheme::Collocated;
+    assert_eq!(
+        key_of(scene(), m).as_deref(),
+        Some("method.projection.share_floor")
+    );
 }
 
 /// A column at rest with one cell left empty inside it (cell (4, 5) of a

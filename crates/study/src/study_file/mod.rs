@@ -334,14 +334,16 @@ mod tests {
             .unwrap()
     }
 
-    /// The ghost surface's keys: `surface_level` and `min_surface_share`
-    /// read, their defaults, and a wrong level refused.
+    /// The ghost surface's keys: `surface_level`, `min_surface_share` and
+    /// `share_floor` read, their defaults, and a wrong level refused.
     #[test]
     fn the_ghost_surfaces_keys_parse() {
-        let method: solver::Method =
-            toml::from_str("[projection]\nsurface_level = \"distance\"\nmin_surface_share = 0.2\n")
-                .unwrap();
+        let method: solver::Method = toml::from_str(
+            "[projection]\nsurface_level = \"distance\"\nmin_surface_share = 0.2\nshare_floor = \"face_mass\"\n",
+        )
+        .unwrap();
         assert_eq!(method.projection.min_surface_share, 0.2);
+        assert_eq!(method.projection.share_floor, solver::ShareFloor::FaceMass);
         assert_eq!(
             method.projection.surface_level,
             solver::SurfaceLevel::Distance
@@ -349,6 +351,7 @@ mod tests {
         let defaults = solver::Method::default().projection;
         assert_eq!(defaults.surface_level, solver::SurfaceLevel::Fraction);
         assert_eq!(defaults.min_surface_share, 0.05);
+        assert_eq!(defaults.share_floor, solver::ShareFloor::Fixed);
         assert!(
             toml::from_str::<solver::Method>("[projection]\nsurface_level = \"level_set\"\n")
                 .is_err()

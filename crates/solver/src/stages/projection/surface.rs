@@ -611,7 +611,7 @@ pub(crate) mod tests {
 #[cfg(test)]
 mod ghost_tests {
     use super::tests::column;
-    use crate::config::{FreeSurface, Holes, SurfaceLevel};
+    use crate::config::{FreeSurface, Holes, ShareFloor, SurfaceLevel};
     use crate::{Solver, SolverConfig};
 
     /// The column of `tests::column` (0.1 m of water, h = 1 cm) under
@@ -705,6 +705,31 @@ mod ghost_tests {
             assert_eq!(s.projection.unknown[above], super::AIR, "{level:?}");
             let error = s.projection.pressure[top] / weight - 1.0;
             assert!((low..high).contains(&error), "{level:?}: top cell {error}");
+        }
+    }
+
+    /// The face-mass bound on theta binds only where a face carries more
+    /// mass than the surface the cells place allows: on a resting column
+    /// whose top sits anywhere in its cell, at 2 and 4 particles a cell,
+    /// every face's theta is the cells' reading, and the top faces' lies
+    /// inside the cell (so the comparison is not of ones).
+    #[test]
+    fn the_face_mass_bound_leaves_a_flat_surface_alone() {
+        for (ppc, top) in [(2, 0.1), (2, 0.105), (4, 0.1025), (4, 0.1075)] {
+            let shares = |floor: ShareFloor| {
+                let mut cfg = standing_column(FreeSurface::Ghost).cfg.clone();
+                cfg.scene.ppc = ppc;
+                cfg.scene.bodies[0].rect[3] = top;
+                cfg.method.projection.surface_level = SurfaceLevel::Distance;
+                cfg.method.projection.share_floor = floor;
+                let mut s = Solver::new(cfg).unwrap();
+                s.step().unwrap();
+                s.projection.faces.fields[1].share.clone()
+            };
+            let (fixed, by_mass) = (shares(ShareFloor::Fixed), shares(ShareFloor::FaceMass));
+            assert_eq!(fixed, by_mass, "ppc {ppc}, top {top}");
+            let inside = fixed.iter().filter(|&&theta| theta < 0.99).count();
+            assert!(inside >= 8, "ppc {ppc}, top {top}: {inside} surface faces");
         }
     }
 }

@@ -93,16 +93,32 @@ pub fn depth_of(basis: ShapeKind, fraction: f64) -> f64 {
 
 /// `depth_of` under `tail`'s kernel (one copy per kernel).
 fn depth_by(tail: impl Fn(f64) -> f64 + Copy, fraction: f64) -> f64 {
+    invert(|s| fraction_by(tail, s), fraction)
+}
+
+/// The share theta of the way from a fluid cell's centre to its air
+/// neighbour's at which a flat surface gives the face between them (a
+/// quadratic B-spline's node, as the staggered faces are) the fill
+/// `fill`: half a cell plus the surface's height above the face,
+/// F^-1(fill), within [0, 1].
+pub fn face_share(fill: f64) -> f64 {
+    (0.5 + invert(|s| node_fraction(quadratic_tail, s), fill)).clamp(0.0, 1.0)
+}
+
+/// The s within +-`DEPTH_BOUND` at which the increasing `reading` gives
+/// `value`, by bisection (a fixed count of halvings, so the result is
+/// the same on every machine).
+fn invert(reading: impl Fn(f64) -> f64, value: f64) -> f64 {
     let (mut lo, mut hi) = (-DEPTH_BOUND, DEPTH_BOUND);
-    if fraction <= fraction_by(tail, lo) {
+    if value <= reading(lo) {
         return lo;
     }
-    if fraction >= fraction_by(tail, hi) {
+    if value >= reading(hi) {
         return hi;
     }
     for _ in 0..BISECTIONS {
         let mid = 0.5 * (lo + hi);
-        if fraction_by(tail, mid) < fraction {
+        if reading(mid) < value {
             lo = mid;
         } else {
             hi = mid;
@@ -168,5 +184,19 @@ mod tests {
         let (inside, outside) = (g(0.75), g(-0.25));
         let linear = inside / (inside - outside);
         assert!(0.75 - linear > 0.015, "linear theta {linear}");
+    }
+
+    /// A face s cells below a flat surface holds F(s) of a full face's
+    /// mass; its share reads the surface back half a cell plus s from its
+    /// fluid cell's centre, and clamps to [0, 1] beyond.
+    #[test]
+    fn a_faces_share_reads_a_flat_surface() {
+        for k in 0..=18 {
+            let s = -0.45 + 0.05 * k as f64;
+            let share = face_share(node_fraction(quadratic_tail, s));
+            assert!((share - (0.5 + s)).abs() < 1e-11, "{s} read as {share}");
+        }
+        assert_eq!(face_share(0.0), 0.0);
+        assert_eq!(face_share(1.0), 1.0);
     }
 }

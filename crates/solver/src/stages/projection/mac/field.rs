@@ -41,6 +41,10 @@ pub struct FaceField {
     /// Per face: whether this step's solve sets it (it borders a fluid
     /// cell and is not a wall's), filled by `solve::mark_solved`.
     pub solved: Vec<bool>,
+    /// Per face: the share theta of the way from its fluid cell's centre
+    /// to its air cell's at which a ghost surface puts p = 0 (1 off the
+    /// surface), filled by `solve::fill_shares`.
+    pub share: Vec<f64>,
 }
 
 impl FaceField {
@@ -67,6 +71,7 @@ impl FaceField {
             vel_star: vec![0.0; n],
             shift: vec![0.0; n],
             solved: vec![false; n],
+            share: vec![1.0; n],
         }
     }
 

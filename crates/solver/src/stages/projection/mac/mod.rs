@@ -22,7 +22,7 @@ pub use packing::correct_packing;
 
 use super::surface::mark_fluid;
 use super::{Inputs, Scratch};
-use crate::config::{Advection, AdvectionStep, FaceDensity, ProjectionSettings};
+use crate::config::{Advection, AdvectionStep, FaceDensity, ProjectionSettings, ShareFloor};
 use crate::grid::Grid;
 use crate::particles::{Mat2, Particles, Vec2};
 use crate::viscosity;
@@ -95,6 +95,7 @@ pub fn project(inputs: &Inputs, gravity: Vec2, affine: bool, grid: &mut Grid, s:
     for field in faces.fields.iter_mut() {
         solve::mark_solved(field, s);
         solve::slave_air_faces(field, s, material);
+        solve::fill_shares(field, s, full_mass, set.share_floor == ShareFloor::FaceMass);
     }
     s.stats = solve::fresh_stats(s.fluid.len());
     // Incompressible, p is the constraint's multiplier: D u^{n+1} = 0

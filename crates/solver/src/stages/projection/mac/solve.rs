@@ -13,7 +13,7 @@
 //! D u is the exact flux balance of the cell's faces, so the gradient's
 //! only kernel is the constant of a closed box.
 
-use super::super::{Scratch, SolveStats, AIR};
+use super::super::{surface_depth, Scratch, SolveStats, AIR};
 use super::field::FaceField;
 use crate::config::Material;
 
@@ -71,8 +71,7 @@ pub fn assemble(
                 row[4] += coupling;
                 row[slot] = -coupling;
             } else {
-                let (di, dj) = (slot as i64 % 3 - 1, slot as i64 / 3 - 1);
-                row[4] += coupling / surface_share(s, c, (ci + di, cj + dj));
+                row[4] += coupling / field.share[field.index(i, j)];
             }
         }
         s.alpha.push(alpha);
@@ -117,23 +116,52 @@ fn cells_beside(field: &FaceField, i: i64, j: i64) -> [(i64, i64); 2] {
     }
 }
 
-/// The share theta of the way from fluid cell `c`'s centre to the centre
-/// of the air cell at (i, j) at which p = 0 sits: 1 (the air cell's
-/// centre) unless a ghost surface puts it where the fluid fraction
-/// crosses a half.
-fn surface_share(s: &Scratch, c: usize, (i, j): (i64, i64)) -> f64 {
-    if !s.ghost_surface {
-        return 1.0;
+/// How far apart, in cells, a flat surface's two readings of theta fall
+/// at two particles a cell: the cells' fractions and the face's mass
+/// (99 % of a slosh's surface faces within 0.024). Beyond it the face's
+/// mass bounds theta; within it the bound would rectify the readings'
+/// noise and move the wave's surface (its period shortens 0.8 % at h = 1
+/// cm without this slack).
+const READINGS_SPREAD: f64 = 0.05;
+
+/// Each solved face's theta (`FaceField::share`): where a ghost surface
+/// crosses it, the share of the way from its fluid cell's centre to its
+/// air cell's at which p = 0 sits (`Scratch::surface_share`); with
+/// `face_mass`, at least the share at which a flat surface would give the
+/// face its own mass (`surface_depth::face_share`), less
+/// `READINGS_SPREAD`.
+/// Elsewhere 1.
+pub fn fill_shares(field: &mut FaceField, s: &Scratch, full_mass: f64, face_mass: bool) {
+    let mut share = std::mem::take(&mut field.share);
+    for (f, theta) in share.iter_mut().enumerate() {
+        *theta = 1.0;
+        if !s.ghost_surface || !field.solved[f] {
+            continue;
+        }
+        let (i, j) = field.coords(f);
+        let [lo, hi] = cells_beside(field, i, j).map(|(ci, cj)| s.cell_at(ci, cj));
+        let fluid = |c: Option<usize>| c.is_some_and(|c| s.unknown[c] != AIR);
+        let (c, o) = match (lo, hi) {
+            (Some(c), Some(o)) if fluid(lo) && !fluid(hi) => (c, o),
+            (Some(o), Some(c)) if fluid(hi) && !fluid(lo) => (c, o),
+            _ => continue,
+        };
+        *theta = s.surface_share(c, o);
+        if face_mass {
+            let by_mass = surface_depth::face_share(field.mass[f] / full_mass);
+            *theta = theta.max(by_mass - READINGS_SPREAD);
+        }
     }
-    s.cell_at(i, j).map_or(1.0, |o| s.surface_share(c, o))
+    field.share = share;
 }
 
 /// p_hi - p_lo across a face between in-box cells `lo` and `hi`: an air
 /// cell reads p = 0 at its centre, or under a ghost surface the ghost
-/// pressure p (theta - 1) / theta of its fluid neighbour's p, so that the
-/// jump is p / theta: the surface moves through the cell with the fluid
-/// fraction instead of jumping a cell when a particle crosses a cell's edge.
-fn pressure_jump(s: &Scratch, lo: (i64, i64), hi: (i64, i64)) -> f64 {
+/// pressure p (theta - 1) / theta of its fluid neighbour's p (`share`:
+/// the face's theta), so that the jump is p / theta: the surface moves
+/// through the cell with the fluid fraction instead of jumping a cell
+/// when a particle crosses a cell's edge.
+fn pressure_jump(s: &Scratch, lo: (i64, i64), hi: (i64, i64), share: f64) -> f64 {
     let [c_lo, c_hi] = [lo, hi].map(|(i, j)| i as usize + j as usize * s.cells[0]);
     let solved = |c: usize| match s.unknown[c] {
         AIR => None,
@@ -141,8 +169,8 @@ fn pressure_jump(s: &Scratch, lo: (i64, i64), hi: (i64, i64)) -> f64 {
     };
     match (solved(c_lo), solved(c_hi)) {
         (Some(p_lo), Some(p_hi)) => p_hi - p_lo,
-        (Some(p_lo), None) => -p_lo / surface_share(s, c_lo, hi),
-        (None, Some(p_hi)) => p_hi / surface_share(s, c_hi, lo),
+        (Some(p_lo), None) => -p_lo / share,
+        (None, Some(p_hi)) => p_hi / share,
         (None, None) => 0.0,
     }
 }
@@ -177,7 +205,7 @@ pub fn apply_gradient(
         }
         let (i, j) = field.coords(f);
         let [lo, hi] = cells_beside(field, i, j);
-        let jump = pressure_jump(s, lo, hi);
+        let jump = pressure_jump(s, lo, hi, field.share[f]);
         *value -= scale * h * jump / field.operator_mass[f].max(light);
     }
     follow_neighbours(field, values);
