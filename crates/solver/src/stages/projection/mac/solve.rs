@@ -118,10 +118,10 @@ fn cells_beside(field: &FaceField, i: i64, j: i64) -> [(i64, i64); 2] {
 
 /// How far apart, in cells, a flat surface's two readings of theta fall
 /// at two particles a cell: the cells' fractions and the face's mass
-/// (99 % of a slosh's surface faces within 0.024). Beyond it the face's
-/// mass bounds theta; within it the bound would rectify the readings'
-/// noise and move the wave's surface (its period shortens 0.8 % at h = 1
-/// cm without this slack).
+/// (the face's at most 0.024 above on 99 % of a slosh's faces normal to
+/// the surface). Beyond it the face's mass bounds theta; within it the
+/// bound would rectify the readings' noise and move the wave's surface
+/// (its period shortens 0.8 % at h = 1 cm without this slack).
 const READINGS_SPREAD: f64 = 0.05;
 
 /// Each solved face's theta (`FaceField::share`): where a ghost surface
