@@ -819,6 +819,25 @@ fn matrix_skips_the_cases_a_behaviour_record_holds_with_the_same_parameters() {
         "{}",
         stderr(&o)
     );
+    // Every case recorded: the matrix runs none, and its report scores
+    // the four behaviours from the record alone.
+    let full = out.join("full.jsonl");
+    std::fs::write(&full, &lines).unwrap();
+    let fourth = out.join("fourth");
+    let (full, f4) = (full.to_str().unwrap(), fourth.to_str().unwrap());
+    let o = kick(&["matrix", st, "--out", f4, "--skip-recorded", full]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("ran 0 cases (2 already done)"));
+    let o = kick(&["report", f4, "--behaviour-runs", full]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let page = std::fs::read_to_string(fourth.join("report").join("index.html")).unwrap();
+    assert!(
+        page.contains("The four behaviours of the bug report"),
+        "{page}"
+    );
+    let again =
+        std::fs::read_to_string(fourth.join("report").join("behaviour_runs.jsonl")).unwrap();
+    assert_eq!(again.lines().count(), 2, "{again}");
     // A record that is not one is bad input, named by file and line.
     let bad = out.join("bad.jsonl");
     std::fs::write(&bad, "{\"summary\": 1}\n").unwrap();
