@@ -133,35 +133,25 @@ impl FieldCheckerboard {
         self.node_sum.fill(0.0);
         self.node_mass.fill(0.0);
         let shape = Shape::new(v.shape, v.scene.ppc);
-        let width = shape.width();
         let origin = Vec2::from(v.scene.origin);
-        let inside = |b: i64, a: usize, n: usize| {
-            let k = b + PAD as i64 + a as i64;
+        let inside = |k: i64, n: usize| {
+            let k = k + PAD as i64;
             (k >= 0 && (k as usize) < n).then_some(k as usize)
         };
         for p in 0..v.x.len() {
             let r = (v.x[p] - origin) / g.h;
-            let half = shape.half_widths(&v.deformation[p]);
-            let wx = shape.weights_with_half(r.x, half[0]);
-            let wy = shape.weights_with_half(r.y, half[1]);
             let (m, mp) = (v.mass[p], v.mass[p] * v.pressure[p]);
             if !(r.x.is_finite() && r.y.is_finite() && mp.is_finite()) {
                 continue;
             }
-            for c in 0..width {
-                let Some(row) = inside(wy.base, c, g.dims[1]) else {
-                    continue;
+            shape.each_weight([r.x, r.y], &v.deformation[p], |[i, j], w, _| {
+                let (Some(col), Some(row)) = (inside(i, g.dims[0]), inside(j, g.dims[1])) else {
+                    return;
                 };
-                for a in 0..width {
-                    let Some(col) = inside(wx.base, a, g.dims[0]) else {
-                        continue;
-                    };
-                    let w = wx.w[a] * wy.w[c];
-                    let n = col + row * g.dims[0];
-                    self.node_sum[n] += w * mp;
-                    self.node_mass[n] += w * m;
-                }
-            }
+                let n = col + row * g.dims[0];
+                self.node_sum[n] += w * mp;
+                self.node_mass[n] += w * m;
+            });
         }
     }
 }

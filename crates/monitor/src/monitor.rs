@@ -82,7 +82,10 @@ pub const ADVECTION_MIN_MASS: f64 = 1e-3;
 /// The critical effective Courant number of a shape family (docs/physics.md section 4b).
 pub fn critical_courant(shape: solver::ShapeKind) -> f64 {
     match shape {
-        solver::ShapeKind::Linear | solver::ShapeKind::Gimp | solver::ShapeKind::Cpgimp => 1.0,
+        solver::ShapeKind::Linear
+        | solver::ShapeKind::Gimp
+        | solver::ShapeKind::Cpgimp
+        | solver::ShapeKind::Cpdi => 1.0,
         solver::ShapeKind::Bspline2 => 1.7,
         solver::ShapeKind::Bspline3 => 1.9,
     }

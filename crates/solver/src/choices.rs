@@ -49,6 +49,11 @@ pub enum ShapeKind {
     /// Convected-particle GIMP: the half-widths follow F's diagonal
     /// (a suspect for "once highly deformed" mattering, not a remedy).
     Cpgimp,
+    /// CPDI (Sadeghirad et al. 2011): the particle's domain is the
+    /// parallelogram F carries its undeformed square to (capped at one cell
+    /// past the particle per axis), its weights the hats' mean over the
+    /// four corners (`shapes/cpdi.rs`).
+    Cpdi,
     /// Quadratic B-spline.
     Bspline2,
     /// Cubic B-spline.

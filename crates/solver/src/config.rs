@@ -762,6 +762,7 @@ impl SolverConfig {
                 ),
             )?;
         }
+        self.validate_cpdi()?;
         m.remedies.validate(&crate::remedies::Check {
             shape: m.shape,
             transfer: m.transfer,
@@ -782,6 +783,25 @@ impl SolverConfig {
             p.validate(i, self.scene.cells())?;
         }
         Ok(())
+    }
+
+    /// CPDI's weights are not a tensor product: the paths that read
+    /// per-axis weights refuse it (the remedies by their `Supports`).
+    fn validate_cpdi(&self) -> Result<(), ConfigError> {
+        let m = &self.method;
+        if m.shape != ShapeKind::Cpdi {
+            return Ok(());
+        }
+        check(
+            m.formulation == Formulation::Explicit,
+            "method.formulation",
+            "\"pressure_implicit\" reads per-axis weights; method.shape = \"cpdi\" needs \"explicit\"",
+        )?;
+        check(
+            m.transfer != TransferKind::Xpic,
+            "method.transfer",
+            "\"xpic\" reads per-axis weights; method.shape = \"cpdi\" needs \"pic\" | \"flip\" | \"apic\"",
+        )
     }
 
     fn validate_scene(&self) -> Result<(), ConfigError> {

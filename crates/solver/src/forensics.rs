@@ -391,18 +391,19 @@ fn stencil_nodes<const W: usize>(
     st: &Stencil,
     grid: &Grid,
 ) -> Vec<(u32, f64, Vec2, Vec2)> {
-    let (wx, dwx) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-    let (wy, dwy) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
-    let inv_h = 1.0 / grid.h;
+    let (inv_h, nx) = (1.0 / grid.h, grid.dims[0]);
     let mut out = Vec::with_capacity(W * W);
-    for c in 0..W {
-        for a in 0..W {
-            let node = st.node + (a + c * grid.dims[0]) as u32;
-            let grad = Vec2::new(dwx[a] * wy[c], wx[a] * dwy[c]) * inv_h;
-            let offset = Vec2::new(a as f64 - st.frac[0], c as f64 - st.frac[1]);
-            out.push((node, wx[a] * wy[c], grad, offset));
+    // CPDI: one slot per corner's node, a node possibly in several.
+    shape.each_piece::<W>(st, nx, |p| {
+        for c in 0..W {
+            for a in 0..W {
+                let node = (p.node + a + c * nx) as u32;
+                let grad = Vec2::new(p.dwx[a] * p.wy[c], p.wx[a] * p.dwy[c]) * inv_h;
+                let offset = Vec2::new(a as f64 - p.frac[0], c as f64 - p.frac[1]);
+                out.push((node, p.wx[a] * p.wy[c], grad, offset));
+            }
         }
-    }
+    });
     out
 }
 

@@ -58,6 +58,16 @@ fn check_phases(phases: &[Solver; 2], drag: &Drag) -> Result<(), ConfigError> {
     }
     if phases
         .iter()
+        .any(|p| !crate::shapes::TENSOR_PRODUCT.contains(&p.config().method.shape))
+    {
+        // Drag and pore pressure spread with per-axis weights.
+        return Err(ConfigError {
+            key: "method.shape".into(),
+            message: "\"cpdi\" is not a tensor product; a mixture's drag and pore pressure need \"linear\" | \"gimp\" | \"cpgimp\" | \"bspline2\" | \"bspline3\"".into(),
+        });
+    }
+    if phases
+        .iter()
         .any(|p| p.config().method.formulation != crate::config::Formulation::Explicit)
     {
         // Its pressure solve is for one fluid filling its cells.

@@ -28,7 +28,7 @@ impl super::Settings for Settings {
     }
     fn supports(&self) -> Supports {
         Supports {
-            // A solid's shear stress is F's; cpGIMP's domains follow F.
+            // A solid's shear stress is F's; cpGIMP's and CPDI's domains follow F.
             solids: false,
             shapes: &[
                 ShapeKind::Linear,

@@ -66,6 +66,8 @@ impl super::Settings for Settings {
         Supports {
             // Its J update re-evaluates the EOS only, not the shear part.
             solids: false,
+            // It reads per-axis weights.
+            shapes: crate::shapes::TENSOR_PRODUCT,
             ..Supports::ALL
         }
     }

@@ -194,6 +194,8 @@ impl super::Settings for Settings {
         // span: the filter would change nothing.
         Supports {
             transfers: &[TransferKind::Flip],
+            // It reads per-axis weights.
+            shapes: crate::shapes::TENSOR_PRODUCT,
             ..Supports::ALL
         }
     }

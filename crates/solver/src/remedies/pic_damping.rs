@@ -44,6 +44,8 @@ impl super::Settings for Settings {
     fn supports(&self) -> Supports {
         Supports {
             transfers: &[TransferKind::Flip],
+            // It reads per-axis weights.
+            shapes: crate::shapes::TENSOR_PRODUCT,
             ..Supports::ALL
         }
     }

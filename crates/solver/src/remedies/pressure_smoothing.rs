@@ -29,6 +29,8 @@ impl super::Settings for Settings {
     fn supports(&self) -> Supports {
         Supports {
             solids: false,
+            // It reads per-axis weights.
+            shapes: crate::shapes::TENSOR_PRODUCT,
             ..Supports::ALL
         }
     }

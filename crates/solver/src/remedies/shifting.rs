@@ -271,6 +271,8 @@ impl super::Settings for Settings {
             solids: false,
             // The shifting grid mirrors at walls only.
             periodic: false,
+            // It reads per-axis weights.
+            shapes: crate::shapes::TENSOR_PRODUCT,
             ..Supports::ALL
         }
     }

@@ -72,17 +72,17 @@ impl StressWork {
             if self.d[p] == Mat2::zeros() {
                 continue;
             }
-            let (wx, dwx) = g.shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-            let (wy, dwy) = g.shape.stencil_weights::<W>(st.frac[1], st.half[1]);
             let mut l = Mat2::zeros();
-            for c in 0..W {
-                let row = st.node as usize + c * nx;
-                for a in 0..W {
-                    let v = 0.5 * (grid.vel[row + a] + grid.vel_new[row + a]);
-                    let grad = crate::Vec2::new(dwx[a] * wy[c], wx[a] * dwy[c]);
-                    l += v * grad.transpose();
+            g.shape.each_piece::<W>(st, nx, |pc| {
+                for c in 0..W {
+                    let row = pc.node + c * nx;
+                    for a in 0..W {
+                        let v = 0.5 * (grid.vel[row + a] + grid.vel_new[row + a]);
+                        let grad = crate::Vec2::new(pc.dwx[a] * pc.wy[c], pc.wx[a] * pc.dwy[c]);
+                        l += v * grad.transpose();
+                    }
                 }
-            }
+            });
             sum += self.d[p].component_mul(&l).sum() * inv_h;
         }
         -g.dt * sum

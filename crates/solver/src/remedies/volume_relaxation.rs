@@ -44,6 +44,8 @@ impl super::Settings for Settings {
         Supports {
             mixtures: false,
             solids: false,
+            // It reads per-axis weights.
+            shapes: crate::shapes::TENSOR_PRODUCT,
             ..Supports::ALL
         }
     }

@@ -1,8 +1,10 @@
 //! Shape functions as one enum over the families; each family's 1D kernel lives
-//! in its own `shape_*.rs`. 2D weights are tensor products.
+//! in its own `shape_*.rs`. 2D weights are tensor products, or (CPDI) sums
+//! of four: the stages walk a particle's weights as `Piece`s.
 
 use crate::choices::ShapeKind;
 pub(crate) mod bspline;
+pub mod cpdi;
 mod gimp;
 pub(crate) mod linear;
 
@@ -29,6 +31,16 @@ macro_rules! with_width {
 }
 pub(crate) use with_width;
 
+/// The families whose weights are one tensor product: what the paths that
+/// read per-axis weights (most remedies, mixtures, the projection) take.
+pub const TENSOR_PRODUCT: &[ShapeKind] = &[
+    ShapeKind::Linear,
+    ShapeKind::Gimp,
+    ShapeKind::Cpgimp,
+    ShapeKind::Bspline2,
+    ShapeKind::Bspline3,
+];
+
 /// Widest stencil (cubic B-spline) in nodes per axis.
 pub const MAX_STENCIL: usize = 4;
 
@@ -41,6 +53,25 @@ pub struct Stencil {
     /// GIMP particle half-width per axis in cell units (uGIMP: constant;
     /// cpGIMP: follows F's diagonal); unused by the other families.
     pub half: [f64; 2],
+    /// CPDI's domain vectors [r1x, r1y, r2x, r2y] in cells
+    /// (`cpdi::domain`); unused by the other families.
+    pub domain: [f64; 4],
+}
+
+/// One tensor-product share of a particle's weights: the node (a, c) past
+/// `node` takes weight `wx[a] wy[c]` and gradient (`dwx[a] wy[c]`,
+/// `wx[a] dwy[c]`) per cell. A tensor-product shape has one piece, its
+/// stencil; CPDI has one per domain corner (`cpdi::pieces`).
+#[derive(Clone, Copy, Debug)]
+pub struct Piece<const W: usize> {
+    /// The piece's first node (padded index).
+    pub node: usize,
+    /// The particle's offset past that node, in cells.
+    pub frac: [f64; 2],
+    pub wx: [f64; W],
+    pub dwx: [f64; W],
+    pub wy: [f64; W],
+    pub dwy: [f64; W],
 }
 
 /// 1D weights of one particle on its stencil nodes `base .. base + width`.
@@ -73,12 +104,31 @@ impl Shape {
         }
     }
 
-    /// Nodes per axis touched by one particle.
+    /// Nodes per axis of one piece (`Piece`): the stages' loop width.
     pub fn width(&self) -> usize {
         match self.kind {
-            ShapeKind::Linear => 2,
+            ShapeKind::Linear | ShapeKind::Cpdi => 2,
             ShapeKind::Gimp | ShapeKind::Bspline2 => 3,
             ShapeKind::Bspline3 | ShapeKind::Cpgimp => 4,
+        }
+    }
+
+    /// Nodes per axis that one particle's pieces can touch, from its
+    /// stencil's first node (`Stencil::node`).
+    pub fn reach(&self) -> usize {
+        match self.kind {
+            ShapeKind::Cpdi => 4,
+            _ => self.width(),
+        }
+    }
+
+    /// A particle's CPDI domain for deformation gradient `f`
+    /// (`Stencil::domain`); zeros for the other families.
+    #[inline]
+    pub fn domain(&self, f: &crate::particles::Mat2) -> [f64; 4] {
+        match self.kind {
+            ShapeKind::Cpdi => cpdi::domain(f, self.gimp_half),
+            _ => [0.0; 4],
         }
     }
 
@@ -101,7 +151,7 @@ impl Shape {
         let shift = match self.kind {
             ShapeKind::Linear => 0.0,
             ShapeKind::Gimp | ShapeKind::Bspline2 => 0.5,
-            ShapeKind::Bspline3 | ShapeKind::Cpgimp => 1.0,
+            ShapeKind::Bspline3 | ShapeKind::Cpgimp | ShapeKind::Cpdi => 1.0,
         };
         floor(xr - shift)
     }
@@ -118,7 +168,8 @@ impl Shape {
     #[inline]
     pub fn kernel_with_half(&self, r: f64, half: f64) -> (f64, f64) {
         match self.kind {
-            ShapeKind::Linear => linear::kernel(r),
+            // CPDI: the hat each corner takes.
+            ShapeKind::Linear | ShapeKind::Cpdi => linear::kernel(r),
             ShapeKind::Gimp => gimp::kernel(r, self.gimp_half),
             ShapeKind::Cpgimp => gimp::kernel_any_width(r, half),
             ShapeKind::Bspline2 => bspline::quadratic(r),
@@ -195,8 +246,83 @@ impl Shape {
         match self.kind {
             ShapeKind::Bspline2 => Some(4.0),
             ShapeKind::Bspline3 => Some(3.0),
-            ShapeKind::Linear | ShapeKind::Gimp | ShapeKind::Cpgimp => None,
+            ShapeKind::Linear | ShapeKind::Gimp | ShapeKind::Cpgimp | ShapeKind::Cpdi => None,
         }
+    }
+
+    /// The particle's one piece under a tensor-product shape.
+    #[inline(always)]
+    pub fn tensor_piece<const W: usize>(&self, st: &Stencil) -> Piece<W> {
+        let (wx, dwx) = self.stencil_weights::<W>(st.frac[0], st.half[0]);
+        let (wy, dwy) = self.stencil_weights::<W>(st.frac[1], st.half[1]);
+        Piece {
+            node: st.node as usize,
+            frac: st.frac,
+            wx,
+            dwx,
+            wy,
+            dwy,
+        }
+    }
+
+    /// Runs `visit` on each of a particle's pieces: its stencil under a
+    /// tensor-product shape, its four corners under CPDI. `nx` is the
+    /// padded grid's row length.
+    #[inline(always)]
+    pub fn each_piece<const W: usize>(
+        &self,
+        st: &Stencil,
+        nx: usize,
+        mut visit: impl FnMut(&Piece<W>),
+    ) {
+        if self.kind == ShapeKind::Cpdi {
+            for piece in &cpdi::pieces::<W>(st, nx) {
+                visit(piece);
+            }
+        } else {
+            visit(&self.tensor_piece::<W>(st));
+        }
+    }
+
+    /// Each (node, weight, gradient per cell) of a particle at `xr` (cells
+    /// from node 0) with deformation gradient `f`, node by node of each
+    /// piece (rows of y outer), the node as its (x, y) index: for the paths
+    /// off the step loop (the monitor, tests). A node can come more than
+    /// once under CPDI; its shares add.
+    pub fn each_weight(
+        &self,
+        xr: [f64; 2],
+        f: &crate::particles::Mat2,
+        mut visit: impl FnMut([i64; 2], f64, [f64; 2]),
+    ) {
+        let ((bx, fx), (by, fy)) = (self.locate(xr[0]), self.locate(xr[1]));
+        // Nodes numbered in a reach x reach frame from the stencil's first.
+        let nx = self.reach();
+        let st = Stencil {
+            node: 0,
+            frac: [fx, fy],
+            half: self.half_widths(f),
+            domain: self.domain(f),
+        };
+        fn walk<const W: usize>(
+            shape: &Shape,
+            st: &Stencil,
+            nx: usize,
+            visit: &mut impl FnMut(usize, f64, [f64; 2]),
+        ) {
+            shape.each_piece::<W>(st, nx, |p| {
+                for c in 0..W {
+                    for a in 0..W {
+                        let grad = [p.dwx[a] * p.wy[c], p.wx[a] * p.dwy[c]];
+                        visit(p.node + a + c * nx, p.wx[a] * p.wy[c], grad);
+                    }
+                }
+            });
+        }
+        let mut local = |n: usize, w: f64, grad: [f64; 2]| {
+            visit([bx + (n % nx) as i64, by + (n / nx) as i64], w, grad)
+        };
+        with_width!(self, W => walk::<W>(self, &st, nx, &mut local))
     }
 }
 

@@ -8,7 +8,7 @@ use crate::config::TransferKind;
 use crate::grid::Grid;
 use crate::par::Pieces;
 use crate::particles::{Mat2, Particles, Vec2};
-use crate::shapes::{Shape, Stencil};
+use crate::shapes::{Piece, Shape, Stencil};
 use rayon::prelude::*;
 
 pub struct Transfer {
@@ -130,13 +130,31 @@ fn gather<const W: usize, const MODE: u8>(
     vel_new: &[Vec2],
     nx: usize,
 ) -> Gathered {
-    let [fx, fy] = st.frac;
-    let (wx, dwx) = shape.stencil_weights::<W>(fx, st.half[0]);
-    let (wy, dwy) = shape.stencil_weights::<W>(fy, st.half[1]);
-    let base = st.node as usize;
-    let mut v_pic = Vec2::zeros();
-    let mut dv = Vec2::zeros();
-    let (mut b0, mut b1) = (Vec2::zeros(), Vec2::zeros());
+    let mut sums = Gathered {
+        v_pic: Vec2::zeros(),
+        dv: Vec2::zeros(),
+        b0: Vec2::zeros(),
+        b1: Vec2::zeros(),
+    };
+    shape.each_piece::<W>(st, nx, |piece| {
+        gather_piece::<W, MODE>(piece, vel, vel_new, nx, &mut sums)
+    });
+    sums
+}
+
+/// One piece's share of the G2P sums, added to `sums`.
+#[inline(always)]
+fn gather_piece<const W: usize, const MODE: u8>(
+    piece: &Piece<W>,
+    vel: &[Vec2],
+    vel_new: &[Vec2],
+    nx: usize,
+    sums: &mut Gathered,
+) {
+    let [fx, fy] = piece.frac;
+    let (wx, dwx, wy, dwy) = (piece.wx, piece.dwx, piece.wy, piece.dwy);
+    let base = piece.node;
+    let Gathered { v_pic, dv, b0, b1 } = sums;
     for c in 0..W {
         let row = base + c * nx;
         // s0 = sum N_x v; s1 = sum N_x a v (spline APIC) or sum dN_x v.
@@ -151,19 +169,18 @@ fn gather<const W: usize, const MODE: u8>(
                 _ => {}
             }
         }
-        v_pic += wy[c] * s0;
-        dv += wy[c] * sd;
+        *v_pic += wy[c] * s0;
+        *dv += wy[c] * sd;
         match MODE {
             APIC_SPLINE => {
-                b0 += wy[c] * (s1 - fx * s0);
-                b1 += (wy[c] * (c as f64 - fy)) * s0;
+                *b0 += wy[c] * (s1 - fx * s0);
+                *b1 += (wy[c] * (c as f64 - fy)) * s0;
             }
             APIC_GRADIENT | FLIP_GRADIENT => {
-                b0 += wy[c] * s1;
-                b1 += dwy[c] * s0;
+                *b0 += wy[c] * s1;
+                *b1 += dwy[c] * s0;
             }
             _ => {}
         }
     }
-    Gathered { v_pic, dv, b0, b1 }
 }

@@ -7,7 +7,7 @@
 use crate::grid::Grid;
 use crate::par::Pieces;
 use crate::particles::{Mat2, Particles, Vec2};
-use crate::shapes::{Shape, Stencil};
+use crate::shapes::{Piece, Shape, Stencil};
 use crate::stages::sort::{Bins, TILE};
 use rayon::prelude::*;
 
@@ -160,13 +160,26 @@ fn scatter_particle<const W: usize, const MASS: bool, const MOMENTUM: bool, cons
     pass: &Pass,
     p: usize,
 ) {
+    let st = &pass.inputs.stencils[p];
+    pass.inputs
+        .shape
+        .each_piece::<W>(st, pass.dims[0], |piece| {
+            scatter_piece::<W, MASS, MOMENTUM, FORCE>(pass, p, piece)
+        });
+}
+
+/// Particle `p`'s sums on the nodes of one of its pieces.
+#[inline(always)]
+fn scatter_piece<const W: usize, const MASS: bool, const MOMENTUM: bool, const FORCE: bool>(
+    pass: &Pass,
+    p: usize,
+    piece: &Piece<W>,
+) {
     let (inputs, dims) = (pass.inputs, pass.dims);
     let ps = inputs.particles;
-    let st = &inputs.stencils[p];
-    let [fx, fy] = st.frac;
-    let (wx, dwx) = inputs.shape.stencil_weights::<W>(fx, st.half[0]);
-    let (wy, dwy) = inputs.shape.stencil_weights::<W>(fy, st.half[1]);
-    let base = st.node as usize;
+    let [fx, fy] = piece.frac;
+    let (wx, dwx, wy, dwy) = (piece.wx, piece.dwx, piece.wy, piece.dwy);
+    let base = piece.node;
     let m = ps.mass[p];
     // Momentum at node (a, c): N m (v + C h (a - fx, c - fy)), split into a
     // per-particle constant and a slope per node step (cell units).

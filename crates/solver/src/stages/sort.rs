@@ -55,7 +55,7 @@ pub fn sort(
     stencils: &mut [Stencil],
     bins: &mut Bins,
 ) -> Result<(), StepError> {
-    let width = shape.width() as i64;
+    let width = shape.reach() as i64;
     let (inv_h, origin, dims) = (1.0 / grid.h, grid.origin, grid.dims);
     let pad = crate::grid::PAD as i64;
     stencils
@@ -81,6 +81,7 @@ pub fn sort(
             };
             st.frac = [fx, fy];
             st.half = shape.half_widths(f);
+            st.domain = shape.domain(f);
         });
     let stencils = &*stencils;
     crate::par::keep_warm(|| {

@@ -60,21 +60,20 @@ pub(crate) fn velocity_gradient<const W: usize>(
     nx: usize,
     inv_h: f64,
 ) -> Mat2 {
-    let (wx, dwx) = shape.stencil_weights::<W>(st.frac[0], st.half[0]);
-    let (wy, dwy) = shape.stencil_weights::<W>(st.frac[1], st.half[1]);
-    let base = st.node as usize;
     let (mut col0, mut col1) = (Vec2::zeros(), Vec2::zeros());
-    for c in 0..W {
-        let row = base + c * nx;
-        let (mut sw, mut sdw) = (Vec2::zeros(), Vec2::zeros());
-        for a in 0..W {
-            let vn = velocity[row + a];
-            sw += wx[a] * vn;
-            sdw += dwx[a] * vn;
+    shape.each_piece::<W>(st, nx, |p| {
+        for c in 0..W {
+            let row = p.node + c * nx;
+            let (mut sw, mut sdw) = (Vec2::zeros(), Vec2::zeros());
+            for a in 0..W {
+                let vn = velocity[row + a];
+                sw += p.wx[a] * vn;
+                sdw += p.dwx[a] * vn;
+            }
+            col0 += p.wy[c] * sdw;
+            col1 += p.dwy[c] * sw;
         }
-        col0 += wy[c] * sdw;
-        col1 += dwy[c] * sw;
-    }
+    });
     Mat2::from_columns(&[col0, col1]) * inv_h
 }
 

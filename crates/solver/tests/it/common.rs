@@ -91,6 +91,16 @@ pub const SHAPES: [ShapeKind; 5] = [
     ShapeKind::Bspline2,
     ShapeKind::Bspline3,
 ];
+/// Every family, for the tests that run the solver; the tests of per-axis
+/// weights take `SHAPES` (CPDI's weights are not one tensor product).
+pub const RUN_SHAPES: [ShapeKind; 6] = [
+    ShapeKind::Linear,
+    ShapeKind::Gimp,
+    ShapeKind::Cpgimp,
+    ShapeKind::Cpdi,
+    ShapeKind::Bspline2,
+    ShapeKind::Bspline3,
+];
 pub const TRANSFERS: [TransferKind; 3] =
     [TransferKind::Pic, TransferKind::Flip, TransferKind::Apic];
 pub const SCHEMES: [SchemeKind; 3] = [SchemeKind::Usf, SchemeKind::Usl, SchemeKind::Musl];

@@ -27,6 +27,7 @@ fn configs() -> Vec<SolverConfig> {
         (ShapeKind::Bspline2, TransferKind::Apic, SchemeKind::Musl),
         (ShapeKind::Bspline3, TransferKind::Pic, SchemeKind::Usl),
         (ShapeKind::Gimp, TransferKind::Flip, SchemeKind::Usl),
+        (ShapeKind::Cpdi, TransferKind::Apic, SchemeKind::Musl),
     ] {
         let mut mat = Material::tait(1.5e4);
         mat.viscosity = 0.5;

@@ -13,7 +13,7 @@ fn dam_break(method: Method) -> Solver {
 
 fn methods() -> Vec<(String, Method)> {
     let mut out = vec![];
-    for shape in common::SHAPES {
+    for shape in common::RUN_SHAPES {
         for scheme in common::SCHEMES {
             for (name, transfer, alpha) in [
                 ("pic", TransferKind::Pic, 1.0),
@@ -22,6 +22,10 @@ fn methods() -> Vec<(String, Method)> {
                 ("apic", TransferKind::Apic, 1.0),
                 ("xpic", TransferKind::Xpic, 1.0),
             ] {
+                // XPIC reads per-axis weights: CPDI is refused with it.
+                if shape == ShapeKind::Cpdi && transfer == TransferKind::Xpic {
+                    continue;
+                }
                 let mut m = common::method(shape, transfer, scheme);
                 m.flip_alpha = alpha;
                 m.xpic_order = 3;

@@ -23,6 +23,7 @@ mod remedy_volumetric;
 mod scene;
 mod set_method;
 mod shape;
+mod shape_cpdi;
 mod solid_neo_hookean;
 mod stage_cull;
 mod stage_grid;

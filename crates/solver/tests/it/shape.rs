@@ -113,7 +113,7 @@ fn check_stage_weights<const W: usize>(shape: &Shape, x: f64) -> [f64; 4] {
     let lo = match shape.kind {
         ShapeKind::Linear => 0.0,
         ShapeKind::Gimp | ShapeKind::Bspline2 => 0.5,
-        ShapeKind::Bspline3 | ShapeKind::Cpgimp => 1.0,
+        ShapeKind::Bspline3 | ShapeKind::Cpgimp | ShapeKind::Cpdi => 1.0,
     };
     assert!((lo..lo + 1.0).contains(&f), "{what}: offset {f}");
     assert_eq!(base as f64 + f, x, "{what}: base {base} + {f}");

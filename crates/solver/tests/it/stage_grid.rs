@@ -107,7 +107,7 @@ fn guarded_nodes_get_exactly_gravity_despite_stress() {
     ];
     scene.materials = vec![reference, light];
     let gravity = Vec2::new(0.0, -G);
-    for shape in common::SHAPES {
+    for shape in common::RUN_SHAPES {
         for transfer in common::TRANSFERS {
             for scheme in common::SCHEMES {
                 let tag = format!("{shape:?} {transfer:?} {scheme:?}");

@@ -133,7 +133,7 @@ fn simple_shear_gives_newtonian_shear_stress() {
     let tau = mu * rate;
     let eta = gradient_round_off();
     let mut worst = [0.0f64; 2];
-    for shape in common::SHAPES {
+    for shape in common::RUN_SHAPES {
         for transfer in common::TRANSFERS {
             for scheme in common::SCHEMES {
                 let mat = Material {
@@ -276,7 +276,7 @@ fn uniform_compression_gives_eos_pressure_and_bulk_viscous_stress() {
             ..mat
         };
         for j_update in [JUpdate::Det, JUpdate::Exp, JUpdate::Substeps] {
-            for shape in common::SHAPES {
+            for shape in common::RUN_SHAPES {
                 for transfer in common::TRANSFERS {
                     for scheme in common::SCHEMES {
                         let mut method = common::method(shape, transfer, scheme);

@@ -50,7 +50,7 @@ fn step_does_not_allocate() {
             .build()
             .unwrap();
         let mut configs = vec![];
-        for shape in common::SHAPES {
+        for shape in common::RUN_SHAPES {
             for transfer in common::TRANSFERS {
                 for scheme in common::SCHEMES {
                     let mut mat = Material::tait(1.5e4);
@@ -67,6 +67,8 @@ fn step_does_not_allocate() {
                 // incompressible with it corrected by position (MIC(0), the
                 // bilinear advection, the orthogonal ghost surface, the
                 // drift read two cells deep).
+                // (CPDI's weights are not per-axis: it is explicit only.)
+                let implicit_ks = if shape == ShapeKind::Cpdi { 0 } else { 2 };
                 for (k, drift_correction, preconditioner, advection, free_surface, drift_depth) in [
                     (
                         1.5e6,
@@ -84,7 +86,10 @@ fn step_does_not_allocate() {
                         FreeSurface::GhostOrthogonal,
                         2,
                     ),
-                ] {
+                ]
+                .into_iter()
+                .take(implicit_ks)
+                {
                     let mut mat = Material::tait(1.5e6);
                     mat.k = k;
                     mat.viscosity = 0.5;

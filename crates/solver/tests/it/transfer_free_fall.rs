@@ -9,7 +9,7 @@ use crate::common;
 #[test]
 fn free_fall_is_exact() {
     let g = 9.81;
-    for shape in common::SHAPES {
+    for shape in common::RUN_SHAPES {
         for transfer in common::TRANSFERS {
             for scheme in common::SCHEMES {
                 let scene =

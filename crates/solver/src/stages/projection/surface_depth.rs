@@ -53,7 +53,7 @@ fn cubic_tail(s: f64) -> f64 {
 /// bisection runs on one kernel's arithmetic.
 fn tail_of(basis: ShapeKind) -> fn(f64) -> f64 {
     match basis {
-        ShapeKind::Linear | ShapeKind::Gimp | ShapeKind::Cpgimp => hat_tail,
+        ShapeKind::Linear | ShapeKind::Gimp | ShapeKind::Cpgimp | ShapeKind::Cpdi => hat_tail,
         ShapeKind::Bspline2 => quadratic_tail,
         ShapeKind::Bspline3 => cubic_tail,
     }
@@ -85,7 +85,9 @@ pub fn cell_fraction(basis: ShapeKind, s: f64) -> f64 {
 /// the result is the same on every machine).
 pub fn depth_of(basis: ShapeKind, fraction: f64) -> f64 {
     match basis {
-        ShapeKind::Linear | ShapeKind::Gimp | ShapeKind::Cpgimp => depth_by(hat_tail, fraction),
+        ShapeKind::Linear | ShapeKind::Gimp | ShapeKind::Cpgimp | ShapeKind::Cpdi => {
+            depth_by(hat_tail, fraction)
+        }
         ShapeKind::Bspline2 => depth_by(quadratic_tail, fraction),
         ShapeKind::Bspline3 => depth_by(cubic_tail, fraction),
     }
