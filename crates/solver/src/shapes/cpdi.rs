@@ -18,7 +18,17 @@ pub const CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0
 /// so the support fits the 4-node stencil (Uintah's `cpdi_lcrit` caps the
 /// domain vectors' lengths instead, by default not at all). A larger domain
 /// is scaled down whole, which keeps its shape.
-pub const CORNER_REACH: f64 = 1.0;
+pub const CORNER_REACH: f64 = CORNER_REACH_CELLS as f64;
+pub const CORNER_REACH_CELLS: usize = 1;
+
+/// Nodes per axis a particle's corners can touch from its stencil's first
+/// node, `floor(x_p - CORNER_REACH)`.
+pub const REACH_NODES: usize = 2 * CORNER_REACH_CELLS + 2;
+
+// The ghost layers hold a corner past a wall; colours keep two tiles of
+// particles apart (`sort::TILE`).
+const _: () = assert!(CORNER_REACH_CELLS <= crate::grid::PAD);
+const _: () = assert!(REACH_NODES <= crate::stages::sort::TILE + 1);
 
 /// A domain whose area has fallen below this share of the undeformed one
 /// (an inverted or collapsed particle kept by `on_inversion = "keep"`)
@@ -42,8 +52,9 @@ pub fn domain(f: &crate::particles::Mat2, half: f64) -> [f64; 4] {
 }
 
 /// The four corner pieces of a particle with stencil `st` (its first node
-/// one cell below and left of the particle's cell, `st.frac` in [1, 2)).
-/// Only the first two entries of each array are used (`W` >= 2).
+/// `CORNER_REACH` cells below and left of the particle's cell, `st.frac`
+/// in [CORNER_REACH, CORNER_REACH + 1)). Only the first two entries of
+/// each array are used (`W` >= 2).
 #[inline(always)]
 pub fn pieces<const W: usize>(st: &Stencil, nx: usize) -> [Piece<W>; 4] {
     let [r1x, r1y, r2x, r2y] = st.domain;
@@ -67,9 +78,9 @@ pub fn pieces<const W: usize>(st: &Stencil, nx: usize) -> [Piece<W>; 4] {
         };
         let mut offset = [0usize; 2];
         for a in 0..2 {
-            // The corner lies in [0, 3] cells past the stencil's first node.
-            let c = corner[a].clamp(0.0, 3.0);
-            let k = (c.floor() as usize).min(2);
+            // The corner lies within the reach past the stencil's first node.
+            let c = corner[a].clamp(0.0, (REACH_NODES - 1) as f64);
+            let k = (c.floor() as usize).min(REACH_NODES - 2);
             let t = c - k as f64;
             offset[a] = k;
             piece.frac[a] = st.frac[a] - k as f64;

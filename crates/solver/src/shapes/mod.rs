@@ -117,7 +117,7 @@ impl Shape {
     /// stencil's first node (`Stencil::node`).
     pub fn reach(&self) -> usize {
         match self.kind {
-            ShapeKind::Cpdi => 4,
+            ShapeKind::Cpdi => cpdi::REACH_NODES,
             _ => self.width(),
         }
     }
@@ -151,7 +151,8 @@ impl Shape {
         let shift = match self.kind {
             ShapeKind::Linear => 0.0,
             ShapeKind::Gimp | ShapeKind::Bspline2 => 0.5,
-            ShapeKind::Bspline3 | ShapeKind::Cpgimp | ShapeKind::Cpdi => 1.0,
+            ShapeKind::Bspline3 | ShapeKind::Cpgimp => 1.0,
+            ShapeKind::Cpdi => cpdi::CORNER_REACH,
         };
         floor(xr - shift)
     }

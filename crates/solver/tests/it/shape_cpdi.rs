@@ -158,12 +158,13 @@ fn cpdi_domains_follow_f_up_to_the_cap_and_keep_their_shape_past_it() {
     let reach = (d[0].abs() + d[2].abs()).max(d[1].abs() + d[3].abs());
     assert!((reach - cpdi::CORNER_REACH).abs() < 1e-15, "{d:?}");
     assert!((d[2] / d[0] - 9.0).abs() < 1e-12 && d[1] == 0.0 && (d[3] - d[0]).abs() < 1e-15);
-    // Every node a capped particle touches lies in its 4 x 4 stencil.
+    // Every node a capped particle touches lies in its stencil.
+    let reach = 0..cpdi::REACH_NODES as i64;
     for x in positions() {
-        let base = x.map(|v| (v - 1.0).floor() as i64);
+        let base = x.map(|v| (v - cpdi::CORNER_REACH).floor() as i64);
         for ([i, j], _) in by_node(&shape, x, &sheared) {
             assert!(
-                (0..4).contains(&(i - base[0])) && (0..4).contains(&(j - base[1])),
+                reach.contains(&(i - base[0])) && reach.contains(&(j - base[1])),
                 "{x:?}: {i}, {j}"
             );
         }
