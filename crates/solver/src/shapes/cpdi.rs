@@ -51,54 +51,49 @@ pub fn domain(f: &crate::particles::Mat2, half: f64) -> [f64; 4] {
     r
 }
 
-/// The four corner pieces of a particle with stencil `st` (its first node
-/// `CORNER_REACH` cells below and left of the particle's cell, `st.frac`
-/// in [CORNER_REACH, CORNER_REACH + 1)). Only the first two entries of
-/// each array are used (`W` >= 2).
+/// Corner `k`'s piece (`CORNERS[k]`) of a particle with stencil `st` (its
+/// first node `CORNER_REACH` cells below and left of the particle's cell,
+/// `st.frac` in [CORNER_REACH, CORNER_REACH + 1)). Only the first two
+/// entries of each array are used (`W` >= 2).
 #[inline(always)]
-pub fn pieces<const W: usize>(st: &Stencil, nx: usize) -> [Piece<W>; 4] {
+pub fn corner_piece<const W: usize>(st: &Stencil, nx: usize, k: usize) -> Piece<W> {
     let [r1x, r1y, r2x, r2y] = st.domain;
+    let [xi, eta] = CORNERS[k];
     let quarter_inv_det = 0.25 / (r1x * r2y - r1y * r2x);
-    CORNERS.map(|[xi, eta]| {
-        let corner = [
-            st.frac[0] + xi * r1x + eta * r2x,
-            st.frac[1] + xi * r1y + eta * r2y,
-        ];
-        let g = [
-            (xi * r2y - eta * r1y) * quarter_inv_det,
-            (eta * r1x - xi * r2x) * quarter_inv_det,
-        ];
-        let mut piece = Piece {
-            node: st.node as usize,
-            frac: st.frac,
-            wx: [0.0; W],
-            dwx: [0.0; W],
-            wy: [0.0; W],
-            dwy: [0.0; W],
+    let corner = [
+        st.frac[0] + xi * r1x + eta * r2x,
+        st.frac[1] + xi * r1y + eta * r2y,
+    ];
+    // G_c per cell; x carries the corner's 1/4, y the 4 that undoes it in dN_y.
+    let scale = [0.25, 1.0];
+    let grad = [
+        (xi * r2y - eta * r1y) * quarter_inv_det,
+        4.0 * (eta * r1x - xi * r2x) * quarter_inv_det,
+    ];
+    let mut piece = Piece {
+        node: st.node as usize,
+        frac: st.frac,
+        wx: [0.0; W],
+        dwx: [0.0; W],
+        wy: [0.0; W],
+        dwy: [0.0; W],
+    };
+    let mut offset = [0usize; 2];
+    for a in 0..2 {
+        // The corner lies within the reach past the stencil's first node.
+        let c = corner[a].clamp(0.0, (REACH_NODES - 1) as f64);
+        let first = (c.floor() as usize).min(REACH_NODES - 2);
+        let t = c - first as f64;
+        offset[a] = first;
+        piece.frac[a] = st.frac[a] - first as f64;
+        let (w, dw) = if a == 0 {
+            (&mut piece.wx, &mut piece.dwx)
+        } else {
+            (&mut piece.wy, &mut piece.dwy)
         };
-        let mut offset = [0usize; 2];
-        for a in 0..2 {
-            // The corner lies within the reach past the stencil's first node.
-            let c = corner[a].clamp(0.0, (REACH_NODES - 1) as f64);
-            let k = (c.floor() as usize).min(REACH_NODES - 2);
-            let t = c - k as f64;
-            offset[a] = k;
-            piece.frac[a] = st.frac[a] - k as f64;
-            let (w, dw) = if a == 0 {
-                (&mut piece.wx, &mut piece.dwx)
-            } else {
-                (&mut piece.wy, &mut piece.dwy)
-            };
-            // x carries the corner's 1/4, y the 4 that undoes it in dN_y.
-            let (scale, grad) = if a == 0 {
-                (0.25, g[0])
-            } else {
-                (1.0, 4.0 * g[1])
-            };
-            (w[0], w[1]) = (scale * (1.0 - t), scale * t);
-            (dw[0], dw[1]) = (grad * (1.0 - t), grad * t);
-        }
-        piece.node += offset[0] + offset[1] * nx;
-        piece
-    })
+        (w[0], w[1]) = (scale[a] * (1.0 - t), scale[a] * t);
+        (dw[0], dw[1]) = (grad[a] * (1.0 - t), grad[a] * t);
+    }
+    piece.node += offset[0] + offset[1] * nx;
+    piece
 }
