@@ -395,14 +395,10 @@ fn stencil_nodes<const W: usize>(
     let mut out = Vec::with_capacity(W * W);
     // CPDI: one slot per corner's node, a node possibly in several.
     shape.each_piece::<W>(st, nx, |p| {
-        for c in 0..W {
-            for a in 0..W {
-                let node = (p.node + a + c * nx) as u32;
-                let grad = Vec2::new(p.dwx[a] * p.wy[c], p.wx[a] * p.dwy[c]) * inv_h;
-                let offset = Vec2::new(a as f64 - p.frac[0], c as f64 - p.frac[1]);
-                out.push((node, p.wx[a] * p.wy[c], grad, offset));
-            }
-        }
+        p.each_node(nx, |node, [a, c], w, [gx, gy]| {
+            let offset = Vec2::new(a as f64 - p.frac[0], c as f64 - p.frac[1]);
+            out.push((node as u32, w, Vec2::new(gx, gy) * inv_h, offset));
+        })
     });
     out
 }

@@ -74,14 +74,10 @@ impl StressWork {
             }
             let mut l = Mat2::zeros();
             g.shape.each_piece::<W>(st, nx, |pc| {
-                for c in 0..W {
-                    let row = pc.node + c * nx;
-                    for a in 0..W {
-                        let v = 0.5 * (grid.vel[row + a] + grid.vel_new[row + a]);
-                        let grad = crate::Vec2::new(pc.dwx[a] * pc.wy[c], pc.wx[a] * pc.dwy[c]);
-                        l += v * grad.transpose();
-                    }
-                }
+                pc.each_node(nx, |n, _, _, [gx, gy]| {
+                    let v = 0.5 * (grid.vel[n] + grid.vel_new[n]);
+                    l += v * crate::Vec2::new(gx, gy).transpose();
+                })
             });
             sum += self.d[p].component_mul(&l).sum() * inv_h;
         }

@@ -74,6 +74,26 @@ pub struct Piece<const W: usize> {
     pub dwy: [f64; W],
 }
 
+impl<const W: usize> Piece<W> {
+    /// Each node of the piece, rows of y outer: its padded index (rows
+    /// `nx` long), its offset (a, c) past the piece's first node, its
+    /// weight and its gradient per cell.
+    #[inline(always)]
+    pub fn each_node(&self, nx: usize, mut visit: impl FnMut(usize, [usize; 2], f64, [f64; 2])) {
+        for c in 0..W {
+            for a in 0..W {
+                let grad = [self.dwx[a] * self.wy[c], self.wx[a] * self.dwy[c]];
+                visit(
+                    self.node + a + c * nx,
+                    [a, c],
+                    self.wx[a] * self.wy[c],
+                    grad,
+                );
+            }
+        }
+    }
+}
+
 /// 1D weights of one particle on its stencil nodes `base .. base + width`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Weights1d {
@@ -317,12 +337,7 @@ impl Shape {
             visit: &mut impl FnMut(usize, f64, [f64; 2]),
         ) {
             shape.each_piece::<W>(st, nx, |p| {
-                for c in 0..W {
-                    for a in 0..W {
-                        let grad = [p.dwx[a] * p.wy[c], p.wx[a] * p.dwy[c]];
-                        visit(p.node + a + c * nx, p.wx[a] * p.wy[c], grad);
-                    }
-                }
+                p.each_node(nx, |n, _, w, grad| visit(n, w, grad))
             });
         }
         let mut local = |n: usize, w: f64, grad: [f64; 2]| {
